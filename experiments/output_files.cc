@@ -1,0 +1,88 @@
+#include "experiments/output_files.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <system_error>
+
+namespace springlab {
+
+std::string format_number(double value) {
+  char buffer[32];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  if (ec != std::errc()) return "nan";
+  return std::string(buffer, end);
+}
+
+AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
+  if (std::filesystem::is_directory(path_)) {
+    throw std::runtime_error(path_ + ": is a directory, not a file");
+  }
+  temp_path_ = path_ + ".tmp" + std::to_string(::getpid());
+  file_ = std::fopen(temp_path_.c_str(), "wb");
+  if (file_ == nullptr) {
+    throw std::runtime_error(path_ + ": cannot write (" + std::strerror(errno) + ")");
+  }
+}
+
+AtomicFile::~AtomicFile() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+    std::remove(temp_path_.c_str());
+  }
+}
+
+void AtomicFile::write(const std::string& text) {
+  if (file_ == nullptr) return;
+  if (std::fwrite(text.data(), 1, text.size(), file_) != text.size()) failed_ = true;
+}
+
+void AtomicFile::commit() {
+  if (file_ == nullptr) return;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (failed_ || !closed || std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    std::remove(temp_path_.c_str());
+    throw std::runtime_error(path_ + ": write failed");
+  }
+}
+
+EnergyCsv::EnergyCsv(const MassSpringModel& model, AtomicFile& file) : model_(model), file_(file) {
+  file_.write("t,kinetic,spring,gravity,total\n");
+}
+
+void EnergyCsv::observe(double t, const Vector& x, const Vector& v) {
+  const Energies e = model_.energies(x, v);
+  file_.write(format_number(t) + ',' + format_number(e.kinetic) + ',' + format_number(e.spring) +
+              ',' + format_number(e.gravity) + ',' + format_number(e.total()) + '\n');
+}
+
+TrajectoryCsv::TrajectoryCsv(const MassSpringModel& model, AtomicFile& file)
+    : model_(model), file_(file) {
+  static const char* axes[] = {"x", "y", "z"};
+  std::string header = "t,i";
+  for (int r = 0; r < model.dimension(); ++r) header += std::string(",") + axes[r];
+  for (int r = 0; r < model.dimension(); ++r) header += std::string(",v") + axes[r];
+  file_.write(header + '\n');
+}
+
+void TrajectoryCsv::observe(double t, const Vector& x, const Vector& v) {
+  const Eigen::MatrixXd positions = model_.scene_positions(x);
+  const Eigen::MatrixXd velocities = model_.scene_velocities(v);
+  const std::string time = format_number(t);
+  std::string rows;
+  for (Eigen::Index i = 0; i < positions.rows(); ++i) {
+    rows += time + ',' + std::to_string(i);
+    for (Eigen::Index r = 0; r < positions.cols(); ++r) rows += ',' + format_number(positions(i, r));
+    for (Eigen::Index r = 0; r < velocities.cols(); ++r) rows += ',' + format_number(velocities(i, r));
+    rows += '\n';
+  }
+  file_.write(rows);
+}
+
+}  // namespace springlab

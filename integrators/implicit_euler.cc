@@ -1,0 +1,22 @@
+#include "integrators/implicit_euler.h"
+
+namespace springlab {
+
+ImplicitEuler::ImplicitEuler()
+    : ImplicitIntegrator({.name = "implicit-euler",
+                          .scheme = "v' = v + h M^-1 F(t + h, x + h v', v'),  x' = x + h v'",
+                          .order = 1,
+                          .implicit = true,
+                          .stability_function =
+                              [](std::complex<double> z) { return 1.0 / (1.0 - z); }}) {}
+
+StepResult ImplicitEuler::do_step(double h) {
+  const StepResult result =
+      solve_velocity(h, {.t_eval_offset = 1.0, .a = 0.0, .b = 1.0, .c = 1.0}, v_new_);
+  if (!result.ok) return result;
+  x_ += h * v_new_;
+  v_.swap(v_new_);
+  return result;
+}
+
+}  // namespace springlab

@@ -1,0 +1,122 @@
+// The integrator interface. A base class owns what every method shares
+// (state, time, statistics, the counted calls into the model); a method
+// overrides one narrow hook:
+//   - fixed-step methods implement do_step(h): advance (x, v) from t to t+h;
+//   - adaptive methods (SUNDIALS) override advance_to(t_out) and take as many
+//     internal steps as their error control needs.
+// Failures (Newton not converging, a solver error) are returned as a
+// StepResult, never thrown, never abort()/exit().
+#pragma once
+
+#include <complex>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include "models/mechanical_system.h"
+
+namespace springlab {
+
+// One vocabulary for every method (SPEC §5), exported with these names.
+struct IntegratorStats {
+  long steps = 0;               // accepted steps
+  long rejected_steps = 0;      // error-test failures (adaptive) or failed attempts
+  long force_evals = 0;         // evaluations of F(t, x, v)
+  long jacobian_evals = 0;      // evaluations of dF/dx and/or dF/dv
+  long linear_solves = 0;       // solves with a factorized (or iterative) matrix
+  long newton_iterations = 0;   // nonlinear iterations
+  long factorizations = 0;      // numeric factorizations / linear solver setups
+  long nonlinear_failures = 0;  // nonlinear solves that did not converge
+};
+
+// Every knob any method reads; each method uses only the ones it needs.
+struct IntegratorOptions {
+  double newton_tol = 1e-10;  // converged when ||M^-1 r||_inf <= tol * max(1, ||v||_inf)
+  int max_newton = 20;        // Newton iterations per step before giving up
+  double rtol = 1e-6;         // adaptive methods
+  double atol = 1e-8;
+  long max_steps = 100000;    // adaptive: internal steps per output interval
+  int max_order = 0;          // adaptive: 0 = the method's default
+  std::string linear_solver = "auto";
+  bool dq_jacobian = false;
+  bool stald = false;
+};
+
+struct StepResult {
+  bool ok = true;
+  std::string message;  // why it failed, naming the call / condition
+  static StepResult success() { return {}; }
+  static StepResult failure(std::string why) { return {false, std::move(why)}; }
+};
+
+// What a student (and the shared test suites) can read off a method.
+struct IntegratorInfo {
+  std::string name;
+  std::string scheme;        // one line: the update formula
+  int order = 1;             // global order of accuracy
+  bool adaptive = false;
+  bool implicit = false;
+  bool symplectic = false;   // for forces that depend on x only
+  // Largest stable omega*h on the undamped linear oscillator; infinity for an
+  // A-stable method, 0 for one unstable at every step (explicit Euler).
+  double stability_limit = std::numeric_limits<double>::infinity();
+  // R(z) of the method on y' = lambda y, when one step is that scalar map
+  // (so the oscillator's energy changes by |R(i w h)|^2 each step). Empty for
+  // partitioned methods (symplectic Euler, Verlet) and adaptive ones.
+  std::function<std::complex<double>(std::complex<double>)> stability_function = {};
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+
+  const IntegratorInfo& info() const { return info_; }
+  const std::string& name() const { return info_.name; }
+
+  // Binds the system and initial state; resets statistics.
+  StepResult initialize(const MechanicalSystem& system, double t0, const Vector& x0,
+                        const Vector& v0, const IntegratorOptions& options);
+
+  // Advances to t_out. A fixed-step method takes exactly one step of
+  // h = t_out - t(); an adaptive one as many as it needs.
+  virtual StepResult advance_to(double t_out);
+
+  double t() const { return t_; }
+  const Vector& x() const { return x_; }
+  const Vector& v() const { return v_; }
+  const IntegratorStats& stats() const { return stats_; }
+
+ protected:
+  explicit Integrator(IntegratorInfo info) : info_(std::move(info)) {}
+
+  // Hooks.
+  virtual StepResult do_initialize() { return StepResult::success(); }
+  virtual StepResult do_step(double h) = 0;  // fixed-step methods
+
+  // Counted calls into the model.
+  void eval_force(double t, const Vector& x, const Vector& v, Vector& f);
+  // a = M^-1 F(t, x, v)
+  void eval_acceleration(double t, const Vector& x, const Vector& v, Vector& a);
+  void eval_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                      SparseMatrix* dfdv);
+
+  const MechanicalSystem& system() const { return *system_; }
+  const IntegratorOptions& options() const { return options_; }
+  IntegratorStats& mutable_stats() { return stats_; }
+
+  // State, owned here so the driver and observers read it uniformly.
+  double t_ = 0.0;
+  Vector x_, v_;
+
+ private:
+  IntegratorInfo info_;
+  const MechanicalSystem* system_ = nullptr;
+  IntegratorOptions options_;
+  IntegratorStats stats_;
+  Vector inv_mass_;
+};
+
+}  // namespace springlab

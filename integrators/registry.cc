@@ -1,0 +1,66 @@
+#include "integrators/registry.h"
+
+#include <algorithm>
+#include <functional>
+#include <stdexcept>
+
+#include "integrators/explicit_euler.h"
+#include "integrators/implicit_euler.h"
+#include "integrators/implicit_midpoint.h"
+#include "integrators/linear_implicit_euler.h"
+#include "integrators/rk4.h"
+#include "integrators/symplectic_euler.h"
+#include "integrators/verlet.h"
+
+namespace springlab {
+namespace {
+
+struct Entry {
+  std::string name;
+  std::function<std::unique_ptr<Integrator>()> make;
+};
+
+// The name comes from the method's own IntegratorInfo, so it is written once.
+template <class Method>
+Entry entry() {
+  return {Method().name(), [] { return std::unique_ptr<Integrator>(new Method()); }};
+}
+
+// One line per method, sorted by name.
+const std::vector<Entry>& registry() {
+  static const std::vector<Entry> entries = {
+      entry<ExplicitEuler>(),
+      entry<ImplicitEuler>(),
+      entry<ImplicitMidpoint>(),
+      entry<LinearImplicitEuler>(),
+      entry<RungeKutta4>(),
+      entry<SymplecticEuler>(),
+      entry<VelocityVerlet>(),
+  };
+  return entries;
+}
+
+}  // namespace
+
+std::vector<std::string> integrator_names() {
+  std::vector<std::string> names;
+  for (const Entry& e : registry()) names.push_back(e.name);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+bool is_integrator(const std::string& name) {
+  const auto& r = registry();
+  return std::any_of(r.begin(), r.end(), [&](const Entry& e) { return name == e.name; });
+}
+
+std::unique_ptr<Integrator> make_integrator(const std::string& name) {
+  for (const Entry& e : registry()) {
+    if (name == e.name) return e.make();
+  }
+  std::string valid;
+  for (const std::string& n : integrator_names()) valid += (valid.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown integrator '" + name + "' (integrators: " + valid + ")");
+}
+
+}  // namespace springlab

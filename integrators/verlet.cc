@@ -1,0 +1,61 @@
+#include "integrators/verlet.h"
+
+namespace springlab {
+
+VelocityVerlet::VelocityVerlet()
+    : Integrator({.name = "verlet",
+                  .scheme = "v+ = v + h/2 a(x), x' = x + h v+, v' = v+ + h/2 a(x', v')",
+                  .order = 2,
+                  .symplectic = true,
+                  .stability_limit = 2.0}) {}
+
+StepResult VelocityVerlet::do_initialize() {
+  have_acceleration_ = false;
+  return StepResult::success();
+}
+
+StepResult VelocityVerlet::do_step(double h) {
+  if (!have_acceleration_) {
+    eval_acceleration(t_, x_, v_, a_);
+    have_acceleration_ = true;
+  }
+  v_half_ = v_ + 0.5 * h * a_;
+  x_ += h * v_half_;
+  return closing_kick(t_ + h, h, v_half_);
+}
+
+StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half) {
+  const Vector& m = system().mass();
+  const VelocityDependence dependence = system().velocity_dependence();
+  if (dependence == VelocityDependence::kNone) {
+    eval_acceleration(t, x_, v_half, a_);
+    v_ = v_half + 0.5 * h * a_;
+    return StepResult::success();
+  }
+
+  // F(t, x, v) = F(t, x, 0) + D v with D = dF/dv(t, x).
+  eval_force(t, x_, Vector::Zero(x_.size()), f0_);
+  eval_jacobians(t, x_, v_half, nullptr, &dfdv_);
+  rhs_ = m.cwiseProduct(v_half) + 0.5 * h * f0_;
+  if (dependence == VelocityDependence::kDiagonal) {
+    const Vector d = dfdv_.diagonal();
+    v_ = rhs_.array() / (m - 0.5 * h * d).array();
+  } else {
+    lhs_ = -0.5 * h * dfdv_;
+    lhs_.diagonal() += m;
+    // M - h/2 dF/dv is symmetric positive definite: dF/dv of drag, wind and
+    // spring damping is symmetric negative semidefinite.
+    ++mutable_stats().factorizations;
+    if (!solver_.factorize(lhs_, /*symmetric=*/true)) {
+      return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
+    }
+    ++mutable_stats().linear_solves;
+    if (!solver_.solve(rhs_, v_)) {
+      return StepResult::failure("verlet: closing half-kick solve gave a non-finite velocity");
+    }
+  }
+  a_ = (f0_ + dfdv_ * v_).cwiseQuotient(m);
+  return StepResult::success();
+}
+
+}  // namespace springlab

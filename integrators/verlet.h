@@ -1,0 +1,42 @@
+// verlet — velocity Verlet (kick-drift-kick leapfrog).
+//
+//   v_{n+1/2} = v_n + h/2 M^-1 F(t_n, x_n, v_n)
+//   x_{n+1}   = x_n + h v_{n+1/2}
+//   v_{n+1}   = v_{n+1/2} + h/2 M^-1 F(t_{n+1}, x_{n+1}, v_{n+1})
+//
+// The closing half-kick is implicit in v_{n+1} when F depends on v (drag,
+// spring damping, wind). Every such force here is affine in v,
+// F(t, x, v) = F(t, x, 0) + dF/dv(x) v, so it is solved exactly:
+//   (M - h/2 dF/dv) v_{n+1} = M v_{n+1/2} + h/2 F(t_{n+1}, x_{n+1}, 0)
+// (an element-wise division when dF/dv is diagonal, a sparse SPD solve with
+// spring damping). The end-of-step acceleration is reused by the next step,
+// so a step costs one force evaluation.
+//
+// Order 2. Symplectic and time-reversible when F depends on x only: energy
+// stays bounded. On the undamped oscillator it is stable for w h <= 2.
+#pragma once
+
+#include "integrators/integrator.h"
+#include "integrators/sparse_direct_solver.h"
+
+namespace springlab {
+
+class VelocityVerlet final : public Integrator {
+ public:
+  VelocityVerlet();
+
+ protected:
+  StepResult do_initialize() override;
+  StepResult do_step(double h) override;
+
+ private:
+  // Sets v_ from the closing half-kick and a_ to the acceleration at the new state.
+  StepResult closing_kick(double t, double h, const Vector& v_half);
+
+  bool have_acceleration_ = false;
+  Vector a_, f0_, rhs_, v_half_;
+  SparseMatrix dfdv_, lhs_;
+  SparseDirectSolver solver_;
+};
+
+}  // namespace springlab

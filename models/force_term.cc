@@ -1,0 +1,37 @@
+#include "models/force_term.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace springlab {
+
+BlockSlot find_block_slot(const SparseMatrix& pattern, int dim, int a, int b) {
+  BlockSlot slot;
+  const int* outer = pattern.outerIndexPtr();
+  const int* inner = pattern.innerIndexPtr();
+  for (int c = 0; c < dim; ++c) {
+    const int col = b * dim + c;
+    const int* begin = inner + outer[col];
+    const int* end = inner + outer[col + 1];
+    const int* hit = std::lower_bound(begin, end, a * dim);
+    if (hit == end || *hit != a * dim) {
+      throw std::logic_error("find_block_slot: block not in the Jacobian pattern");
+    }
+    slot.offset[c] = static_cast<int>(hit - inner);
+  }
+  return slot;
+}
+
+std::vector<int> diagonal_slots(const SparseMatrix& pattern) {
+  std::vector<int> slots(static_cast<std::size_t>(pattern.rows()));
+  for (int k = 0; k < pattern.rows(); ++k) {
+    const int* begin = pattern.innerIndexPtr() + pattern.outerIndexPtr()[k];
+    const int* end = pattern.innerIndexPtr() + pattern.outerIndexPtr()[k + 1];
+    const int* hit = std::lower_bound(begin, end, k);
+    if (hit == end || *hit != k) throw std::logic_error("diagonal_slots: missing diagonal entry");
+    slots[static_cast<std::size_t>(k)] = static_cast<int>(hit - pattern.innerIndexPtr());
+  }
+  return slots;
+}
+
+}  // namespace springlab

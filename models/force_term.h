@@ -1,0 +1,99 @@
+// One kind of force: the unit a model is assembled from. A new kind of force
+// (or, later, a finite element as a "generalized spring") is one new file
+// that implements this interface plus one line in force_registry.cc; every
+// integrator then runs it unchanged, and the shared model tests
+// (Jacobian vs finite differences, force = -grad energy) cover it.
+//
+// Terms work on the arrays of *all* particles in the model's internal order:
+// free particles first (indices < free_particles), fixed ones after. Fixed
+// particles have zero velocity. Jacobian blocks are only written for pairs of
+// free particles: fixed particles are not unknowns (the projection
+// q = P^T q_free + q_fixed of the course codes, done once, not per force).
+#pragma once
+
+#include <array>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "models/mechanical_system.h"
+
+namespace springlab {
+
+// A read-only view of the configuration at which forces are evaluated.
+struct Configuration {
+  double t = 0.0;
+  const double* x = nullptr;  // positions, particle p at x[p*dim .. p*dim+dim)
+  const double* v = nullptr;  // velocities, same layout (fixed particles: 0)
+  int dim = 2;
+  int free_particles = 0;
+  bool is_free(int p) const { return p < free_particles; }
+};
+
+// Which column of the energy report a term's potential belongs to.
+enum class EnergyKind { kNone, kSpring, kGravity };
+
+// Collects the dim x dim blocks (a, b) of free particles that any term writes.
+class JacobianPatternBuilder {
+ public:
+  explicit JacobianPatternBuilder(int dim) : dim_(dim) {}
+  void add_block(int a, int b) { blocks_.emplace_back(a, b); }
+  int dim() const { return dim_; }
+  const std::vector<std::pair<int, int>>& blocks() const { return blocks_; }
+
+ private:
+  int dim_;
+  std::vector<std::pair<int, int>> blocks_;
+};
+
+// Where a block lives in the CSC value array of the shared pattern:
+// entry (row a*dim + r, column b*dim + c) is values[offset[c] + r], because a
+// block's rows are contiguous within each of its columns.
+struct BlockSlot {
+  std::array<int, 3> offset{-1, -1, -1};
+  bool valid() const { return offset[0] >= 0; }
+};
+
+// Looks up the slot of block (a, b) in a compressed pattern that contains it.
+BlockSlot find_block_slot(const SparseMatrix& pattern, int dim, int a, int b);
+
+// Value index of each diagonal entry (k, k) of a compressed pattern, k < rows.
+std::vector<int> diagonal_slots(const SparseMatrix& pattern);
+
+// Adds s * K to block slot `slot` of `values` (K is dim x dim, row-major).
+template <int D>
+inline void add_block(double* values, const BlockSlot& slot, const double (&K)[D][D], double s) {
+  for (int c = 0; c < D; ++c) {
+    double* col = values + slot.offset[c];
+    for (int r = 0; r < D; ++r) col[r] += s * K[r][c];
+  }
+}
+
+class ForceTerm {
+ public:
+  virtual ~ForceTerm() = default;
+  virtual std::string_view name() const = 0;
+
+  // f += F(configuration); f has one entry per coordinate of every particle.
+  virtual void add_force(const Configuration& c, double* f) const = 0;
+
+  // The potential whose negative gradient is this force (0 for dissipative
+  // and driving forces, which store no energy).
+  virtual double potential_energy(const Configuration&) const { return 0.0; }
+  virtual EnergyKind energy_kind() const { return EnergyKind::kNone; }
+  // Conservative terms derive entirely from potential_energy; the others'
+  // power F.v is the work rate the damping budget accounts for.
+  virtual bool conservative() const = 0;
+
+  virtual VelocityDependence velocity_dependence() const { return VelocityDependence::kNone; }
+  virtual bool symmetric_jacobians() const { return true; }
+
+  // Jacobian support: declare blocks once, cache their slots once the pattern
+  // is final, then add dF/dx and dF/dv values (either pointer may be null)
+  // into the value arrays of the shared pattern at every evaluation.
+  virtual void declare_jacobian_blocks(JacobianPatternBuilder&) const {}
+  virtual void bind_jacobian(const SparseMatrix& /*pattern*/) {}
+  virtual void add_jacobians(const Configuration&, double* /*dfdx*/, double* /*dfdv*/) const {}
+};
+
+}  // namespace springlab

@@ -1,0 +1,177 @@
+#include "models/mass_spring_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/SparseCore>
+
+namespace springlab {
+namespace {
+
+// Free particles first, each group in scene order: then the free unknowns are
+// the head of the all-particle arrays and the projection onto them is a copy.
+ParticleOrder make_order(const Scene& scene) {
+  ParticleOrder order;
+  order.dim = scene.dimension;
+  const int n = static_cast<int>(scene.particles.size());
+  order.internal_of_scene.assign(static_cast<std::size_t>(n), -1);
+  for (int pass = 0; pass < 2; ++pass) {
+    const bool want_fixed = pass == 1;
+    for (int p = 0; p < n; ++p) {
+      if (scene.particles[static_cast<std::size_t>(p)].fixed != want_fixed) continue;
+      order.internal_of_scene[static_cast<std::size_t>(p)] =
+          static_cast<int>(order.scene_of_internal.size());
+      order.scene_of_internal.push_back(p);
+    }
+    if (pass == 0) order.free_particles = static_cast<int>(order.scene_of_internal.size());
+  }
+  return order;
+}
+
+}  // namespace
+
+MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
+  const int dim = order_.dim;
+  const int all = particle_count();
+  const Eigen::Index n = static_cast<Eigen::Index>(order_.free_particles) * dim;
+
+  mass_.resize(n);
+  x0_.resize(n);
+  v0_.resize(n);
+  x_all_.setZero(static_cast<Eigen::Index>(all) * dim);
+  v_all_.setZero(x_all_.size());
+  f_all_.setZero(x_all_.size());
+  for (int p = 0; p < all; ++p) {
+    const Particle& particle = scene_.particles[static_cast<std::size_t>(order_.scene_of_internal[p])];
+    for (int r = 0; r < dim; ++r) {
+      x_all_[p * dim + r] = particle.x[r];
+      if (p < order_.free_particles) {
+        mass_[p * dim + r] = particle.mass;
+        x0_[p * dim + r] = particle.x[r];
+        v0_[p * dim + r] = particle.v[r];
+      }
+    }
+  }
+
+  for (const ForceKind& kind : force_kinds()) {
+    if (auto term = kind.make(scene_, order_)) terms_.push_back(std::move(term));
+  }
+
+  // One pattern for dF/dx and dF/dv: the full diagonal plus every block a
+  // term declares. Values stay zero here; terms cache their slots in it.
+  JacobianPatternBuilder builder(dim);
+  for (int p = 0; p < order_.free_particles; ++p) builder.add_block(p, p);
+  for (const auto& term : terms_) term->declare_jacobian_blocks(builder);
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(builder.blocks().size() * static_cast<std::size_t>(dim * dim));
+  for (const auto& [a, b] : builder.blocks()) {
+    for (int r = 0; r < dim; ++r)
+      for (int c = 0; c < dim; ++c) entries.emplace_back(a * dim + r, b * dim + c, 0.0);
+  }
+  pattern_.resize(n, n);
+  pattern_.setFromTriplets(entries.begin(), entries.end());
+  pattern_.makeCompressed();
+  std::fill(pattern_.valuePtr(), pattern_.valuePtr() + pattern_.nonZeros(), 0.0);
+  for (const auto& term : terms_) {
+    term->bind_jacobian(pattern_);
+    symmetric_ = symmetric_ && term->symmetric_jacobians();
+    velocity_dependence_ = std::max(velocity_dependence_, term->velocity_dependence());
+  }
+
+  // SPEC §6: E_s = T(0) + U_spring(0) + sum_free m_i (|g| d + |w_max|^2 / 2),
+  // d the diameter of the initial positions' bounding box.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (const Particle& p : scene_.particles) {
+    lo = lo.cwiseMin(p.x);
+    hi = hi.cwiseMax(p.x);
+  }
+  const double diameter = (hi - lo).head(dim).norm();
+  double w_max = 0.0;
+  if (scene_.wind) w_max = scene_.wind->velocity.norm() * (1.0 + std::abs(scene_.wind->gust));
+  const Energies e0 = energies(x0_, v0_);
+  const double free_mass = mass_.sum() / dim;
+  energy_scale_ = e0.kinetic + e0.spring +
+                  free_mass * (scene_.gravity.norm() * diameter + 0.5 * w_max * w_max);
+}
+
+Configuration MassSpringModel::configure(double t, const Vector& x, const Vector& v) const {
+  const Eigen::Index n = dofs();
+  x_all_.head(n) = x;
+  v_all_.head(n) = v;
+  Configuration c;
+  c.t = t;
+  c.x = x_all_.data();
+  c.v = v_all_.data();
+  c.dim = order_.dim;
+  c.free_particles = order_.free_particles;
+  return c;
+}
+
+void MassSpringModel::force(double t, const Vector& x, const Vector& v, Vector& f) const {
+  const Configuration c = configure(t, x, v);
+  f_all_.setZero();
+  for (const auto& term : terms_) term->add_force(c, f_all_.data());
+  f = f_all_.head(dofs());
+}
+
+void MassSpringModel::jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                                SparseMatrix* dfdv) const {
+  const Configuration c = configure(t, x, v);
+  for (SparseMatrix* m : {dfdx, dfdv}) {
+    if (m == nullptr) continue;
+    if (m->nonZeros() != pattern_.nonZeros() || m->rows() != pattern_.rows()) *m = pattern_;
+    std::fill(m->valuePtr(), m->valuePtr() + m->nonZeros(), 0.0);
+  }
+  double* dx = dfdx != nullptr ? dfdx->valuePtr() : nullptr;
+  double* dv = dfdv != nullptr ? dfdv->valuePtr() : nullptr;
+  for (const auto& term : terms_) term->add_jacobians(c, dx, dv);
+}
+
+Energies MassSpringModel::energies(const Vector& x, const Vector& v) const {
+  const Configuration c = configure(0.0, x, v);
+  Energies e;
+  e.kinetic = 0.5 * mass_.dot(v.cwiseProduct(v));
+  for (const auto& term : terms_) {
+    switch (term->energy_kind()) {
+      case EnergyKind::kSpring: e.spring += term->potential_energy(c); break;
+      case EnergyKind::kGravity: e.gravity += term->potential_energy(c); break;
+      case EnergyKind::kNone: break;
+    }
+  }
+  return e;
+}
+
+double MassSpringModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {
+  const Configuration c = configure(t, x, v);
+  f_all_.setZero();
+  for (const auto& term : terms_) {
+    if (!term->conservative()) term->add_force(c, f_all_.data());
+  }
+  return f_all_.head(dofs()).dot(v);
+}
+
+Eigen::MatrixXd MassSpringModel::scene_positions(const Vector& x) const {
+  const int dim = order_.dim;
+  Eigen::MatrixXd out(particle_count(), dim);
+  for (int s = 0; s < particle_count(); ++s) {
+    const int p = order_.internal_of_scene[static_cast<std::size_t>(s)];
+    for (int r = 0; r < dim; ++r) {
+      out(s, r) = p < order_.free_particles ? x[p * dim + r] : x_all_[p * dim + r];
+    }
+  }
+  return out;
+}
+
+Eigen::MatrixXd MassSpringModel::scene_velocities(const Vector& v) const {
+  const int dim = order_.dim;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(particle_count(), dim);
+  for (int s = 0; s < particle_count(); ++s) {
+    const int p = order_.internal_of_scene[static_cast<std::size_t>(s)];
+    if (p >= order_.free_particles) continue;
+    for (int r = 0; r < dim; ++r) out(s, r) = v[p * dim + r];
+  }
+  return out;
+}
+
+}  // namespace springlab

@@ -1,0 +1,82 @@
+// The mass-spring system of SPEC §2 assembled from a Scene: the state holds
+// only free particles, forces come from the registered ForceTerms the scene
+// names, and both Jacobians share one sparsity pattern built here once.
+//
+// Not thread-safe: evaluation uses the model's scratch arrays. Use one model
+// per thread (they are cheap to build from the Scene).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "models/force_registry.h"
+#include "models/force_term.h"
+#include "models/mechanical_system.h"
+#include "models/scene.h"
+
+namespace springlab {
+
+struct Energies {
+  double kinetic = 0.0;
+  double spring = 0.0;
+  double gravity = 0.0;
+  double total() const { return kinetic + spring + gravity; }
+};
+
+class MassSpringModel final : public MechanicalSystem {
+ public:
+  explicit MassSpringModel(const Scene& scene);
+
+  // MechanicalSystem
+  Eigen::Index dofs() const override { return mass_.size(); }
+  const Vector& mass() const override { return mass_; }
+  void force(double t, const Vector& x, const Vector& v, Vector& f) const override;
+  void jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                 SparseMatrix* dfdv) const override;
+  const SparseMatrix& jacobian_pattern() const override { return pattern_; }
+  bool jacobian_symmetric() const override { return symmetric_; }
+  VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
+
+  int dimension() const { return order_.dim; }
+  int particle_count() const { return static_cast<int>(order_.scene_of_internal.size()); }
+  int free_particle_count() const { return order_.free_particles; }
+  const Scene& scene() const { return scene_; }
+
+  // Initial state of the free degrees of freedom.
+  const Vector& initial_positions() const { return x0_; }
+  const Vector& initial_velocities() const { return v0_; }
+
+  Energies energies(const Vector& x, const Vector& v) const;
+  // Power of the non-conservative forces (drag, spring damping, wind): the
+  // rate at which they change the mechanical energy.
+  double nonconservative_power(double t, const Vector& x, const Vector& v) const;
+
+  // SPEC §6's energy scale E_s = T(0) + U_spring(0) + sum_free m (|g| d + |w_max|^2/2).
+  double energy_scale() const { return energy_scale_; }
+
+  // Positions/velocities of all particles in scene order, one row each
+  // (fixed particles at their fixed place, with zero velocity).
+  Eigen::MatrixXd scene_positions(const Vector& x) const;
+  Eigen::MatrixXd scene_velocities(const Vector& v) const;
+
+  const std::vector<std::unique_ptr<ForceTerm>>& terms() const { return terms_; }
+
+ private:
+  Configuration configure(double t, const Vector& x, const Vector& v) const;
+
+  Scene scene_;
+  ParticleOrder order_;
+  Vector mass_;
+  Vector x0_, v0_;
+  std::vector<std::unique_ptr<ForceTerm>> terms_;
+  SparseMatrix pattern_;
+  bool symmetric_ = true;
+  VelocityDependence velocity_dependence_ = VelocityDependence::kNone;
+  double energy_scale_ = 0.0;
+
+  // Scratch: all particles, internal order. The fixed tail of x_all_ holds
+  // the fixed positions and never changes; v_all_'s fixed tail stays 0.
+  mutable Vector x_all_, v_all_, f_all_;
+};
+
+}  // namespace springlab

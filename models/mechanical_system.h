@@ -1,0 +1,58 @@
+// What a time integrator sees of a model: the second-order system
+//
+//     M x'' = F(t, x, v),    v = x',
+//
+// over the free degrees of freedom only (fixed particles are not unknowns),
+// with a lumped (diagonal) mass M and the analytic Jacobians dF/dx, dF/dv on
+// one fixed sparsity pattern. Integrators know this interface and nothing of
+// springs; models implement it and know nothing of time stepping.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace springlab {
+
+using Vector = Eigen::VectorXd;
+using SparseMatrix = Eigen::SparseMatrix<double>;  // column-major (CSC)
+
+// How F depends on v. Every force here is affine in v:
+// F(t, x, v) = F(t, x, 0) + dF/dv(t, x) v, which is what lets velocity Verlet
+// solve its closing half-kick exactly.
+enum class VelocityDependence {
+  kNone,      // F depends on (t, x) only
+  kDiagonal,  // dF/dv is diagonal (drag, wind)
+  kCoupled,   // dF/dv couples particles (spring damping)
+};
+
+class MechanicalSystem {
+ public:
+  virtual ~MechanicalSystem() = default;
+
+  // Number of unknowns n = (free particles) x dimension.
+  virtual Eigen::Index dofs() const = 0;
+  // Lumped mass per degree of freedom (length n, all > 0).
+  virtual const Vector& mass() const = 0;
+
+  // f = F(t, x, v); f is resized to n.
+  virtual void force(double t, const Vector& x, const Vector& v, Vector& f) const = 0;
+
+  // Fills dF/dx and/or dF/dv (either may be null) at (t, x, v). Both come
+  // back with exactly the pattern of jacobian_pattern(), so integrators can
+  // combine them value by value (A = M - a dF/dv - b dF/dx) and reuse one
+  // symbolic factorization for the whole run.
+  virtual void jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                         SparseMatrix* dfdv) const = 0;
+
+  // The shared pattern (union of both Jacobians' entries plus the full
+  // diagonal), values all zero. Built once per scene.
+  virtual const SparseMatrix& jacobian_pattern() const = 0;
+
+  // True when both Jacobians are symmetric at every state (no spring damping:
+  // its dF/dx is not symmetric). Lets implicit methods use LDL^T.
+  virtual bool jacobian_symmetric() const = 0;
+
+  virtual VelocityDependence velocity_dependence() const = 0;
+};
+
+}  // namespace springlab

@@ -1,0 +1,65 @@
+// The scene: what a scene file (SPEC §3) or a built-in scene (SPEC §4)
+// describes, before any physics is assembled from it. Plain data; the model
+// (mass_spring_model.h) turns it into forces and a state.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace springlab {
+
+// Thrown for every malformed scene; what() is the one line the user sees,
+// already prefixed with the file name and the offending element.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Particle {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // components past `dimension` are 0
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  double mass = 1.0;
+  bool fixed = false;
+};
+
+struct Spring {
+  int i = 0;
+  int j = 0;
+  double k = 0.0;
+  double rest = 0.0;     // resolved: the initial distance when the file omits it
+  double damping = 0.0;  // c in F_i = -c ((v_i - v_j).d) d
+};
+
+// w(t) = w0 (1 + gust sin(2 pi f t)); F_i = coefficient (w(t) - v_i)
+struct Wind {
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  double coefficient = 0.0;
+  double gust = 0.0;
+  double frequency = 0.0;
+};
+
+struct Scene {
+  std::string name;
+  int dimension = 2;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  double drag = 0.0;
+  std::optional<Wind> wind;
+  std::vector<Particle> particles;
+  std::vector<Spring> springs;
+};
+
+// Parses and validates a scene (SPEC §3). `source` names the file in messages.
+// Throws SceneError on any violation; never returns a half-valid scene.
+Scene parse_scene(const std::string& json_text, const std::string& source);
+Scene load_scene_file(const std::string& path);
+
+// The scene as a scene file (round-trips through parse_scene).
+std::string scene_to_json(const Scene& scene);
+
+// Runs every SPEC §3 check on an already-built scene (used for built-ins too).
+void validate_scene(const Scene& scene, const std::string& source);
+
+}  // namespace springlab

@@ -1,0 +1,159 @@
+// Damping along a spring (internal friction), SPEC §2:
+//   d = x_i - x_j, l = |d|, u = d / l, w = v_i - v_j
+//   F_i = -c (w.u) u,  F_j = -F_i            (dissipates: F_i.v_i + F_j.v_j = -c (w.u)^2)
+// Jacobians, with P = I - u u^T:
+//   dF_i/dv_i = -c u u^T                      (symmetric, negative semidefinite)
+//   dF_i/dx_i = -(c/l) [ (w.u) P + u (P w)^T ] (NOT symmetric: models with spring
+//                                               damping report jacobian_symmetric() = false)
+// and dF_i/d(.)_j = -dF_i/d(.)_i, dF_j = -dF_i.
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "models/force_registry.h"
+
+namespace springlab {
+namespace {
+
+struct DamperData {
+  int a, b;
+  double c;
+};
+
+class SpringDampingForce final : public ForceTerm {
+ public:
+  SpringDampingForce(std::vector<DamperData> dampers, int dim, int free_particles)
+      : dampers_(std::move(dampers)), dim_(dim), free_(free_particles) {}
+
+  std::string_view name() const override { return "spring-damping"; }
+  bool conservative() const override { return false; }
+  VelocityDependence velocity_dependence() const override { return VelocityDependence::kCoupled; }
+  bool symmetric_jacobians() const override { return false; }
+
+  void add_force(const Configuration& c, double* f) const override {
+    if (dim_ == 2) add_force_d<2>(c, f); else add_force_d<3>(c, f);
+  }
+
+  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
+    for (const DamperData& s : dampers_) {
+      if (s.a < free_ && s.b < free_) {
+        builder.add_block(s.a, s.b);
+        builder.add_block(s.b, s.a);
+      }
+    }
+  }
+
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    slots_.assign(dampers_.size(), {});
+    for (std::size_t n = 0; n < dampers_.size(); ++n) {
+      const DamperData& s = dampers_[n];
+      Slots& sl = slots_[n];
+      if (s.a < free_) sl.aa = find_block_slot(pattern, dim_, s.a, s.a);
+      if (s.b < free_) sl.bb = find_block_slot(pattern, dim_, s.b, s.b);
+      if (s.a < free_ && s.b < free_) {
+        sl.ab = find_block_slot(pattern, dim_, s.a, s.b);
+        sl.ba = find_block_slot(pattern, dim_, s.b, s.a);
+      }
+    }
+  }
+
+  void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
+    if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
+  }
+
+ private:
+  struct Slots {
+    BlockSlot aa, ab, ba, bb;
+  };
+
+  // Unit direction and relative velocity of damper s; false when degenerate.
+  template <int D>
+  bool geometry(const Configuration& c, const DamperData& s, double (&u)[D], double (&w)[D],
+                double& l) const {
+    double l2 = 0.0;
+    for (int r = 0; r < D; ++r) {
+      u[r] = c.x[s.a * D + r] - c.x[s.b * D + r];
+      w[r] = c.v[s.a * D + r] - c.v[s.b * D + r];
+      l2 += u[r] * u[r];
+    }
+    l = std::sqrt(l2);
+    if (l == 0.0) return false;  // no direction: the damper exerts no force
+    for (int r = 0; r < D; ++r) u[r] /= l;
+    return true;
+  }
+
+  template <int D>
+  void add_force_d(const Configuration& c, double* f) const {
+    for (const DamperData& s : dampers_) {
+      double u[D], w[D], l;
+      if (!geometry<D>(c, s, u, w, l)) continue;
+      double wu = 0.0;
+      for (int r = 0; r < D; ++r) wu += w[r] * u[r];
+      for (int r = 0; r < D; ++r) {
+        f[s.a * D + r] -= s.c * wu * u[r];
+        f[s.b * D + r] += s.c * wu * u[r];
+      }
+    }
+  }
+
+  template <int D>
+  void add_pair(double* values, const Slots& sl, const double (&B)[D][D]) const {
+    // B = dF_i/d(.)_i; the other three blocks follow by sign.
+    if (sl.aa.valid()) add_block<D>(values, sl.aa, B, 1.0);
+    if (sl.bb.valid()) add_block<D>(values, sl.bb, B, 1.0);
+    if (sl.ab.valid()) {
+      add_block<D>(values, sl.ab, B, -1.0);
+      add_block<D>(values, sl.ba, B, -1.0);
+    }
+  }
+
+  template <int D>
+  void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
+    for (std::size_t n = 0; n < dampers_.size(); ++n) {
+      const DamperData& s = dampers_[n];
+      double u[D], w[D], l;
+      if (!geometry<D>(c, s, u, w, l)) continue;
+      double wu = 0.0;
+      for (int r = 0; r < D; ++r) wu += w[r] * u[r];
+      if (dfdv != nullptr) {
+        double B[D][D];
+        for (int r = 0; r < D; ++r)
+          for (int q = 0; q < D; ++q) B[r][q] = -s.c * u[r] * u[q];
+        add_pair<D>(dfdv, slots_[n], B);
+      }
+      if (dfdx != nullptr) {
+        double pw[D];  // P w = w - (w.u) u
+        for (int r = 0; r < D; ++r) pw[r] = w[r] - wu * u[r];
+        double B[D][D];
+        for (int r = 0; r < D; ++r) {
+          for (int q = 0; q < D; ++q) {
+            const double p_rq = (r == q ? 1.0 : 0.0) - u[r] * u[q];
+            B[r][q] = -(s.c / l) * (wu * p_rq + u[r] * pw[q]);
+          }
+        }
+        add_pair<D>(dfdx, slots_[n], B);
+      }
+    }
+  }
+
+  std::vector<DamperData> dampers_;
+  std::vector<Slots> slots_;
+  int dim_;
+  int free_;
+};
+
+}  // namespace
+
+std::unique_ptr<ForceTerm> make_spring_damping_force(const Scene& scene,
+                                                     const ParticleOrder& order) {
+  std::vector<DamperData> dampers;
+  for (const Spring& s : scene.springs) {
+    if (s.damping == 0.0) continue;
+    dampers.push_back({order.internal_of_scene[s.i], order.internal_of_scene[s.j], s.damping});
+  }
+  if (dampers.empty()) return nullptr;
+  return std::make_unique<SpringDampingForce>(std::move(dampers), order.dim,
+                                              order.free_particles);
+}
+
+}  // namespace springlab

@@ -1,0 +1,56 @@
+// Small scenes with known answers, built in code so each test states its
+// physics explicitly.
+#pragma once
+
+#include <cmath>
+
+#include "models/scene.h"
+
+namespace springlab::testing {
+
+// One spring along x, fixed end at the origin, no gravity:
+// x(t) = rest + amplitude cos(w t), w = sqrt(k / m). With rest = 0 (the
+// default) the spring is linear in every direction, F = -k x, so the linear
+// analysis (stability limits, energy factors) holds at any amplitude; with
+// rest > 0 it is linear only while the mass stays on its side of the anchor.
+inline Scene oscillator(double k = 100.0, double mass = 1.0, double rest = 0.0,
+                        double amplitude = 0.1) {
+  Scene s;
+  s.name = "oscillator";
+  s.dimension = 2;
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
+                 {Eigen::Vector3d(rest + amplitude, 0, 0), Eigen::Vector3d::Zero(), mass, false}};
+  s.springs = {{0, 1, k, rest, 0.0}};
+  return s;
+}
+
+// A 2-D elastic pendulum: nonlinear, swinging and stretching under gravity.
+inline Scene swinging_spring() {
+  Scene s;
+  s.name = "swinging-spring";
+  s.dimension = 2;
+  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
+                 {Eigen::Vector3d(0.9, -0.7, 0), Eigen::Vector3d(0.5, 0.3, 0), 1.0, false}};
+  s.springs = {{0, 1, 50.0, 1.0, 0.0}};
+  return s;
+}
+
+// Every force kind at once, 3-D: a short damped chain in gusty wind with drag.
+inline Scene damped_windy_chain() {
+  Scene s;
+  s.name = "damped-windy-chain";
+  s.dimension = 3;
+  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.drag = 0.2;
+  s.wind = Wind{Eigen::Vector3d(2.0, 0.0, 1.0), 0.3, 0.5, 2.0};
+  s.particles.push_back({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true});
+  for (int p = 1; p <= 3; ++p) {
+    s.particles.push_back({Eigen::Vector3d(0.5 * p, -0.1 * p, 0.05 * p),
+                           Eigen::Vector3d(0.1, 0.2 * p, -0.1), 0.5, false});
+    s.springs.push_back({p - 1, p, 40.0, 0.45, 0.8});
+  }
+  return s;
+}
+
+}  // namespace springlab::testing

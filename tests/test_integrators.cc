@@ -1,0 +1,239 @@
+// Shared suites, instantiated once per registered integrator: a new method
+// gets every test that applies to it (read off its IntegratorInfo: order,
+// stability limit, stability function, symplecticity) by one registry line.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+
+#include "experiments/simulation.h"
+#include "integrators/registry.h"
+#include "models/mass_spring_model.h"
+#include "scenes_for_tests.h"
+
+namespace springlab {
+namespace {
+
+using testing::damped_windy_chain;
+using testing::oscillator;
+using testing::swinging_spring;
+
+class EveryIntegrator : public ::testing::TestWithParam<std::string> {
+ protected:
+  IntegratorInfo info() const { return make_integrator(GetParam())->info(); }
+  RunSettings settings(double dt, double t_end) const {
+    RunSettings s;
+    s.integrator = GetParam();
+    s.dt = dt;
+    s.t_end = t_end;
+    s.options.newton_tol = 1e-13;
+    return s;
+  }
+};
+
+std::string test_name(const ::testing::TestParamInfo<std::string>& p) {
+  std::string name = p.param;
+  for (char& c : name) {
+    if (c == '-') c = '_';
+  }
+  return name;
+}
+
+double mechanical_energy(const MassSpringModel& m, const Vector& x, const Vector& v) {
+  return m.energies(x, v).total();
+}
+
+// On the undamped oscillator one step multiplies the energy by |R(i w h)|^2
+// exactly, for any method whose step is the scalar map R on y' = lambda y.
+TEST_P(EveryIntegrator, OscillatorEnergyFactorPerStepIsExact) {
+  const IntegratorInfo i = info();
+  if (!i.stability_function || i.adaptive) GTEST_SKIP() << "no scalar stability function";
+  const MassSpringModel model(oscillator(100.0, 1.0));
+  const double w = 10.0;
+  for (double wh : {0.1, 0.7, 2.5}) {
+    auto integrator = make_integrator(GetParam());
+    IntegratorOptions options;
+    options.newton_tol = 1e-14;
+    ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
+                                       model.initial_velocities(), options).ok);
+    const double factor = std::norm(i.stability_function(std::complex<double>(0.0, wh)));
+    double energy = mechanical_energy(model, integrator->x(), integrator->v());
+    for (int step = 1; step <= 5; ++step) {
+      ASSERT_TRUE(integrator->advance_to(step * wh / w).ok);
+      const double next = mechanical_energy(model, integrator->x(), integrator->v());
+      EXPECT_NEAR(next / energy, factor, 1e-9 * factor) << "w h = " << wh << ", step " << step;
+      energy = next;
+    }
+  }
+}
+
+// Final-state error e(h) = |x - x*| + |v - v*| / w against the exact
+// solution (oscillator) or a tight RK4 reference (nonlinear scenes); the
+// observed order log2(e(h) / e(h/2)) must be within 0.2 of the declared one.
+double observed_order(const std::string& name, int order, const Scene& scene, double t_end,
+                      const Vector& x_ref, const Vector& v_ref, double w) {
+  const MassSpringModel model(scene);
+  const double h = order == 1 ? 1e-3 : (order == 2 ? 1e-2 : 1e-2);
+  double error[2];
+  for (int k = 0; k < 2; ++k) {
+    RunSettings s;
+    s.integrator = name;
+    s.dt = h / (1 << k);
+    s.t_end = t_end;
+    s.options.newton_tol = 1e-14;
+    const RunResult r = simulate(model, s);
+    EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+    error[k] = (r.x_final - x_ref).norm() + (r.v_final - v_ref).norm() / w;
+  }
+  return std::log2(error[0] / error[1]);
+}
+
+TEST_P(EveryIntegrator, ConvergenceOrderOnOscillatorMatchesTheory) {
+  const IntegratorInfo i = info();
+  if (i.adaptive) GTEST_SKIP() << "adaptive: tested by tolerance proportionality";
+  const double k = 100.0, w = 10.0, rest = 0.0, amplitude = 0.1, t_end = 1.0;
+  Vector x_exact(2), v_exact(2);
+  x_exact << rest + amplitude * std::cos(w * t_end), 0.0;
+  v_exact << -amplitude * w * std::sin(w * t_end), 0.0;
+  const double p = observed_order(GetParam(), i.order, oscillator(k, 1.0, rest, amplitude), t_end,
+                                  x_exact, v_exact, w);
+  EXPECT_NEAR(p, i.order, 0.2);
+}
+
+RunResult reference_run(const Scene& scene, double t_end) {
+  const MassSpringModel model(scene);
+  RunSettings s;
+  s.integrator = "rk4";
+  s.dt = 2.5e-5;
+  s.t_end = t_end;
+  return simulate(model, s);
+}
+
+TEST_P(EveryIntegrator, ConvergenceOrderOnNonlinearScenesMatchesTheory) {
+  const IntegratorInfo i = info();
+  if (i.adaptive) GTEST_SKIP() << "adaptive: tested by tolerance proportionality";
+  for (const Scene& scene : {swinging_spring(), damped_windy_chain()}) {
+    const RunResult ref = reference_run(scene, 0.5);
+    ASSERT_EQ(ref.status, RunStatus::kCompleted);
+    const double p = observed_order(GetParam(), i.order, scene, 0.5, ref.x_final, ref.v_final, 7.0);
+    EXPECT_NEAR(p, i.order, 0.2) << scene.name;
+  }
+}
+
+// Symplectic methods: the energy error oscillates without drift.
+TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
+  const IntegratorInfo i = info();
+  if (!i.symplectic) GTEST_SKIP() << "not symplectic";
+  for (const Scene& scene : {oscillator(), swinging_spring()}) {
+    const MassSpringModel model(scene);
+    auto integrator = make_integrator(GetParam());
+    ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
+                                       model.initial_velocities(), IntegratorOptions{}).ok);
+    const double h = 0.01, e0 = model.energies(model.initial_positions(),
+                                               model.initial_velocities()).total();
+    double early = 0.0, late = 0.0;
+    for (int step = 1; step <= 10000; ++step) {
+      ASSERT_TRUE(integrator->advance_to(step * h).ok);
+      const double dev = std::abs(mechanical_energy(model, integrator->x(), integrator->v()) - e0);
+      if (step <= 2000) early = std::max(early, dev);
+      if (step > 8000) late = std::max(late, dev);
+    }
+    // Bounded: the w h = 0.1 (oscillator) deviation is O(h) of the energy...
+    EXPECT_LT(late, 0.1 * std::abs(e0)) << scene.name;
+    // ...and does not grow: the last 2000 steps stay within the first 2000's band.
+    EXPECT_LT(late, 1.05 * early + 1e-12 * std::abs(e0)) << scene.name;
+  }
+}
+
+// The stability limit on the undamped oscillator: stable 1% below, unstable 1% above.
+TEST_P(EveryIntegrator, StabilityLimitHoldsJustBelowAndFailsJustAbove) {
+  const IntegratorInfo i = info();
+  if (i.adaptive || std::isinf(i.stability_limit) || i.stability_limit == 0.0) {
+    GTEST_SKIP() << "no finite stability limit";
+  }
+  const MassSpringModel model(oscillator(100.0, 1.0));
+  const double w = 10.0;
+  for (double factor : {0.99, 1.01}) {
+    const double dt = factor * i.stability_limit / w;
+    RunSettings s = settings(dt, 10000 * dt);
+    const RunResult r = simulate(model, s);
+    EXPECT_EQ(r.diverged(), factor > 1.0) << "w h = " << factor * i.stability_limit;
+  }
+}
+
+// A-stable methods: no step is too large; the energy never grows.
+TEST_P(EveryIntegrator, AStableMethodsStayStableAtWh100) {
+  const IntegratorInfo i = info();
+  if (!std::isinf(i.stability_limit)) GTEST_SKIP() << "not A-stable";
+  const MassSpringModel model(oscillator(100.0, 1.0));
+  const RunResult r = simulate(model, settings(100.0 / 10.0, 1000.0));
+  EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  EXPECT_LE(r.energy_final, r.energy_initial * (1.0 + 1e-9));
+}
+
+// Explicit Euler has no stable step: it blows up, and the run says when.
+TEST_P(EveryIntegrator, UnconditionallyUnstableMethodDivergesAsAResult) {
+  const IntegratorInfo i = info();
+  if (i.stability_limit != 0.0) GTEST_SKIP() << "has a stable range";
+  const MassSpringModel model(oscillator(100.0, 1.0));
+  const RunResult r = simulate(model, settings(0.05, 100.0));
+  ASSERT_EQ(r.status, RunStatus::kDiverged);
+  // Energy grows by (1 + w^2 h^2) = 1.25 per step; 1000x the scale takes
+  // ceil(ln 1000 / ln 1.25) = 31 steps.
+  EXPECT_NEAR(*r.diverged_at, 31 * 0.05, 1e-12);
+  EXPECT_TRUE(r.x_final.allFinite());
+}
+
+// A hanging mass at its equilibrium stays there, whatever the method.
+TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
+  // Rest length 1, placed where the spring balances the weight m g / k.
+  Scene s = oscillator(100.0, 2.0, 1.0, 0.0);
+  s.gravity = Eigen::Vector3d(-9.81, 0, 0);  // pulls along -x, toward the anchor
+  s.particles[1].x.x() = 1.0 - 2.0 * 9.81 / 100.0;
+  s.drag = 0.5;
+  const MassSpringModel model(s);
+  const RunResult r = simulate(model, settings(0.01, 1.0));
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  EXPECT_LT((r.x_final - model.initial_positions()).norm(), 1e-12);
+  EXPECT_LT(r.v_final.norm(), 1e-12);
+}
+
+TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
+  const IntegratorInfo i = info();
+  const MassSpringModel model(damped_windy_chain());
+  const RunResult r = simulate(model, settings(0.001, 0.01));
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  const IntegratorStats& s = r.stats;
+  if (!i.adaptive) {
+    EXPECT_EQ(s.steps, 10);
+  }
+  EXPECT_GE(s.force_evals, s.steps);
+  EXPECT_EQ(s.rejected_steps, 0);
+  EXPECT_EQ(s.nonlinear_failures, 0);
+  if (i.implicit) {
+    EXPECT_GE(s.newton_iterations, s.steps);
+    EXPECT_GE(s.jacobian_evals, s.steps);
+    EXPECT_GE(s.linear_solves, s.newton_iterations);
+    EXPECT_GE(s.factorizations, 1);
+  } else {
+    EXPECT_EQ(s.newton_iterations, 0);
+  }
+}
+
+TEST_P(EveryIntegrator, SameInputsGiveBitIdenticalResults) {
+  const MassSpringModel model(damped_windy_chain());
+  const RunResult a = simulate(model, settings(0.002, 0.1));
+  const RunResult b = simulate(MassSpringModel(damped_windy_chain()), settings(0.002, 0.1));
+  ASSERT_EQ(a.x_final.size(), b.x_final.size());
+  for (Eigen::Index k = 0; k < a.x_final.size(); ++k) {
+    EXPECT_EQ(a.x_final[k], b.x_final[k]);
+    EXPECT_EQ(a.v_final[k], b.v_final[k]);
+  }
+  EXPECT_EQ(a.stats.force_evals, b.stats.force_evals);
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegrator, ::testing::ValuesIn(integrator_names()),
+                         test_name);
+
+}  // namespace
+}  // namespace springlab

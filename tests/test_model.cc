@@ -1,0 +1,172 @@
+// The model's analytic derivatives against central finite differences, at
+// random states with stretched and compressed springs, in 2-D and 3-D, with
+// every force kind on; and force = -grad(potential energy) for the
+// conservative terms.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "models/mass_spring_model.h"
+
+namespace springlab {
+namespace {
+
+// A small random scene exercising every force: a fixed particle, springs with
+// positive and zero rest length, spring damping, drag, gravity and wind.
+Scene random_scene(int dim, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Scene s;
+  s.name = "random";
+  s.dimension = dim;
+  s.gravity.head(dim).setConstant(-3.0);
+  s.drag = 0.3;
+  s.wind = Wind{Eigen::Vector3d(1.0, 0.5, dim == 3 ? -0.5 : 0.0), 0.2, 0.5, 1.5};
+  const int n = 6;
+  for (int p = 0; p < n; ++p) {
+    Particle particle;
+    for (int r = 0; r < dim; ++r) {
+      particle.x[r] = u(rng) + p;
+      particle.v[r] = u(rng);
+    }
+    particle.mass = 1.0 + 0.5 * p;
+    particle.fixed = p == 2;
+    s.particles.push_back(particle);
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      if ((i + j) % 3 == 0) continue;
+      Spring spring{i, j, 10.0 + i + j, 0.0, 0.4 * ((i + j) % 2)};
+      const double l = (s.particles[i].x - s.particles[j].x).norm();
+      // stretched, compressed and zero-rest-length springs
+      spring.rest = (i + j) % 5 == 0 ? 0.0 : l * (((i + j) % 2 == 0) ? 0.7 : 1.4);
+      s.springs.push_back(spring);
+    }
+  }
+  return s;
+}
+
+class ModelDerivatives : public ::testing::TestWithParam<int> {};
+
+TEST_P(ModelDerivatives, JacobiansMatchCentralDifferences) {
+  const int dim = GetParam();
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const MassSpringModel model(random_scene(dim, seed));
+    const double t = 0.37 * seed;
+    const Vector x = model.initial_positions();
+    const Vector v = model.initial_velocities();
+    SparseMatrix dfdx, dfdv;
+    model.jacobians(t, x, v, &dfdx, &dfdv);
+    const Eigen::MatrixXd Kx(dfdx), Kv(dfdv);
+    const double eps = 1e-6;
+    Vector fp, fm;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      Vector xp = x, xm = x;
+      xp[k] += eps;
+      xm[k] -= eps;
+      model.force(t, xp, v, fp);
+      model.force(t, xm, v, fm);
+      const Vector column_x = (fp - fm) / (2 * eps);
+      EXPECT_LT((Kx.col(k) - column_x).norm(), 1e-6 * (1.0 + column_x.norm()))
+          << "dF/dx column " << k << " seed " << seed;
+      Vector vp = v, vm = v;
+      vp[k] += eps;
+      vm[k] -= eps;
+      model.force(t, x, vp, fp);
+      model.force(t, x, vm, fm);
+      const Vector column_v = (fp - fm) / (2 * eps);
+      EXPECT_LT((Kv.col(k) - column_v).norm(), 1e-6 * (1.0 + column_v.norm()))
+          << "dF/dv column " << k << " seed " << seed;
+    }
+  }
+}
+
+TEST_P(ModelDerivatives, ConservativeForceIsMinusEnergyGradient) {
+  const int dim = GetParam();
+  Scene s = random_scene(dim, 7);
+  s.drag = 0.0;
+  s.wind.reset();
+  for (Spring& spring : s.springs) spring.damping = 0.0;
+  const MassSpringModel model(s);
+  const Vector x = model.initial_positions();
+  const Vector v = model.initial_velocities();
+  Vector f;
+  model.force(0.0, x, v, f);
+  const double eps = 1e-6;
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    Vector xp = x, xm = x;
+    xp[k] += eps;
+    xm[k] -= eps;
+    const Energies ep = model.energies(xp, v), em = model.energies(xm, v);
+    const double dV = ((ep.spring + ep.gravity) - (em.spring + em.gravity)) / (2 * eps);
+    EXPECT_NEAR(f[k], -dV, 1e-6 * (1.0 + std::abs(f[k]))) << "coordinate " << k;
+  }
+}
+
+TEST_P(ModelDerivatives, DampingDissipatesAndSymmetryIsReported) {
+  const int dim = GetParam();
+  Scene s = random_scene(dim, 3);
+  s.wind.reset();
+  s.gravity.setZero();
+  const MassSpringModel damped(s);
+  EXPECT_FALSE(damped.jacobian_symmetric());  // spring damping's dF/dx is not symmetric
+  EXPECT_EQ(damped.velocity_dependence(), VelocityDependence::kCoupled);
+  // Drag and spring damping only remove energy: their power is -gamma|v|^2 - sum c (w.u)^2 < 0.
+  EXPECT_LT(damped.nonconservative_power(0.0, damped.initial_positions(),
+                                         damped.initial_velocities()), 0.0);
+  for (Spring& spring : s.springs) spring.damping = 0.0;
+  const MassSpringModel undamped(s);
+  EXPECT_TRUE(undamped.jacobian_symmetric());
+  EXPECT_EQ(undamped.velocity_dependence(), VelocityDependence::kDiagonal);
+  SparseMatrix dfdx;
+  undamped.jacobians(0.0, undamped.initial_positions(), undamped.initial_velocities(), &dfdx,
+                     nullptr);
+  const Eigen::MatrixXd K(dfdx);
+  EXPECT_LT((K - K.transpose()).norm(), 1e-12 * K.norm());
+}
+
+INSTANTIATE_TEST_SUITE_P(Dimensions, ModelDerivatives, ::testing::Values(2, 3),
+                         [](const auto& info) { return std::to_string(info.param) + "D"; });
+
+TEST(Model, FixedParticlesAreNotUnknownsAndStayPut) {
+  Scene s = random_scene(3, 11);
+  const MassSpringModel model(s);
+  EXPECT_EQ(model.dofs(), 5 * 3);  // 6 particles, one fixed
+  EXPECT_EQ(model.jacobian_pattern().rows(), 15);
+  Vector x = model.initial_positions();
+  x.setConstant(42.0);
+  const Eigen::MatrixXd all = model.scene_positions(x);
+  EXPECT_EQ(all.row(2).transpose(), s.particles[2].x);  // the fixed particle
+  EXPECT_EQ(all(0, 0), 42.0);
+}
+
+TEST(Model, EnergiesFollowSpecFormulas) {
+  Scene s;
+  s.dimension = 2;
+  s.gravity = Eigen::Vector3d(0, -10, 0);
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 5.0, true},
+                 {Eigen::Vector3d(0, -3, 0), Eigen::Vector3d(2, 0, 0), 2.0, false}};
+  s.springs = {{0, 1, 100.0, 2.0, 0.0}};
+  const MassSpringModel model(s);
+  const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
+  EXPECT_DOUBLE_EQ(e.kinetic, 0.5 * 2.0 * 4.0);
+  EXPECT_DOUBLE_EQ(e.spring, 0.5 * 100.0 * 1.0);
+  EXPECT_DOUBLE_EQ(e.gravity, -2.0 * (-10.0) * (-3.0));  // fixed particle stores nothing
+  // E_s = T + U + m_free (|g| d + 0): d = 3 (bounding-box diagonal)
+  EXPECT_DOUBLE_EQ(model.energy_scale(), 4.0 + 50.0 + 2.0 * 10.0 * 3.0);
+}
+
+TEST(Model, AbsentForcesAreNotAssembled) {
+  Scene s;
+  s.dimension = 2;
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
+                 {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
+  s.springs = {{0, 1, 10.0, 1.0, 0.0}};
+  const MassSpringModel model(s);
+  ASSERT_EQ(model.terms().size(), 1u);
+  EXPECT_EQ(model.terms()[0]->name(), "spring");
+  EXPECT_EQ(model.velocity_dependence(), VelocityDependence::kNone);
+}
+
+}  // namespace
+}  // namespace springlab
