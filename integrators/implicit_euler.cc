@@ -7,6 +7,7 @@ ImplicitEuler::ImplicitEuler()
                           .scheme = "v' = v + h M^-1 F(t + h, x + h v', v'),  x' = x + h v'",
                           .order = 1,
                           .implicit = true,
+                          .iterates_to_tolerance = true,
                           .stability_function =
                               [](std::complex<double> z) { return 1.0 / (1.0 - z); }}) {}
 

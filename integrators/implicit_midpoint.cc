@@ -7,6 +7,7 @@ ImplicitMidpoint::ImplicitMidpoint()
                           .scheme = "y' = y + h f(t + h/2, (y + y')/2)",
                           .order = 2,
                           .implicit = true,
+                          .iterates_to_tolerance = true,
                           .symplectic = true,
                           .stability_function =
                               [](std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }}) {}

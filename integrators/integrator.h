@@ -57,6 +57,7 @@ struct IntegratorInfo {
   int order = 1;             // global order of accuracy
   bool adaptive = false;
   bool implicit = false;
+  bool iterates_to_tolerance = false;  // solves its nonlinear system to --newton-tol
   bool symplectic = false;   // for forces that depend on x only
   // Largest stable omega*h on the undamped linear oscillator; infinity for an
   // A-stable method, 0 for one unstable at every step (explicit Euler).

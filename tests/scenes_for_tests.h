@@ -53,4 +53,20 @@ inline Scene damped_windy_chain() {
   return s;
 }
 
+// A 2-D chain squeezed to 30% of its rest length with a zig-zag kink: every
+// spring is compressed, so its transverse stiffness k (1 - L/l) is negative
+// and M - h^2 dF/dx is indefinite at moderate h.
+inline Scene compressed_chain() {
+  Scene s;
+  s.name = "compressed-chain";
+  s.dimension = 2;
+  s.particles.push_back({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true});
+  for (int p = 1; p <= 6; ++p) {
+    s.particles.push_back({Eigen::Vector3d(0.3 * p, 0.02 * (p % 2), 0), Eigen::Vector3d::Zero(),
+                           1.0, p == 6});
+    s.springs.push_back({p - 1, p, 100.0, 1.0, 0.0});
+  }
+  return s;
+}
+
 }  // namespace springlab::testing

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <complex>
 
+#include <Eigen/Eigenvalues>
+
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
 #include "models/mass_spring_model.h"
@@ -196,6 +198,45 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT((r.x_final - model.initial_positions()).norm(), 1e-12);
   EXPECT_LT(r.v_final.norm(), 1e-12);
+}
+
+// Compressed springs: Newton's matrix is indefinite, Newton must still
+// converge (the line search keeps it on course), never crash. (A single
+// linearized step, Baraff-Witkin's, has no such guarantee: it diverges here.)
+TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
+  const IntegratorInfo i = info();
+  if (!i.iterates_to_tolerance) GTEST_SKIP() << "does not iterate Newton to a tolerance";
+  const MassSpringModel model(testing::compressed_chain());
+  const double h = 0.2;
+  SparseMatrix dfdx;
+  model.jacobians(0.0, model.initial_positions(), model.initial_velocities(), &dfdx, nullptr);
+  Eigen::MatrixXd newton = -h * h * Eigen::MatrixXd(dfdx);
+  newton.diagonal() += model.mass();
+  const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(newton).eigenvalues()[0];
+  ASSERT_LT(lowest, 0.0) << "the scene must make M - h^2 dF/dx indefinite";
+  RunSettings s = settings(h, 4.0);
+  s.options.newton_tol = 1e-10;
+  const RunResult r = simulate(model, s);
+  EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  EXPECT_EQ(r.stats.nonlinear_failures, 0);
+  EXPECT_TRUE(r.x_final.allFinite());
+}
+
+// A Newton that cannot converge is a result naming the reason, not a crash.
+TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
+  const MassSpringModel model(testing::compressed_chain());
+  RunSettings s;
+  s.integrator = "implicit-euler";
+  s.dt = 0.2;
+  s.t_end = 1.0;
+  s.options.max_newton = 1;
+  s.options.newton_tol = 1e-14;
+  const RunResult r = simulate(model, s);
+  ASSERT_EQ(r.status, RunStatus::kFailed);
+  EXPECT_NE(r.failure.find("implicit-euler: Newton failed at t = 0"), std::string::npos) << r.failure;
+  EXPECT_NE(r.failure.find("no convergence in 1 iterations"), std::string::npos) << r.failure;
+  EXPECT_EQ(r.stats.nonlinear_failures, 1);
+  EXPECT_DOUBLE_EQ(*r.diverged_at, 0.2);
 }
 
 TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
