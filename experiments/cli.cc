@@ -122,11 +122,12 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  if (!energy_path.empty() && energy_path == trajectory_path) {
-    throw UsageError("--energy and --trajectory name the same file");
+  if (!energy_path.empty() && !trajectory_path.empty() && same_file(energy_path, trajectory_path)) {
+    throw UsageError("--energy " + energy_path + " and --trajectory " + trajectory_path +
+                     " name the same file");
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
-  time_grid(common.run.dt, common.run.t_end);  // refuse a bad grid before any output exists
+  make_time_grid(common.run.dt, common.run.t_end);  // refuse a bad grid before any output exists
   const MassSpringModel model(scene);
 
   // Files are opened (as temporaries) before any step runs.
@@ -145,8 +146,12 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   }
 
   const RunResult r = simulate(model, common.run, observers);
-  if (energy_file) energy_file->commit();
-  if (trajectory_file) trajectory_file->commit();
+  for (AtomicFile* f : {energy_file.get(), trajectory_file.get()}) {
+    if (f != nullptr) f->finish();
+  }
+  for (AtomicFile* f : {energy_file.get(), trajectory_file.get()}) {
+    if (f != nullptr) f->publish();
+  }
 
   if (common.json) {
     Json out;
@@ -155,7 +160,8 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     out["dt"] = r.dt;
     out["t_end"] = r.t_end;
     out["status"] = to_string(r.status);
-    for (const auto& [key, value] : stats_json(r.stats).items()) out[key] = value;
+    const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
+    for (const auto& [key, value] : stats.items()) out[key] = value;
     out["wall_seconds"] = r.wall_seconds;
     out["diverged"] = r.diverged();
     out["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);

@@ -1,5 +1,6 @@
 #include "experiments/output_files.h"
 
+#include <stdlib.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -23,18 +24,23 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
   if (std::filesystem::is_directory(path_)) {
     throw std::runtime_error(path_ + ": is a directory, not a file");
   }
-  temp_path_ = path_ + ".tmp" + std::to_string(::getpid());
-  file_ = std::fopen(temp_path_.c_str(), "wb");
+  // A unique temporary beside the target (same file system, so the final
+  // rename is atomic); mkstemp never reuses an existing name.
+  std::string name = path_ + ".tmpXXXXXX";
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) throw std::runtime_error(path_ + ": cannot write (" + std::strerror(errno) + ")");
+  temp_path_ = name;
+  file_ = ::fdopen(fd, "wb");
   if (file_ == nullptr) {
+    ::close(fd);
+    std::remove(temp_path_.c_str());
     throw std::runtime_error(path_ + ": cannot write (" + std::strerror(errno) + ")");
   }
 }
 
 AtomicFile::~AtomicFile() {
-  if (file_ != nullptr) {
-    std::fclose(file_);
-    std::remove(temp_path_.c_str());
-  }
+  if (file_ != nullptr) std::fclose(file_);
+  if (!published_) std::remove(temp_path_.c_str());
 }
 
 void AtomicFile::write(const std::string& text) {
@@ -42,14 +48,29 @@ void AtomicFile::write(const std::string& text) {
   if (std::fwrite(text.data(), 1, text.size(), file_) != text.size()) failed_ = true;
 }
 
-void AtomicFile::commit() {
+void AtomicFile::finish() {
   if (file_ == nullptr) return;
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
-  if (failed_ || !closed || std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
-    std::remove(temp_path_.c_str());
+  if (failed_ || !closed) {
+    failed_ = true;
     throw std::runtime_error(path_ + ": write failed");
   }
+}
+
+void AtomicFile::publish() {
+  finish();
+  if (failed_ || std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    throw std::runtime_error(path_ + ": write failed");
+  }
+  published_ = true;
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  auto resolved = [&](const std::string& p) { return fs::weakly_canonical(fs::absolute(p, ec), ec); };
+  return resolved(a) == resolved(b);
 }
 
 EnergyCsv::EnergyCsv(const MassSpringModel& model, AtomicFile& file) : model_(model), file_(file) {

@@ -20,8 +20,11 @@ class AtomicFile {
   AtomicFile& operator=(const AtomicFile&) = delete;
 
   void write(const std::string& text);
-  // Flushes, closes and renames into place; throws on an I/O error.
-  void commit();
+  // Flushes and closes the temporary; throws on an I/O error. Finish every
+  // file of a run before publishing any, so they appear all or none.
+  void finish();
+  // Renames the finished temporary into place (finishing it if needed).
+  void publish();
   const std::string& path() const { return path_; }
 
  private:
@@ -29,7 +32,11 @@ class AtomicFile {
   std::string temp_path_;
   std::FILE* file_ = nullptr;
   bool failed_ = false;
+  bool published_ = false;
 };
+
+// True when two paths name the same file (after resolving ".", ".." and links).
+bool same_file(const std::string& a, const std::string& b);
 
 // Shortest decimal text that reads back to the same double (deterministic).
 std::string format_number(double value);

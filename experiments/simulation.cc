@@ -17,7 +17,7 @@ const char* to_string(RunStatus status) {
   return "unknown";
 }
 
-std::vector<double> time_grid(double dt, double t_end) {
+TimeGrid make_time_grid(double dt, double t_end) {
   if (!(dt > 0.0) || !std::isfinite(dt)) throw std::invalid_argument("dt must be a positive number");
   if (!(t_end > 0.0) || !std::isfinite(t_end)) {
     throw std::invalid_argument("t_end must be a positive number");
@@ -25,20 +25,26 @@ std::vector<double> time_grid(double dt, double t_end) {
   const double ratio = t_end / dt;
   if (ratio > 1e9) throw std::invalid_argument("t_end / dt exceeds 1e9 steps");
   const double whole = std::round(ratio);
-  const long steps = std::abs(ratio - whole) <= 1e-9 * std::max(1.0, ratio)
-                         ? static_cast<long>(whole)
-                         : static_cast<long>(std::ceil(ratio));
-  std::vector<double> grid;
-  grid.reserve(static_cast<std::size_t>(std::max(steps, 1L)));
-  for (long k = 1; k < steps; ++k) grid.push_back(static_cast<double>(k) * dt);
-  grid.push_back(t_end);
+  TimeGrid grid;
+  grid.dt = dt;
+  grid.t_end = t_end;
+  grid.steps = std::abs(ratio - whole) <= 1e-9 ? static_cast<long>(whole)
+                                               : static_cast<long>(std::ceil(ratio));
+  grid.steps = std::max(grid.steps, 1L);
   return grid;
+}
+
+std::vector<double> time_grid(double dt, double t_end) {
+  const TimeGrid grid = make_time_grid(dt, t_end);
+  std::vector<double> times;
+  for (long k = 1; k <= grid.steps; ++k) times.push_back(grid.at(k));
+  return times;
 }
 
 RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers) {
   if (settings.every < 1) throw std::invalid_argument("every must be >= 1");
-  const std::vector<double> grid = time_grid(settings.dt, settings.t_end);
+  const TimeGrid grid = make_time_grid(settings.dt, settings.t_end);
   auto integrator = make_integrator(settings.integrator);
 
   RunResult result;
@@ -57,14 +63,21 @@ RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
   notify(0.0, x0, v0);
 
   StepResult step = integrator->initialize(model, 0.0, x0, v0, settings.options);
+  if (!step.ok) {
+    result.status = RunStatus::kFailed;
+    result.failure = step.message;
+    result.diverged_at = 0.0;
+  }
   double t_good = 0.0;
   Vector x_good = x0, v_good = v0;
-  for (std::size_t k = 0; k < grid.size() && step.ok; ++k) {
-    step = integrator->advance_to(grid[k]);
+  bool good_observed = true;  // has the last good state been written?
+  for (long k = 1; k <= grid.steps && result.status == RunStatus::kCompleted; ++k) {
+    const double t = grid.at(k);
+    step = integrator->advance_to(t);
     if (!step.ok) {
       result.status = RunStatus::kFailed;
       result.failure = step.message;
-      result.diverged_at = grid[k];
+      result.diverged_at = t;
       break;
     }
     const Vector& x = integrator->x();
@@ -76,21 +89,17 @@ RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
     }
     if (blown) {
       result.status = RunStatus::kDiverged;
-      result.diverged_at = grid[k];
+      result.diverged_at = t;
       break;
     }
-    t_good = grid[k];
+    t_good = t;
     x_good = x;
     v_good = v;
-    const bool last = k + 1 == grid.size();
-    if (last || (k + 1) % static_cast<std::size_t>(settings.every) == 0) notify(t_good, x, v);
+    good_observed = k == grid.steps || k % settings.every == 0;
+    if (good_observed) notify(t, x, v);
   }
-  if (!step.ok && result.status == RunStatus::kCompleted) {
-    // initialize() itself failed
-    result.status = RunStatus::kFailed;
-    result.failure = step.message;
-    result.diverged_at = 0.0;
-  }
+  // A run that stopped early still ends its output at its last good state.
+  if (!good_observed) notify(t_good, x_good, v_good);
 
   result.stats = integrator->stats();
   result.t_final = t_good;

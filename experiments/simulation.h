@@ -48,7 +48,17 @@ struct RunResult {
 
 // The grid of SPEC §6: round(T/dt) steps when T/dt is within 1e-9 of a whole
 // number, otherwise the last step is shortened to end exactly at T.
-// Returns t_1 .. t_N (t_0 = 0 excluded), with t_k = k dt and t_N = T exactly.
+// Step k ends at t_k = k dt, and t_N = T exactly (no accumulated drift).
+struct TimeGrid {
+  long steps = 0;
+  double dt = 0.0;
+  double t_end = 0.0;
+  double at(long k) const { return k == steps ? t_end : static_cast<double>(k) * dt; }
+};
+// Throws std::invalid_argument for a non-positive or non-finite dt or t_end,
+// or more than 1e9 steps.
+TimeGrid make_time_grid(double dt, double t_end);
+// t_1 .. t_N as a list (small grids: tests and tools).
 std::vector<double> time_grid(double dt, double t_end);
 
 // Runs to t_end or until the run diverges or fails (both are results, not

@@ -1,0 +1,384 @@
+// The run driver (experiments/simulation.h) and the stability search
+// (experiments/stability.h) in-process: the output time grid of SPEC §6, the
+// observer protocol, the divergence rule (the E_s threshold) and the
+// bisection on dt, each checked against a value worked out by hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "experiments/simulation.h"
+#include "experiments/stability.h"
+#include "models/mass_spring_model.h"
+#include "models/scene.h"
+
+namespace springlab {
+namespace {
+
+// One zero-rest-length spring along x from a fixed anchor at the origin, no
+// gravity: F = -k x in every direction, so the linear analysis is exact.
+// w = sqrt(k / m), E(0) = k amplitude^2 / 2 = E_s.
+Scene linear_oscillator(double k = 100.0, double mass = 1.0, double amplitude = 0.1) {
+  Scene s;
+  s.name = "linear-oscillator";
+  s.dimension = 2;
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
+                 {Eigen::Vector3d(amplitude, 0, 0), Eigen::Vector3d::Zero(), mass, false}};
+  s.springs = {{0, 1, k, 0.0, 0.0}};
+  return s;
+}
+
+RunSettings settings(const std::string& integrator, double dt, double t_end) {
+  RunSettings s;
+  s.integrator = integrator;
+  s.dt = dt;
+  s.t_end = t_end;
+  return s;
+}
+
+class RecordingObserver final : public Observer {
+ public:
+  void observe(double t, const Vector& x, const Vector& v) override {
+    times.push_back(t);
+    xs.push_back(x);
+    vs.push_back(v);
+  }
+  std::vector<double> times;
+  std::vector<Vector> xs, vs;
+};
+
+// ---------------------------------------------------------------- time_grid
+
+TEST(SimulationTimeGrid, WholeNumberOfStepsEvenWhenTOverDtIsInexact) {
+  // 1 / 0.1 is not exactly 10 in binary; the grid still has 10 points.
+  const std::vector<double> grid = time_grid(0.1, 1.0);
+  ASSERT_EQ(grid.size(), 10u);
+  for (std::size_t k = 0; k + 1 < grid.size(); ++k) {
+    EXPECT_EQ(grid[k], static_cast<double>(k + 1) * 0.1) << "k = " << k + 1;
+  }
+  EXPECT_EQ(grid.back(), 1.0);
+
+  // 0.3 / 0.1 = 2.9999999999999996 and (3 * 0.1) / 0.1 = 3.0000000000000004.
+  const std::vector<double> below = time_grid(0.1, 0.3);
+  ASSERT_EQ(below.size(), 3u);
+  EXPECT_EQ(below[0], 0.1);
+  EXPECT_EQ(below[1], 2 * 0.1);
+  EXPECT_EQ(below[2], 0.3);
+  const std::vector<double> above = time_grid(0.1, 3 * 0.1);
+  ASSERT_EQ(above.size(), 3u);
+  EXPECT_EQ(above[2], 3 * 0.1);
+
+  EXPECT_EQ(time_grid(0.01, 5.0).size(), 500u);
+  EXPECT_EQ(time_grid(0.25, 1.0), (std::vector<double>{0.25, 0.5, 0.75, 1.0}));
+}
+
+TEST(SimulationTimeGrid, LastStepShortenedToEndExactlyAtT) {
+  const std::vector<double> grid = time_grid(0.3, 1.0);
+  ASSERT_EQ(grid.size(), 4u);
+  EXPECT_EQ(grid[0], 1 * 0.3);
+  EXPECT_EQ(grid[1], 2 * 0.3);
+  EXPECT_EQ(grid[2], 3 * 0.3);
+  EXPECT_EQ(grid[3], 1.0);
+
+  EXPECT_EQ(time_grid(1.0, 3.5), (std::vector<double>{1.0, 2.0, 3.0, 3.5}));
+  // 1e-6 past a whole number is far outside the 1e-9 rounding window.
+  EXPECT_EQ(time_grid(1.0, 3.0 + 1e-6), (std::vector<double>{1.0, 2.0, 3.0, 3.0 + 1e-6}));
+}
+
+TEST(SimulationTimeGrid, StepLongerThanTGivesOnePointAtT) {
+  EXPECT_EQ(time_grid(2.0, 1.0), (std::vector<double>{1.0}));
+  EXPECT_EQ(time_grid(1.0, 1.0), (std::vector<double>{1.0}));
+  EXPECT_EQ(time_grid(1e3, 1e-3), (std::vector<double>{1e-3}));
+}
+
+TEST(SimulationTimeGrid, WithinOneBillionthOfWholeRounds) {
+  // T / dt = 10 + 5e-11 (and 10 - 5e-11): 10 steps, the last ending at T.
+  for (const double t_end : {1.0 + 5e-12, 1.0 - 5e-12}) {
+    SCOPED_TRACE(t_end);
+    const std::vector<double> grid = time_grid(0.1, t_end);
+    ASSERT_EQ(grid.size(), 10u);
+    EXPECT_EQ(grid[8], 9 * 0.1);
+    EXPECT_EQ(grid.back(), t_end);
+  }
+  // 3 + 1e-10 whole steps of 1.
+  EXPECT_EQ(time_grid(1.0, 3.0 + 1e-10), (std::vector<double>{1.0, 2.0, 3.0 + 1e-10}));
+}
+
+TEST(SimulationTimeGrid, BadStepOrEndTimeThrows) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const double dt : {0.0, -0.0, -0.1, nan, inf, -inf}) {
+    SCOPED_TRACE(dt);
+    EXPECT_THROW(time_grid(dt, 1.0), std::invalid_argument);
+  }
+  for (const double t_end : {0.0, -0.0, -1.0, nan, inf, -inf}) {
+    SCOPED_TRACE(t_end);
+    EXPECT_THROW(time_grid(0.1, t_end), std::invalid_argument);
+  }
+}
+
+TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
+  const MassSpringModel model(linear_oscillator());
+  EXPECT_THROW(simulate(model, settings("rk4", 0.0, 1.0)), std::invalid_argument);
+  EXPECT_THROW(simulate(model, settings("rk4", -0.1, 1.0)), std::invalid_argument);
+  EXPECT_THROW(simulate(model, settings("rk4", 0.1, 0.0)), std::invalid_argument);
+  RunSettings every = settings("rk4", 0.1, 1.0);
+  every.every = 0;
+  EXPECT_THROW(simulate(model, every), std::invalid_argument);
+}
+
+// ----------------------------------------------------------------- observer
+
+TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
+  const MassSpringModel model(linear_oscillator());
+  RecordingObserver a, b;
+  const RunResult r = simulate(model, settings("verlet", 0.1, 1.0), {&a, &b});
+  EXPECT_FALSE(r.diverged());
+  EXPECT_EQ(r.status, RunStatus::kCompleted);
+  EXPECT_FALSE(r.diverged_at.has_value());
+  EXPECT_EQ(r.t_final, 1.0);
+  EXPECT_EQ(r.stats.steps, 10);
+
+  ASSERT_EQ(a.times.size(), 11u);
+  EXPECT_EQ(a.times, b.times);  // every observer sees every output time
+  EXPECT_EQ(a.times.front(), 0.0);
+  for (std::size_t k = 1; k + 1 < a.times.size(); ++k) EXPECT_EQ(a.times[k], static_cast<double>(k) * 0.1);
+  EXPECT_EQ(a.times.back(), 1.0);
+
+  // The first observation is the initial state, the last the final one.
+  EXPECT_EQ(a.xs.front(), model.initial_positions());
+  EXPECT_EQ(a.vs.front(), model.initial_velocities());
+  EXPECT_EQ(a.xs.back(), r.x_final);
+  EXPECT_EQ(a.vs.back(), r.v_final);
+  ASSERT_EQ(a.xs.back().size(), 2);  // only the free particle is a state
+}
+
+TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
+  const MassSpringModel model(linear_oscillator());
+  {
+    RecordingObserver o;
+    RunSettings s = settings("rk4", 0.1, 1.0);
+    s.every = 3;
+    simulate(model, s, {&o});
+    EXPECT_EQ(o.times, (std::vector<double>{0.0, 3 * 0.1, 6 * 0.1, 9 * 0.1, 1.0}));
+  }
+  {
+    RecordingObserver o;  // 10 steps, every 5: the last is also a 5th
+    RunSettings s = settings("rk4", 0.1, 1.0);
+    s.every = 5;
+    simulate(model, s, {&o});
+    EXPECT_EQ(o.times, (std::vector<double>{0.0, 5 * 0.1, 1.0}));
+  }
+  {
+    RecordingObserver o;  // every larger than the step count
+    RunSettings s = settings("rk4", 0.1, 1.0);
+    s.every = 1000;
+    simulate(model, s, {&o});
+    EXPECT_EQ(o.times, (std::vector<double>{0.0, 1.0}));
+  }
+  {
+    RecordingObserver o;  // shortened last step (w h = 0.3: stable)
+    RunSettings s = settings("symplectic-euler", 0.3, 1.0);
+    s.every = 2;
+    const RunResult r = simulate(MassSpringModel(linear_oscillator(1.0)), s, {&o});
+    EXPECT_FALSE(r.diverged());
+    EXPECT_EQ(o.times, (std::vector<double>{0.0, 2 * 0.3, 1.0}));
+  }
+}
+
+TEST(SimulationObserver, NotCalledForTheDivergedStep) {
+  const MassSpringModel model(linear_oscillator());
+  RecordingObserver o;
+  const RunResult r = simulate(model, settings("explicit-euler", 0.05, 10.0), {&o});
+  ASSERT_TRUE(r.diverged());
+  ASSERT_TRUE(r.diverged_at.has_value());
+  ASSERT_FALSE(o.times.empty());
+  EXPECT_EQ(o.times.back(), r.t_final);
+  EXPECT_LT(o.times.back(), *r.diverged_at);
+  for (const Vector& x : o.xs) EXPECT_TRUE(x.allFinite());
+}
+
+// --------------------------------------------------------- divergence rule
+
+// Forward Euler on x'' = -w^2 x multiplies E = (m v^2 + k x^2) / 2 by exactly
+// 1 + w^2 h^2 per step. Here E(0) = E_s, so with blowup B the run diverges at
+// the first step n with (1 + w^2 h^2)^n > B.
+TEST(SimulationDivergence, ExplicitEulerDivergesAtThePredictedStep) {
+  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  ASSERT_DOUBLE_EQ(model.energy_scale(), 0.5);
+  const double h = 0.05, w = 10.0;
+  const double growth = 1.0 + w * w * h * h;  // 1.25
+  for (const double blowup : {10.0, 1000.0}) {
+    SCOPED_TRACE(blowup);
+    const double n = std::ceil(std::log(blowup) / std::log(growth));  // 11, 31
+    RunSettings s = settings("explicit-euler", h, 10.0);
+    s.blowup = blowup;
+    const RunResult r = simulate(model, s);
+    EXPECT_EQ(r.status, RunStatus::kDiverged);
+    EXPECT_TRUE(r.diverged());
+    ASSERT_TRUE(r.diverged_at.has_value());
+    EXPECT_EQ(*r.diverged_at, n * h);
+    EXPECT_EQ(r.t_final, (n - 1) * h);
+    // The result keeps the last good state: finite, below the threshold.
+    EXPECT_TRUE(r.x_final.allFinite());
+    EXPECT_TRUE(r.v_final.allFinite());
+    EXPECT_NEAR(r.energy_final, 0.5 * std::pow(growth, n - 1), 1e-9 * r.energy_final);
+    EXPECT_LE(r.energy_final, blowup * model.energy_scale());
+    EXPECT_DOUBLE_EQ(r.energy_initial, 0.5);
+  }
+}
+
+// The threshold is on kinetic + spring energy, not on the total: a particle
+// falling freely keeps its mechanical energy, yet its kinetic energy grows
+// past B E_s. E_s = m |g| d = 1 * 10 * 1 (d: the fixed particle 1 m away).
+TEST(SimulationDivergence, ThresholdIsOnKineticPlusSpringEnergy) {
+  Scene s;
+  s.name = "free-fall";
+  s.dimension = 2;
+  s.gravity = Eigen::Vector3d(0, -10, 0);
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
+                 {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
+  const MassSpringModel model(s);
+  ASSERT_DOUBLE_EQ(model.energy_scale(), 10.0);
+  // v_n = -10 n h: kinetic 50 (n h)^2 > 1e4 first at n h = 14.2 (h = 0.1).
+  const RunResult r = simulate(model, settings("explicit-euler", 0.1, 20.0));
+  ASSERT_TRUE(r.diverged());
+  ASSERT_TRUE(r.diverged_at.has_value());
+  EXPECT_DOUBLE_EQ(*r.diverged_at, 142 * 0.1);
+  // ... while the mechanical energy is still what it was, up to Euler's drift.
+  EXPECT_NEAR(r.energy_initial, 0.0, 1e-12);
+}
+
+// E_s = 0: both particles start at the same point, at rest, on a zero-rest
+// spring (so T(0) = U(0) = 0 and the bounding box has diameter 0), yet
+// gravity pulls the free one down. Its energy grows from 0, which must not
+// count: only a non-finite state does.
+TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
+  Scene s;
+  s.name = "zero-energy-scale";
+  s.dimension = 2;
+  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
+                 {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
+  s.springs = {{0, 1, 100.0, 0.0, 0.0}};
+  const MassSpringModel model(s);
+  ASSERT_EQ(model.energy_scale(), 0.0);
+
+  // Stable integrators: finite motion, never a divergence.
+  for (const char* integrator : {"symplectic-euler", "rk4", "implicit-euler"}) {
+    SCOPED_TRACE(integrator);
+    const RunResult r = simulate(model, settings(integrator, 0.01, 5.0));
+    EXPECT_EQ(r.status, RunStatus::kCompleted);
+    EXPECT_FALSE(r.diverged_at.has_value());
+    EXPECT_GT(model.energies(r.x_final, r.v_final).kinetic +
+                  model.energies(r.x_final, r.v_final).spring,
+              0.0);
+  }
+  // Forward Euler grows the energy 1.25-fold per step: 1.25^200 ~ 1e19 times
+  // whatever it had, still finite, still not a divergence ...
+  const RunResult grown = simulate(model, settings("explicit-euler", 0.05, 10.0));
+  EXPECT_EQ(grown.status, RunStatus::kCompleted);
+  EXPECT_TRUE(grown.x_final.allFinite());
+  EXPECT_GT(grown.x_final.norm(), 1e6);
+  // ... until the state overflows (|x| ~ 1.118^n reaches 1e308 near n = 6400).
+  const RunResult overflow = simulate(model, settings("explicit-euler", 0.05, 500.0));
+  EXPECT_EQ(overflow.status, RunStatus::kDiverged);
+  ASSERT_TRUE(overflow.diverged_at.has_value());
+  EXPECT_GT(*overflow.diverged_at, 250.0);
+  EXPECT_LT(*overflow.diverged_at, 500.0);
+  EXPECT_TRUE(overflow.x_final.allFinite());
+  EXPECT_TRUE(overflow.v_final.allFinite());
+}
+
+// ---------------------------------------------------------------- stability
+
+StabilitySettings stability_settings(const std::string& integrator, double t_end) {
+  StabilitySettings s;
+  s.run = settings(integrator, 0.01, t_end);
+  s.dt_min = 1e-3;  // every search here starts far below the limit
+  s.dt_max = 1.0;
+  return s;
+}
+
+void expect_limit(const StabilityResult& r, double limit, double rel_tol) {
+  EXPECT_GE(r.max_stable_dt, 0.97 * limit);
+  EXPECT_LE(r.max_stable_dt, (1.0 + rel_tol) * limit);
+  EXPECT_EQ(r.lo, r.max_stable_dt);
+  EXPECT_LT(r.lo, r.hi);
+  EXPECT_LE(r.hi / r.lo, 1.0 + rel_tol + 1e-12);
+  EXPECT_GT(r.runs, 2);
+}
+
+TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
+  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const double w = 10.0;
+  for (const char* integrator : {"symplectic-euler", "verlet"}) {
+    SCOPED_TRACE(integrator);
+    const StabilitySettings s = stability_settings(integrator, 100.0 / w);
+    const StabilityResult r = find_max_stable_dt(model, s);
+    EXPECT_EQ(r.integrator, integrator);
+    expect_limit(r, 2.0 / w, s.rel_tol);
+  }
+}
+
+// Just past its limit RK4 amplifies by only |R(i w h)| - 1 ~ 2.5 (w h - 2
+// sqrt 2) per step, so a long run (~3500 steps) is needed to see it.
+TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
+  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const double w = 10.0;
+  const StabilitySettings s = stability_settings("rk4", 1e4 / w);
+  const StabilityResult r = find_max_stable_dt(model, s);
+  expect_limit(r, 2.0 * std::sqrt(2.0) / w, s.rel_tol);
+}
+
+TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
+  const MassSpringModel model(linear_oscillator());
+  const StabilityResult r = find_max_stable_dt(model, stability_settings("implicit-euler", 10.0));
+  EXPECT_EQ(r.max_stable_dt, 1.0);
+  EXPECT_EQ(r.runs, 1);
+}
+
+// Forward Euler is never stable on an undamped oscillator, but over a finite
+// run (n = T / h steps, energy factor (1 + w^2 h^2)^n) it stays under the
+// blowup factor for small enough h: the search finds that finite-time limit,
+// near h with (T / h) ln(1 + w^2 h^2) = ln(1000), i.e. h ~ ln(1000) / (T w^2).
+TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
+  const MassSpringModel model(linear_oscillator());
+  const StabilitySettings s = stability_settings("explicit-euler", 10.0);
+  const StabilityResult r = find_max_stable_dt(model, s);
+  ASSERT_GT(r.lo, 0.0);
+  EXPECT_LT(r.lo, r.hi);
+  EXPECT_LE(r.hi / r.lo, 1.0 + s.rel_tol + 1e-12);
+  EXPECT_EQ(r.max_stable_dt, r.lo);
+  RunSettings run = s.run;
+  run.dt = r.lo;
+  EXPECT_FALSE(simulate(model, run).diverged());
+  run.dt = r.hi;
+  EXPECT_TRUE(simulate(model, run).diverged());
+  const double estimate = std::log(1000.0) / (10.0 * 100.0);
+  EXPECT_NEAR(r.max_stable_dt, estimate, 0.03 * estimate);
+}
+
+TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
+  const MassSpringModel model(linear_oscillator());
+  StabilitySettings s = stability_settings("explicit-euler", 10.0);
+  s.dt_min = 0.1;
+  const StabilityResult r = find_max_stable_dt(model, s);
+  EXPECT_EQ(r.max_stable_dt, 0.0);
+  EXPECT_EQ(r.hi, 0.1);
+}
+
+TEST(SimulationStability, BadRangeThrows) {
+  const MassSpringModel model(linear_oscillator());
+  StabilitySettings s = stability_settings("rk4", 1.0);
+  s.dt_min = 0.0;
+  EXPECT_THROW(find_max_stable_dt(model, s), std::invalid_argument);
+  s.dt_min = 0.5;
+  s.dt_max = 0.5;
+  EXPECT_THROW(find_max_stable_dt(model, s), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace springlab
