@@ -1,0 +1,313 @@
+// Built-in scenes (SPEC §4): each is a generator from named parameters to a
+// Scene, checked afterwards by validate_scene like any scene file.
+#include "models/builtin_scenes.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <map>
+#include <optional>
+
+namespace springlab {
+namespace {
+
+// How a parameter's value is restricted (every value must be finite).
+enum class Range { kAny, kNonNegative, kPositive, kWhole, kZeroOrOne };
+
+struct ParameterSpec {
+  SceneParameter parameter;
+  Range range = Range::kAny;
+  double min = 0.0;  // kWhole only: inclusive bounds
+  double max = 0.0;
+};
+
+using Values = std::map<std::string, double>;
+
+struct Generator {
+  BuiltinScene info;
+  std::vector<ParameterSpec> specs;
+  Scene (*build)(const Values&);
+};
+
+std::string format_number(double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+// The whole text must be one finite decimal number: "", "1x", "nan", "inf",
+// " 1" are refused (strtod would accept some of them, or a prefix).
+std::optional<double> parse_number(const std::string& text) {
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
+  if (first != last && *first == '+' && last - first > 1 && first[1] != '-') ++first;
+  double value = 0.0;
+  const auto result = std::from_chars(first, last, value);
+  if (result.ec != std::errc() || result.ptr != last || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+Particle particle_at(const Eigen::Vector3d& x, double mass, bool fixed) {
+  Particle p;
+  p.x = x;
+  p.mass = mass;
+  p.fixed = fixed;
+  return p;
+}
+
+Spring spring_between(int i, int j, double k, double rest) {
+  Spring s;
+  s.i = i;
+  s.j = j;
+  s.k = k;
+  s.rest = rest;
+  return s;
+}
+
+// The course's example: x0 fixed, the mass hanging undeformed at x0 + (0,-L).
+Scene build_spring(const Values& p) {
+  Scene scene;
+  scene.dimension = 2;
+  scene.gravity = {0.0, -p.at("g"), 0.0};
+  scene.drag = p.at("drag");
+  scene.particles = {particle_at({0.0, 0.0, 0.0}, p.at("mass"), true),
+                     particle_at({0.0, -p.at("rest"), 0.0}, p.at("mass"), false)};
+  scene.springs = {spring_between(0, 1, p.at("k"), p.at("rest"))};
+  return scene;
+}
+
+// x(t) = rest + amplitude cos(sqrt(k/m) t): the reference for accuracy tests.
+Scene build_oscillator(const Values& p) {
+  const double rest = p.at("rest");
+  const double amplitude = p.at("amplitude");
+  if (!(rest + amplitude > 0)) {
+    throw SceneError(
+        "scene 'oscillator': parameter 'amplitude' must satisfy rest + amplitude > 0 (got rest " +
+        format_number(rest) + ", amplitude " + format_number(amplitude) + ")");
+  }
+  Scene scene;
+  scene.dimension = 2;
+  scene.particles = {particle_at({0.0, 0.0, 0.0}, p.at("mass"), true),
+                     particle_at({rest + amplitude, 0.0, 0.0}, p.at("mass"), false)};
+  scene.springs = {spring_between(0, 1, p.at("k"), rest)};
+  return scene;
+}
+
+Scene build_chain(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const double spacing = p.at("length") / (n - 1);
+  const bool horizontal = p.at("horizontal") == 1.0;
+  Scene scene;
+  scene.dimension = 2;
+  scene.gravity = {0.0, -p.at("g"), 0.0};
+  scene.drag = p.at("drag");
+  scene.particles.reserve(static_cast<std::size_t>(n));
+  scene.springs.reserve(static_cast<std::size_t>(n - 1));
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d x = horizontal ? Eigen::Vector3d(i * spacing, 0.0, 0.0)
+                                         : Eigen::Vector3d(0.0, -i * spacing, 0.0);
+    scene.particles.push_back(particle_at(x, p.at("mass"), i == 0));
+    if (i > 0) scene.springs.push_back(spring_between(i - 1, i, p.at("k"), spacing));
+  }
+  return scene;
+}
+
+// n x n grid in the x-z plane, (r, c) -> index r n + c, hung from (0,0) and
+// (0,n-1). Springs: structural (rows, then columns), shear (both diagonals of
+// each cell), bend (skip one: rows, then columns).
+Scene build_cloth(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const double spacing = p.at("size") / (n - 1);
+  const double particle_mass = p.at("mass") / (static_cast<double>(n) * n);
+  Scene scene;
+  scene.dimension = 3;
+  scene.gravity = {0.0, -9.81, 0.0};
+  scene.drag = p.at("drag");
+  if (p.at("wind") != 0.0) {
+    // Coefficient = particle mass: each particle relaxes to the wind in 1 s.
+    scene.wind = Wind{{0.0, 0.0, p.at("wind")}, particle_mass, 0.5, 0.5};
+  }
+  const auto count = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+  scene.particles.reserve(count);
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c) {
+      const bool fixed = r == 0 && (c == 0 || c == n - 1);
+      scene.particles.push_back(particle_at({c * spacing, 0.0, r * spacing}, particle_mass, fixed));
+    }
+  }
+  auto index = [n](int r, int c) { return r * n + c; };
+  auto join = [&](int a, int b, double k) {
+    const double rest = (scene.particles[a].x - scene.particles[b].x).norm();
+    scene.springs.push_back(spring_between(a, b, k, rest));
+  };
+  scene.springs.reserve(count * 6);
+  const double k = p.at("k"), k_shear = p.at("k_shear"), k_bend = p.at("k_bend");
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c + 1 < n; ++c) join(index(r, c), index(r, c + 1), k);
+  for (int r = 0; r + 1 < n; ++r)
+    for (int c = 0; c < n; ++c) join(index(r, c), index(r + 1, c), k);
+  for (int r = 0; r + 1 < n; ++r) {
+    for (int c = 0; c + 1 < n; ++c) {
+      join(index(r, c), index(r + 1, c + 1), k_shear);
+      join(index(r, c + 1), index(r + 1, c), k_shear);
+    }
+  }
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c + 2 < n; ++c) join(index(r, c), index(r, c + 2), k_bend);
+  for (int r = 0; r + 2 < n; ++r)
+    for (int c = 0; c < n; ++c) join(index(r, c), index(r + 2, c), k_bend);
+  return scene;
+}
+
+ParameterSpec param(const char* name, double value, const char* meaning, Range range,
+                    double min = 0.0, double max = 0.0) {
+  return {{name, value, meaning}, range, min, max};
+}
+
+// Sorted by name.
+const std::vector<Generator>& generators() {
+  static const std::vector<Generator> table = [] {
+    std::vector<Generator> list = {
+        {{"chain",
+          "n masses in a line joined by springs, the first fixed; hanging under gravity or "
+          "released from horizontal",
+          {}},
+         {param("n", 10, "number of particles, the first one fixed", Range::kWhole, 2, 1e7),
+          param("k", 1000, "stiffness of each spring [N/m]", Range::kNonNegative),
+          param("mass", 0.1, "mass of each particle [kg]", Range::kPositive),
+          param("length", 1, "total rest length of the chain [m]", Range::kPositive),
+          param("drag", 0, "drag coefficient per particle [kg/s]", Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("horizontal", 0, "0: hanging straight down, 1: released from horizontal",
+                Range::kZeroOrOne)},
+         build_chain},
+        {{"cloth",
+          "n x n grid in 3-D with structural, shear and bend springs, two top corners fixed, "
+          "gravity, optional wind",
+          {}},
+         {param("n", 16, "particles per side (n x n grid)", Range::kWhole, 2, 2048),
+          param("k", 1000, "structural spring stiffness [N/m]", Range::kNonNegative),
+          param("k_shear", 1000, "shear (diagonal) spring stiffness [N/m]", Range::kNonNegative),
+          param("k_bend", 100, "bend (skip-one) spring stiffness [N/m]", Range::kNonNegative),
+          param("mass", 1, "mass of the whole cloth, split evenly over the particles [kg]",
+                Range::kPositive),
+          param("size", 1, "side length [m]", Range::kPositive),
+          param("drag", 0, "drag coefficient per particle [kg/s]", Range::kNonNegative),
+          param("wind", 0, "mean wind speed along +z, 0 for no wind [m/s]", Range::kAny)},
+         build_cloth},
+        {{"oscillator",
+          "one undamped linear spring, no gravity, mass released stretched: exact solution known",
+          {}},
+         {param("k", 100, "spring stiffness [N/m]", Range::kPositive),
+          param("mass", 1, "mass of the moving particle [kg]", Range::kPositive),
+          // Rest 0 makes the spring linear in every direction (F = -k x), so
+          // the linear stability analysis holds even as a run blows up; with
+          // rest > 0 it is linear only while the mass stays beyond the anchor.
+          param("rest", 0, "rest length of the spring [m]; 0 = linear in every direction",
+                Range::kNonNegative),
+          param("amplitude", 0.1, "initial stretch beyond the rest length [m]", Range::kAny)},
+         build_oscillator},
+        {{"spring",
+          "the course's example: a mass hanging from a fixed point by one spring, with gravity and "
+          "drag",
+          {}},
+         {param("k", 100, "spring stiffness [N/m]", Range::kNonNegative),
+          param("mass", 1, "mass of the hanging particle [kg]", Range::kPositive),
+          param("rest", 1, "rest length, also the initial length [m]", Range::kPositive),
+          param("drag", 0.5, "drag coefficient [kg/s]", Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny)},
+         build_spring},
+    };
+    for (Generator& g : list) {
+      for (const ParameterSpec& spec : g.specs) g.info.parameters.push_back(spec.parameter);
+    }
+    std::sort(list.begin(), list.end(),
+              [](const Generator& a, const Generator& b) { return a.info.name < b.info.name; });
+    return list;
+  }();
+  return table;
+}
+
+const Generator* find_generator(const std::string& name) {
+  for (const Generator& g : generators()) {
+    if (g.info.name == name) return &g;
+  }
+  return nullptr;
+}
+
+void check_range(const std::string& label, const ParameterSpec& spec, double value) {
+  const std::string prefix = label + ": parameter '" + spec.parameter.name + "' must be ";
+  const std::string got = " (got " + format_number(value) + ")";
+  switch (spec.range) {
+    case Range::kAny:
+      break;
+    case Range::kNonNegative:
+      if (value < 0) throw SceneError(prefix + ">= 0" + got);
+      break;
+    case Range::kPositive:
+      if (value <= 0) throw SceneError(prefix + "> 0" + got);
+      break;
+    case Range::kWhole:
+      if (value != std::floor(value) || value < spec.min || value > spec.max) {
+        throw SceneError(prefix + "a whole number in [" +
+                         std::to_string(static_cast<long long>(spec.min)) + ", " +
+                         std::to_string(static_cast<long long>(spec.max)) + "]" + got);
+      }
+      break;
+    case Range::kZeroOrOne:
+      if (value != 0 && value != 1) throw SceneError(prefix + "0 or 1" + got);
+      break;
+  }
+}
+
+}  // namespace
+
+const std::vector<BuiltinScene>& builtin_scenes() {
+  static const std::vector<BuiltinScene> scenes = [] {
+    std::vector<BuiltinScene> out;
+    for (const Generator& g : generators()) out.push_back(g.info);
+    return out;
+  }();
+  return scenes;
+}
+
+bool is_builtin_scene(const std::string& name) { return find_generator(name) != nullptr; }
+
+Scene make_builtin_scene(const std::string& name,
+                         const std::vector<std::pair<std::string, std::string>>& overrides) {
+  const Generator* generator = find_generator(name);
+  if (generator == nullptr) {
+    std::string names;
+    for (const Generator& g : generators()) names += (names.empty() ? "" : ", ") + g.info.name;
+    throw SceneError("unknown built-in scene '" + name + "' (built-in scenes: " + names + ")");
+  }
+  const std::string label = "scene '" + name + "'";
+  Values values;
+  for (const ParameterSpec& spec : generator->specs)
+    values[spec.parameter.name] = spec.parameter.default_value;
+
+  // Each value is checked as given; a key given twice keeps the last value.
+  for (const auto& [key, text] : overrides) {
+    const auto spec = std::find_if(generator->specs.begin(), generator->specs.end(),
+                                   [&](const ParameterSpec& s) { return s.parameter.name == key; });
+    if (spec == generator->specs.end()) {
+      std::string names;
+      for (const ParameterSpec& s : generator->specs)
+        names += (names.empty() ? "" : ", ") + s.parameter.name;
+      throw SceneError(label + ": unknown parameter '" + key + "' (parameters: " + names + ")");
+    }
+    const std::optional<double> value = parse_number(text);
+    if (!value)
+      throw SceneError(label + ": parameter '" + key + "' must be a finite number (got '" + text +
+                       "')");
+    check_range(label, *spec, *value);
+    values[key] = *value;
+  }
+
+  Scene scene = generator->build(values);
+  scene.name = name;
+  validate_scene(scene, label);  // a safety net: a generator bug is reported, not simulated
+  return scene;
+}
+
+}  // namespace springlab
