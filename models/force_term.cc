@@ -22,6 +22,24 @@ BlockSlot find_block_slot(const SparseMatrix& pattern, int dim, int a, int b) {
   return slot;
 }
 
+void declare_pair_blocks(JacobianPatternBuilder& builder, int a, int b, int free_particles) {
+  if (a < free_particles && b < free_particles) {
+    builder.add_block(a, b);
+    builder.add_block(b, a);
+  }
+}
+
+PairSlots find_pair_slots(const SparseMatrix& pattern, int dim, int a, int b, int free_particles) {
+  PairSlots slots;
+  if (a < free_particles) slots.aa = find_block_slot(pattern, dim, a, a);
+  if (b < free_particles) slots.bb = find_block_slot(pattern, dim, b, b);
+  if (a < free_particles && b < free_particles) {
+    slots.ab = find_block_slot(pattern, dim, a, b);
+    slots.ba = find_block_slot(pattern, dim, b, a);
+  }
+  return slots;
+}
+
 std::vector<int> diagonal_slots(const SparseMatrix& pattern) {
   std::vector<int> slots(static_cast<std::size_t>(pattern.rows()));
   for (int k = 0; k < pattern.rows(); ++k) {

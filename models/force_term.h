@@ -57,6 +57,15 @@ struct BlockSlot {
 // Looks up the slot of block (a, b) in a compressed pattern that contains it.
 BlockSlot find_block_slot(const SparseMatrix& pattern, int dim, int a, int b);
 
+// The four blocks coupling particles a and b (a spring, a damper): a slot is
+// invalid where its row or column particle is fixed.
+struct PairSlots {
+  BlockSlot aa, ab, ba, bb;
+};
+// Declares the off-diagonal blocks (the diagonal ones always exist).
+void declare_pair_blocks(JacobianPatternBuilder& builder, int a, int b, int free_particles);
+PairSlots find_pair_slots(const SparseMatrix& pattern, int dim, int a, int b, int free_particles);
+
 // Value index of each diagonal entry (k, k) of a compressed pattern, k < rows.
 std::vector<int> diagonal_slots(const SparseMatrix& pattern);
 
@@ -66,6 +75,19 @@ inline void add_block(double* values, const BlockSlot& slot, const double (&K)[D
   for (int c = 0; c < D; ++c) {
     double* col = values + slot.offset[c];
     for (int r = 0; r < D; ++r) col[r] += s * K[r][c];
+  }
+}
+
+// For a pair force with F_b = -F_a: given B = dF_a/d(.)_a, adds
+// s B to blocks (a,a) and (b,b) and -s B to blocks (a,b) and (b,a).
+template <int D>
+inline void add_pair_blocks(double* values, const PairSlots& slots, const double (&B)[D][D],
+                            double s) {
+  if (slots.aa.valid()) add_block<D>(values, slots.aa, B, s);
+  if (slots.bb.valid()) add_block<D>(values, slots.bb, B, s);
+  if (slots.ab.valid()) {
+    add_block<D>(values, slots.ab, B, -s);
+    add_block<D>(values, slots.ba, B, -s);
   }
 }
 

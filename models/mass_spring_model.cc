@@ -81,12 +81,16 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
 
   // SPEC §6: E_s = T(0) + U_spring(0) + sum_free m_i (|g| d + |w_max|^2 / 2),
   // d the diameter of the initial positions' bounding box.
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-  for (const Particle& p : scene_.particles) {
-    lo = lo.cwiseMin(p.x);
-    hi = hi.cwiseMax(p.x);
+  double diameter2 = 0.0;
+  for (int r = 0; r < dim; ++r) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const Particle& p : scene_.particles) {
+      lo = std::min(lo, p.x[r]);
+      hi = std::max(hi, p.x[r]);
+    }
+    diameter2 += (hi - lo) * (hi - lo);
   }
-  const double diameter = (hi - lo).head(dim).norm();
+  const double diameter = std::sqrt(diameter2);
   double w_max = 0.0;
   if (scene_.wind) w_max = scene_.wind->velocity.norm() * (1.0 + std::abs(scene_.wind->gust));
   const Energies e0 = energies(x0_, v0_);

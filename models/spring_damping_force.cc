@@ -35,25 +35,14 @@ class SpringDampingForce final : public ForceTerm {
   }
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    for (const DamperData& s : dampers_) {
-      if (s.a < free_ && s.b < free_) {
-        builder.add_block(s.a, s.b);
-        builder.add_block(s.b, s.a);
-      }
-    }
+    for (const DamperData& s : dampers_) declare_pair_blocks(builder, s.a, s.b, free_);
   }
 
   void bind_jacobian(const SparseMatrix& pattern) override {
-    slots_.assign(dampers_.size(), {});
-    for (std::size_t n = 0; n < dampers_.size(); ++n) {
-      const DamperData& s = dampers_[n];
-      Slots& sl = slots_[n];
-      if (s.a < free_) sl.aa = find_block_slot(pattern, dim_, s.a, s.a);
-      if (s.b < free_) sl.bb = find_block_slot(pattern, dim_, s.b, s.b);
-      if (s.a < free_ && s.b < free_) {
-        sl.ab = find_block_slot(pattern, dim_, s.a, s.b);
-        sl.ba = find_block_slot(pattern, dim_, s.b, s.a);
-      }
+    slots_.clear();
+    slots_.reserve(dampers_.size());
+    for (const DamperData& s : dampers_) {
+      slots_.push_back(find_pair_slots(pattern, dim_, s.a, s.b, free_));
     }
   }
 
@@ -62,10 +51,6 @@ class SpringDampingForce final : public ForceTerm {
   }
 
  private:
-  struct Slots {
-    BlockSlot aa, ab, ba, bb;
-  };
-
   // Unit direction and relative velocity of damper s; false when degenerate.
   template <int D>
   bool geometry(const Configuration& c, const DamperData& s, double (&u)[D], double (&w)[D],
@@ -97,17 +82,6 @@ class SpringDampingForce final : public ForceTerm {
   }
 
   template <int D>
-  void add_pair(double* values, const Slots& sl, const double (&B)[D][D]) const {
-    // B = dF_i/d(.)_i; the other three blocks follow by sign.
-    if (sl.aa.valid()) add_block<D>(values, sl.aa, B, 1.0);
-    if (sl.bb.valid()) add_block<D>(values, sl.bb, B, 1.0);
-    if (sl.ab.valid()) {
-      add_block<D>(values, sl.ab, B, -1.0);
-      add_block<D>(values, sl.ba, B, -1.0);
-    }
-  }
-
-  template <int D>
   void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
     for (std::size_t n = 0; n < dampers_.size(); ++n) {
       const DamperData& s = dampers_[n];
@@ -119,7 +93,7 @@ class SpringDampingForce final : public ForceTerm {
         double B[D][D];
         for (int r = 0; r < D; ++r)
           for (int q = 0; q < D; ++q) B[r][q] = -s.c * u[r] * u[q];
-        add_pair<D>(dfdv, slots_[n], B);
+        add_pair_blocks<D>(dfdv, slots_[n], B, 1.0);
       }
       if (dfdx != nullptr) {
         double pw[D];  // P w = w - (w.u) u
@@ -131,13 +105,13 @@ class SpringDampingForce final : public ForceTerm {
             B[r][q] = -(s.c / l) * (wu * p_rq + u[r] * pw[q]);
           }
         }
-        add_pair<D>(dfdx, slots_[n], B);
+        add_pair_blocks<D>(dfdx, slots_[n], B, 1.0);
       }
     }
   }
 
   std::vector<DamperData> dampers_;
-  std::vector<Slots> slots_;
+  std::vector<PairSlots> slots_;
   int dim_;
   int free_;
 };

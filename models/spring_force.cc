@@ -48,25 +48,14 @@ class SpringForce final : public ForceTerm {
   }
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    for (const SpringData& s : springs_) {
-      if (s.a < free_ && s.b < free_) {
-        builder.add_block(s.a, s.b);
-        builder.add_block(s.b, s.a);
-      }
-    }
+    for (const SpringData& s : springs_) declare_pair_blocks(builder, s.a, s.b, free_);
   }
 
   void bind_jacobian(const SparseMatrix& pattern) override {
-    slots_.assign(springs_.size(), {});
-    for (std::size_t n = 0; n < springs_.size(); ++n) {
-      const SpringData& s = springs_[n];
-      Slots& sl = slots_[n];
-      if (s.a < free_) sl.aa = find_block_slot(pattern, dim_, s.a, s.a);
-      if (s.b < free_) sl.bb = find_block_slot(pattern, dim_, s.b, s.b);
-      if (s.a < free_ && s.b < free_) {
-        sl.ab = find_block_slot(pattern, dim_, s.a, s.b);
-        sl.ba = find_block_slot(pattern, dim_, s.b, s.a);
-      }
+    slots_.clear();
+    slots_.reserve(springs_.size());
+    for (const SpringData& s : springs_) {
+      slots_.push_back(find_pair_slots(pattern, dim_, s.a, s.b, free_));
     }
   }
 
@@ -76,10 +65,6 @@ class SpringForce final : public ForceTerm {
   }
 
  private:
-  struct Slots {
-    BlockSlot aa, ab, ba, bb;
-  };
-
   template <int D>
   void add_force_d(const Configuration& c, double* f) const {
     for (const SpringData& s : springs_) {
@@ -112,13 +97,7 @@ class SpringForce final : public ForceTerm {
       const SpringData& s = springs_[n];
       double K[D][D];
       spring_stiffness<D>(c.x + s.a * D, c.x + s.b * D, s.k, s.rest, K);
-      const Slots& sl = slots_[n];
-      if (sl.aa.valid()) add_block<D>(values, sl.aa, K, -1.0);
-      if (sl.bb.valid()) add_block<D>(values, sl.bb, K, -1.0);
-      if (sl.ab.valid()) {
-        add_block<D>(values, sl.ab, K, 1.0);
-        add_block<D>(values, sl.ba, K, 1.0);
-      }
+      add_pair_blocks<D>(values, slots_[n], K, -1.0);  // dF_a/dx_a = -K
     }
   }
 
@@ -151,7 +130,7 @@ class SpringForce final : public ForceTerm {
   }
 
   std::vector<SpringData> springs_;
-  std::vector<Slots> slots_;
+  std::vector<PairSlots> slots_;
   int dim_;
   int free_;
 };
