@@ -1,6 +1,7 @@
 #include "experiments/cli.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -101,6 +102,17 @@ struct CommonOptions {
                    "implicit methods: Newton stops when ||M^-1 r||_inf <= tol max(1, ||v||_inf)");
     cmd.add_option("--max-newton", run.options.max_newton,
                    "implicit methods: Newton iterations per step before the run fails");
+    cmd.add_option("--max-steps", run.options.max_steps,
+                   "adaptive methods: internal steps per output interval before failing");
+    cmd.add_option("--max-order", run.options.max_order,
+                   "adaptive methods: highest order (ARKODE: the method's order); 0 = default");
+    cmd.add_option("--linear-solver", run.options.linear_solver,
+                   "implicit adaptive methods: dense, klu, gmres or auto (dense up to 100 "
+                   "unknowns, klu above)");
+    cmd.add_flag("--dq-jacobian", run.options.dq_jacobian,
+                 "implicit adaptive methods: SUNDIALS difference quotients instead of the "
+                 "analytic Jacobian");
+    cmd.add_flag("--stald", run.options.stald, "cvode-bdf: stability limit detection");
     cmd.add_option("--blowup", run.blowup,
                    "divergence when kinetic + spring energy exceeds this times E_s");
     cmd.add_flag("--json", json, "print one JSON object on stdout");
@@ -114,6 +126,14 @@ struct CommonOptions {
     require_positive("--newton-tol", run.options.newton_tol);
     require_positive("--blowup", run.blowup);
     if (run.options.max_newton < 1) throw UsageError("--max-newton: must be >= 1");
+    if (run.options.max_steps < 1) throw UsageError("--max-steps: must be >= 1");
+    if (run.options.max_order < 0) throw UsageError("--max-order: must be >= 0");
+    static const char* solvers[] = {"auto", "dense", "klu", "gmres"};
+    if (std::find(std::begin(solvers), std::end(solvers), run.options.linear_solver) ==
+        std::end(solvers)) {
+      throw UsageError("--linear-solver: unknown '" + run.options.linear_solver +
+                       "' (auto, dense, klu, gmres)");
+    }
   }
 };
 

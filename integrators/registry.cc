@@ -4,7 +4,11 @@
 #include <functional>
 #include <stdexcept>
 
+#include "integrators/arkode_ark.h"
+#include "integrators/arkode_erk.h"
+#include "integrators/cvode_integrator.h"
 #include "integrators/explicit_euler.h"
+#include "integrators/ida_integrator.h"
 #include "integrators/implicit_euler.h"
 #include "integrators/implicit_midpoint.h"
 #include "integrators/linear_implicit_euler.h"
@@ -29,7 +33,13 @@ Entry entry() {
 // One line per method, sorted by name.
 const std::vector<Entry>& registry() {
   static const std::vector<Entry> entries = {
+      entry<ArkodeDirk>(),
+      entry<ArkodeErk>(),
+      entry<ArkodeImex>(),
+      entry<CvodeAdams>(),
+      entry<CvodeBdf>(),
       entry<ExplicitEuler>(),
+      entry<IdaIntegrator>(),
       entry<ImplicitEuler>(),
       entry<ImplicitMidpoint>(),
       entry<LinearImplicitEuler>(),

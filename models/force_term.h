@@ -107,6 +107,10 @@ class ForceTerm {
   // power F.v is the work rate the damping budget accounts for.
   virtual bool conservative() const = 0;
 
+  // Stiff forces (large Jacobians: springs, damping) are the ones an IMEX
+  // method treats implicitly; the others (gravity, wind) explicitly.
+  virtual bool stiff() const { return true; }
+
   virtual VelocityDependence velocity_dependence() const { return VelocityDependence::kNone; }
   virtual bool symmetric_jacobians() const { return true; }
 

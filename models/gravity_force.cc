@@ -15,6 +15,7 @@ class GravityForce final : public ForceTerm {
 
   std::string_view name() const override { return "gravity"; }
   bool conservative() const override { return true; }
+  bool stiff() const override { return false; }
   EnergyKind energy_kind() const override { return EnergyKind::kGravity; }
 
   void add_force(const Configuration&, double* f) const override {

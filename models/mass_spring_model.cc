@@ -112,15 +112,24 @@ Configuration MassSpringModel::configure(double t, const Vector& x, const Vector
   return c;
 }
 
-void MassSpringModel::force(double t, const Vector& x, const Vector& v, Vector& f) const {
+namespace {
+bool in_part(const ForceTerm& term, ForcePart part) {
+  return part == ForcePart::kAll || term.stiff() == (part == ForcePart::kStiff);
+}
+}  // namespace
+
+void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
+                            Vector& f) const {
   const Configuration c = configure(t, x, v);
   f_all_.setZero();
-  for (const auto& term : terms_) term->add_force(c, f_all_.data());
+  for (const auto& term : terms_) {
+    if (in_part(*term, part)) term->add_force(c, f_all_.data());
+  }
   f = f_all_.head(dofs());
 }
 
-void MassSpringModel::jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
-                                SparseMatrix* dfdv) const {
+void MassSpringModel::jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
+                                SparseMatrix* dfdx, SparseMatrix* dfdv) const {
   const Configuration c = configure(t, x, v);
   for (SparseMatrix* m : {dfdx, dfdv}) {
     if (m == nullptr) continue;
@@ -129,7 +138,9 @@ void MassSpringModel::jacobians(double t, const Vector& x, const Vector& v, Spar
   }
   double* dx = dfdx != nullptr ? dfdx->valuePtr() : nullptr;
   double* dv = dfdv != nullptr ? dfdv->valuePtr() : nullptr;
-  for (const auto& term : terms_) term->add_jacobians(c, dx, dv);
+  for (const auto& term : terms_) {
+    if (in_part(*term, part)) term->add_jacobians(c, dx, dv);
+  }
 }
 
 Energies MassSpringModel::energies(const Vector& x, const Vector& v) const {

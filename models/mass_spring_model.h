@@ -28,10 +28,13 @@ class MassSpringModel final : public MechanicalSystem {
   explicit MassSpringModel(const Scene& scene);
 
   // MechanicalSystem
+  using MechanicalSystem::force;
+  using MechanicalSystem::jacobians;
   Eigen::Index dofs() const override { return mass_.size(); }
   const Vector& mass() const override { return mass_; }
-  void force(double t, const Vector& x, const Vector& v, Vector& f) const override;
-  void jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+  void force(ForcePart part, double t, const Vector& x, const Vector& v,
+             Vector& f) const override;
+  void jacobians(ForcePart part, double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
                  SparseMatrix* dfdv) const override;
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
   bool jacobian_symmetric() const override { return symmetric_; }

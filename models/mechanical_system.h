@@ -25,6 +25,10 @@ enum class VelocityDependence {
   kCoupled,   // dF/dv couples particles (spring damping)
 };
 
+// Which forces to evaluate. IMEX methods treat the stiff part (springs,
+// spring damping, drag) implicitly and the rest (gravity, wind) explicitly.
+enum class ForcePart { kAll, kStiff, kNonstiff };
+
 class MechanicalSystem {
  public:
   virtual ~MechanicalSystem() = default;
@@ -34,15 +38,23 @@ class MechanicalSystem {
   // Lumped mass per degree of freedom (length n, all > 0).
   virtual const Vector& mass() const = 0;
 
-  // f = F(t, x, v); f is resized to n.
-  virtual void force(double t, const Vector& x, const Vector& v, Vector& f) const = 0;
+  // f = F(t, x, v), or only its stiff / non-stiff part; f is resized to n.
+  virtual void force(ForcePart part, double t, const Vector& x, const Vector& v,
+                     Vector& f) const = 0;
+  void force(double t, const Vector& x, const Vector& v, Vector& f) const {
+    force(ForcePart::kAll, t, x, v, f);
+  }
 
-  // Fills dF/dx and/or dF/dv (either may be null) at (t, x, v). Both come
-  // back with exactly the pattern of jacobian_pattern(), so integrators can
-  // combine them value by value (A = M - a dF/dv - b dF/dx) and reuse one
-  // symbolic factorization for the whole run.
-  virtual void jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
-                         SparseMatrix* dfdv) const = 0;
+  // Fills dF/dx and/or dF/dv (either may be null) at (t, x, v), of all the
+  // forces or of one part. Both come back with exactly the pattern of
+  // jacobian_pattern(), so integrators can combine them value by value
+  // (A = M - a dF/dv - b dF/dx) and reuse one symbolic factorization.
+  virtual void jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
+                         SparseMatrix* dfdx, SparseMatrix* dfdv) const = 0;
+  void jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                 SparseMatrix* dfdv) const {
+    jacobians(ForcePart::kAll, t, x, v, dfdx, dfdv);
+  }
 
   // The shared pattern (union of both Jacobians' entries plus the full
   // diagonal), values all zero. Built once per scene.

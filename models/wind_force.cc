@@ -19,6 +19,7 @@ class WindForce final : public ForceTerm {
 
   std::string_view name() const override { return "wind"; }
   bool conservative() const override { return false; }
+  bool stiff() const override { return false; }
   VelocityDependence velocity_dependence() const override { return VelocityDependence::kDiagonal; }
 
   void add_force(const Configuration& c, double* f) const override {

@@ -218,7 +218,11 @@ TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
   s.options.newton_tol = 1e-10;
   const RunResult r = simulate(model, s);
   EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
-  EXPECT_EQ(r.stats.nonlinear_failures, 0);
+  // Adaptive methods may retry a step after a failed Newton solve (that is
+  // their step control); a fixed-step method has no retry, so none may fail.
+  if (!i.adaptive) {
+    EXPECT_EQ(r.stats.nonlinear_failures, 0);
+  }
   EXPECT_TRUE(r.x_final.allFinite());
 }
 
@@ -245,19 +249,37 @@ TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
   const RunResult r = simulate(model, settings(0.001, 0.01));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const IntegratorStats& s = r.stats;
-  if (!i.adaptive) {
-    EXPECT_EQ(s.steps, 10);
-  }
   EXPECT_GE(s.force_evals, s.steps);
-  EXPECT_EQ(s.rejected_steps, 0);
-  EXPECT_EQ(s.nonlinear_failures, 0);
+  EXPECT_GE(s.rejected_steps, 0);
+  if (i.adaptive) {
+    // Error control chooses the steps; output times are interpolated, so
+    // there may be fewer steps than outputs.
+    EXPECT_GE(s.steps, 1);
+  } else {
+    EXPECT_EQ(s.steps, 10);
+    EXPECT_EQ(s.rejected_steps, 0);
+    EXPECT_EQ(s.nonlinear_failures, 0);
+  }
   if (i.implicit) {
     EXPECT_GE(s.newton_iterations, s.steps);
-    EXPECT_GE(s.jacobian_evals, s.steps);
     EXPECT_GE(s.linear_solves, s.newton_iterations);
     EXPECT_GE(s.factorizations, 1);
+    if (i.adaptive) {
+      // SUNDIALS reuses a Jacobian across steps.
+      EXPECT_GE(s.jacobian_evals, 1);
+      EXPECT_LE(s.jacobian_evals, s.steps);
+    } else {
+      EXPECT_GE(s.jacobian_evals, s.steps);
+    }
+  } else if (i.adaptive) {
+    // Explicit RK, or Adams with fixed-point iteration: no Jacobian at all.
+    EXPECT_EQ(s.jacobian_evals, 0);
+    EXPECT_EQ(s.linear_solves, 0);
   } else {
+    // Explicit fixed-step methods never iterate (Verlet's closing kick with
+    // spring damping is one linear solve, exact because F is affine in v).
     EXPECT_EQ(s.newton_iterations, 0);
+    EXPECT_LE(s.linear_solves, s.steps);
   }
 }
 

@@ -1,0 +1,44 @@
+// arkode-dirk and arkode-imex — SUNDIALS ARKODE's ARKStep, adaptive
+// additive Runge-Kutta methods on y = (x, v).
+//
+// arkode-dirk: diagonally implicit RK (default order 4, SDIRK 5-3-4; L-stable),
+//   y' = f(t, y) entirely implicit. Each stage solves a Newton system with
+//   I - h a_ii J, J from the model's analytic Jacobian (dense / KLU / GMRES,
+//   as cvode-bdf), or difference quotients with --dq-jacobian.
+// arkode-imex: additive (IMEX) RK (default order 4, ARK4(3)6L): the stiff
+//   part f_I = (v, M^-1 F_stiff) — springs, spring damping, drag — implicit,
+//   the non-stiff part f_E = (0, M^-1 F_nonstiff) — gravity, wind — explicit,
+//   so the Newton matrix involves only the stiff forces' Jacobian.
+//
+// --max-order picks ARKODE's default table of that order (2-5).
+// Error control as CVODE (--rtol, --atol); --dt is the output interval.
+#pragma once
+
+#include "integrators/sundials_integrator.h"
+
+namespace springlab {
+
+class ArkodeArk : public SundialsIntegrator {
+ protected:
+  ArkodeArk(bool imex, IntegratorInfo info);
+  void create() override;
+  int solve(double t_out, double& t_reached) override;
+  void read_counters(IntegratorStats& stats) const override;
+  const char* solve_call() const override { return "ARKStepEvolve"; }
+
+ private:
+  static int explicit_rhs(double t, N_Vector y, N_Vector ydot, void* self);
+  bool imex_;
+};
+
+class ArkodeDirk final : public ArkodeArk {
+ public:
+  ArkodeDirk();
+};
+
+class ArkodeImex final : public ArkodeArk {
+ public:
+  ArkodeImex();
+};
+
+}  // namespace springlab

@@ -1,0 +1,44 @@
+#include "integrators/arkode_erk.h"
+
+#include <arkode/arkode_erkstep.h>
+
+namespace springlab {
+
+using sundials::check;
+using sundials::check_created;
+
+ArkodeErk::ArkodeErk()
+    : SundialsIntegrator({.name = "arkode-erk",
+                          .scheme = "ARKODE explicit Runge-Kutta, embedded error estimate",
+                          .order = 4,
+                          .adaptive = true}) {}
+
+void ArkodeErk::create() {
+  const IntegratorOptions& o = options();
+  if (o.stald) throw sundials::Failure("--stald applies to cvode-bdf only");
+  memory_ = sundials::SolverMemory(
+      check_created(ERKStepCreate(ode_rhs, t_, y_.get(), context_.get()), "ERKStepCreate"),
+      ERKStepFree);
+  void* mem = memory_.get();
+  check(ERKStepSetErrHandlerFn(mem, sundials::ErrorLog::handler, &log_), "ERKStepSetErrHandlerFn");
+  check(ERKStepSStolerances(mem, o.rtol, o.atol), "ERKStepSStolerances", log_.last);
+  check(ERKStepSetUserData(mem, this), "ERKStepSetUserData");
+  check(ERKStepSetMaxNumSteps(mem, o.max_steps), "ERKStepSetMaxNumSteps", log_.last);
+  if (o.max_order > 0) check(ERKStepSetOrder(mem, o.max_order), "ERKStepSetOrder", log_.last);
+}
+
+int ArkodeErk::solve(double t_out, double& t_reached) {
+  realtype t = t_;
+  const int flag = ERKStepEvolve(memory_.get(), t_out, y_.get(), &t, ARK_NORMAL);
+  t_reached = t;
+  return flag;
+}
+
+void ArkodeErk::read_counters(IntegratorStats& s) const {
+  void* mem = memory_.get();
+  long value = 0;
+  if (ERKStepGetNumSteps(mem, &value) == ARK_SUCCESS) s.steps = value;
+  if (ERKStepGetNumErrTestFails(mem, &value) == ARK_SUCCESS) s.rejected_steps = value;
+}
+
+}  // namespace springlab
