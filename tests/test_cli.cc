@@ -505,6 +505,29 @@ TEST_F(CliRun, DivergenceIsAResult) {
   EXPECT_EQ(ws.listing(), std::vector<std::string>{"e.csv"});
 }
 
+// A SUNDIALS failure (too much work for --max-steps) is a result like a
+// divergence: exit 0, diverged true, the failing call in "failure", and the
+// energy file still valid up to the last good output.
+TEST_F(CliRun, SolverFailureIsAResult) {
+  const std::vector<std::string> args = {
+      "run",      "cloth", "-p",     "n=6",           "--integrator", "cvode-bdf", "--rtol",
+      "1e-8",     "--dt",  "0.1",    "--t-end",       "2",            "--max-steps", "10",
+      "--energy", "e.csv", "--json"};
+  const Output o = ws.run(args);
+  ASSERT_TRUE(o.exited && o.status == 0) << describe(args, o);
+  Json j = parse_object(o.out);
+  EXPECT_EQ(j["diverged"], true);
+  EXPECT_EQ(j["status"], "failed");
+  ASSERT_TRUE(j["failure"].is_string()) << j.dump();
+  EXPECT_TRUE(contains(j["failure"].get<std::string>(), "cvode-bdf: CVode failed at t = "))
+      << j["failure"];
+  EXPECT_TRUE(contains(j["failure"].get<std::string>(), "mxstep")) << j["failure"];
+  ASSERT_TRUE(j["diverged_at"].is_number());
+  const Csv csv = read_csv(ws.file("e.csv"));
+  expect_energy_csv(csv);
+  EXPECT_EQ(csv.rows.back()[0], j["t_final"].get<double>());
+}
+
 // Without --json the run still exits 0 and says it diverged.
 TEST_F(CliRun, DivergenceWithoutJsonExitsZero) {
   const Output o = run_ok({"run", "oscillator", "--integrator", "explicit-euler", "--dt", "0.05",

@@ -170,3 +170,31 @@ TEST(Model, AbsentForcesAreNotAssembled) {
 
 }  // namespace
 }  // namespace springlab
+
+namespace springlab {
+namespace {
+
+// IMEX methods evaluate the stiff and non-stiff forces apart: together they
+// must be exactly the whole, forces and Jacobians alike.
+TEST(Model, StiffAndNonstiffPartsAddUpToTheWhole) {
+  const MassSpringModel model(random_scene(3, 5));
+  const Vector& x = model.initial_positions();
+  const Vector& v = model.initial_velocities();
+  Vector all, stiff, nonstiff;
+  model.force(ForcePart::kAll, 0.3, x, v, all);
+  model.force(ForcePart::kStiff, 0.3, x, v, stiff);
+  model.force(ForcePart::kNonstiff, 0.3, x, v, nonstiff);
+  EXPECT_LT((stiff + nonstiff - all).norm(), 1e-12 * all.norm());
+  EXPECT_GT(nonstiff.norm(), 0.0);  // gravity and wind are there
+  SparseMatrix dx_all, dv_all, dx_stiff, dv_stiff;
+  model.jacobians(ForcePart::kAll, 0.3, x, v, &dx_all, &dv_all);
+  model.jacobians(ForcePart::kStiff, 0.3, x, v, &dx_stiff, &dv_stiff);
+  EXPECT_EQ(Eigen::MatrixXd(dx_all), Eigen::MatrixXd(dx_stiff));  // gravity, wind: no dF/dx
+  // Wind's -c_w I is the only velocity Jacobian outside the stiff part.
+  const Eigen::MatrixXd wind = Eigen::MatrixXd(dv_all) - Eigen::MatrixXd(dv_stiff);
+  const double cw = 0.2;  // random_scene's wind coefficient
+  EXPECT_LT((wind + cw * Eigen::MatrixXd::Identity(wind.rows(), wind.cols())).norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace springlab
