@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/experiment_runner.h"
 #include "experiments/output_files.h"
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
@@ -265,6 +266,22 @@ int command_list() {
   return 0;
 }
 
+void parse_shard(const std::string& text, ExperimentRunOptions& o) {
+  const auto slash = text.find('/');
+  try {
+    std::size_t end_i = 0, end_n = 0;
+    if (slash == std::string::npos) throw std::invalid_argument(text);
+    o.shard_index = std::stoi(text.substr(0, slash), &end_i);
+    o.shard_count = std::stoi(text.substr(slash + 1), &end_n);
+    if (end_i != slash || end_n != text.size() - slash - 1) throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw UsageError("--shard " + text + ": expected i/N, e.g. 2/8");
+  }
+  if (o.shard_count < 1 || o.shard_index < 1 || o.shard_index > o.shard_count) {
+    throw UsageError("--shard " + text + ": need 1 <= i <= N");
+  }
+}
+
 }  // namespace
 
 Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>& parameters) {
@@ -310,6 +327,18 @@ int run_cli(int argc, char** argv) {
 
   CLI::App* list = app.add_subcommand("list", "integrators and built-in scenes");
 
+  std::string experiment_file, shard;
+  ExperimentRunOptions experiment_options;
+  CLI::App* experiment = app.add_subcommand("experiment", "run one experiment definition");
+  experiment->add_option("FILE", experiment_file, "experiment definition (experiments/*.json)")
+      ->required();
+  experiment->add_option("--out", experiment_options.out_dir, "output directory")->required();
+  experiment->add_option("--jobs", experiment_options.jobs, "tasks run at once (default: all cores)");
+  experiment->add_option("--shard", shard, "run only shard i of N (i/N), for job arrays");
+  experiment->add_option("--merge", experiment_options.merge,
+                         "merge N shards into the full tables instead of running");
+  experiment->add_flag("!--no-progress", experiment_options.progress, "no progress line on stderr");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -329,6 +358,13 @@ int run_cli(int argc, char** argv) {
       return 0;
     }
     if (*list) return command_list();
+    if (*experiment) {
+      if (!shard.empty()) parse_shard(shard, experiment_options);
+      if (experiment_options.jobs < 0) throw UsageError("--jobs: must be >= 0");
+      if (experiment_options.merge < 0) throw UsageError("--merge: must be >= 1");
+      run_experiment(experiment_file, experiment_options);
+      return 0;
+    }
   } catch (const std::exception& e) {
     std::cerr << "springlab: error: " << e.what() << '\n';
     return 1;

@@ -1,6 +1,7 @@
 #include "experiments/output_files.h"
 
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -30,6 +31,10 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
   const int fd = ::mkstemp(name.data());
   if (fd < 0) throw std::runtime_error(path_ + ": cannot write (" + std::strerror(errno) + ")");
   temp_path_ = name;
+  // mkstemp creates 0600; give the file the mode any new file would get.
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  ::fchmod(fd, 0666 & ~mask);
   file_ = ::fdopen(fd, "wb");
   if (file_ == nullptr) {
     ::close(fd);

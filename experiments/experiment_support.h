@@ -1,0 +1,38 @@
+// Pieces several experiment kinds share: the options a definition sets for
+// every run, errors against a reference, least-squares slopes.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "experiments/definition.h"
+#include "experiments/simulation.h"
+#include "models/mass_spring_model.h"
+
+namespace springlab {
+
+// rtol/atol (adaptive methods), newton_tol (implicit ones) from a definition.
+IntegratorOptions definition_options(const DefinitionObject& o);
+
+// The scene as a JSON object, for the settings file the report shows.
+nlohmann::json scene_as_json(const Scene& scene);
+
+// The exact solution of a scene that is the oscillator (one free particle on
+// one undamped spring from a fixed one, released at rest, no other force):
+// positions of the free unknowns at t. nullopt when the scene is not one.
+std::optional<Vector> exact_oscillator_positions(const Scene& scene, double t);
+
+// max over particles and axes of |x - x_ref|, the error measure the report names.
+double position_error(const Vector& x, const Vector& x_ref);
+
+// Least-squares slope of log(y) against log(x) over points with finite y > floor.
+std::optional<double> log_log_slope(const std::vector<double>& x, const std::vector<double>& y,
+                                    double floor = 0.0);
+
+// Fixed-step methods' dt by order: "base_dt": {"1": .., "2": .., "4": ..},
+// picking the entry for the largest order key <= the method's order.
+double base_dt_for_order(const DefinitionObject& o, const char* key, int order);
+
+}  // namespace springlab

@@ -1,0 +1,44 @@
+#include "models/modal_analysis.h"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+namespace springlab {
+
+double max_angular_frequency(const MassSpringModel& model, const Vector& x, const Vector& v) {
+  SparseMatrix dfdx;
+  model.jacobians(0.0, x, v, &dfdx, nullptr);
+  // A = M^-1/2 K M^-1/2 with K the symmetric part of -dF/dx: same spectrum
+  // as M^-1 K, and symmetric.
+  const Vector s = model.mass().cwiseSqrt().cwiseInverse();
+  SparseMatrix k = -0.5 * (SparseMatrix(dfdx.transpose()) + dfdx);
+  SparseMatrix a = s.asDiagonal() * k * s.asDiagonal();
+  double lambda = 0.0;
+  if (a.rows() <= 3000) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(a),
+                                                            Eigen::EigenvaluesOnly);
+    lambda = eig.eigenvalues().maxCoeff();
+  } else {
+    // Power iteration on A + c I (c = Gershgorin bound) converges to the
+    // largest eigenvalue of A even when A has negative ones.
+    double c = 0.0;
+    for (int j = 0; j < a.outerSize(); ++j) {
+      double row = 0.0;
+      for (SparseMatrix::InnerIterator it(a, j); it; ++it) row += std::abs(it.value());
+      c = std::max(c, row);
+    }
+    Vector q = Vector::Ones(a.rows()).normalized();
+    double previous = 0.0;
+    for (int iteration = 0; iteration < 5000; ++iteration) {
+      Vector z = a * q + c * q;
+      const double estimate = q.dot(z);
+      q = z.normalized();
+      if (std::abs(estimate - previous) <= 1e-10 * std::abs(estimate)) break;
+      previous = estimate;
+    }
+    lambda = q.dot(a * q);
+  }
+  return lambda > 0.0 ? std::sqrt(lambda) : 0.0;
+}
+
+}  // namespace springlab
