@@ -4,10 +4,16 @@ namespace springlab {
 
 // Each factory lives in its experiment's own file.
 std::unique_ptr<Experiment> make_energy_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_convergence_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_work_precision_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_stability_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
       {"energy", &make_energy_experiment},
+      {"convergence", &make_convergence_experiment},
+      {"work-precision", &make_work_precision_experiment},
+      {"stability", &make_stability_experiment},
   };
   return kinds;
 }

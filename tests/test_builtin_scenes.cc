@@ -118,7 +118,7 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
   EXPECT_EQ(parameter_names("spring"), (Names{"k", "mass", "rest", "drag", "g"}));
   EXPECT_EQ(parameter_names("oscillator"), (Names{"k", "mass", "rest", "amplitude"}));
   EXPECT_EQ(parameter_names("chain"),
-            (Names{"n", "k", "mass", "length", "drag", "g", "horizontal"}));
+            (Names{"n", "k", "mass", "length", "drag", "g", "horizontal", "stretch"}));
   EXPECT_EQ(parameter_names("cloth"),
             (Names{"n", "k", "k_shear", "k_bend", "mass", "size", "drag", "wind"}));
 }
@@ -225,6 +225,15 @@ TEST(BuiltinScenesTest, OscillatorStartsStretchedByTheAmplitude) {
             0.5);
   // The default is the zero-rest (linear in every direction) spring.
   EXPECT_EQ(make_builtin_scene("oscillator").springs[0].rest, 0.0);
+}
+
+TEST(BuiltinScenesTest, ChainStretchPlacesParticlesBeyondTheRestLength) {
+  const Scene scene = make_builtin_scene("chain", {{"n", "5"}, {"stretch", "0.01"}, {"g", "0"}});
+  for (const Spring& s : scene.springs) {
+    EXPECT_DOUBLE_EQ(s.rest, 0.25);
+    EXPECT_NEAR(distance(scene, s), 0.25 * 1.01, 1e-15);
+  }
+  EXPECT_EQ(scene.gravity, Eigen::Vector3d::Zero());
 }
 
 TEST(BuiltinScenesTest, ChainHasNParticlesAndSpringsSummingToItsLength) {

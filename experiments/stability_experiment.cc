@@ -1,0 +1,221 @@
+// stability: the largest stable step of each fixed-step method against
+// stiffness k, found by bisection on log dt (SPEC §6 divergence rule), next
+// to the theoretical limit from w_max = sqrt(largest eigenvalue of M^-1 K)
+// at the initial state:
+//   - a finite limit (w h)* on the undamped oscillator: dt* = (w h)* / w_max
+//     (2 for symplectic Euler and Verlet, 2 sqrt 2 for RK4);
+//   - none (empty) for A-stable methods;
+//   - for a method unstable at every step (explicit Euler, |R(i w h)| > 1),
+//     the step at which the top mode's energy grows by the blow-up factor B
+//     within the simulated time T: (T / h) ln |R(i w h)|^2 = ln B. That
+//     limit shrinks as T grows. (Exact for the oscillator, where all the
+//     energy is in that mode; an estimate for multi-mode scenes.)
+// The simulated time is `periods` periods of the fastest mode, so every k
+// is tested for the same number of oscillations.
+// Plus a map: final / initial energy on a (dt, k) grid for a few methods.
+#include <cmath>
+#include <complex>
+#include <memory>
+#include <numbers>
+
+#include "experiments/experiment.h"
+#include "experiments/experiment_support.h"
+#include "experiments/output_files.h"
+#include "experiments/stability.h"
+#include "integrators/registry.h"
+#include "models/modal_analysis.h"
+
+namespace springlab {
+namespace {
+
+struct StiffnessCase {
+  std::string stiffness_parameter;
+  std::vector<double> k;
+  std::vector<Scene> scenes;  // one per k
+};
+
+struct LimitTask {
+  std::size_t case_index, k_index;
+  std::string integrator;
+};
+
+struct MapTask {
+  std::size_t k_index;
+  double dt;
+  std::string integrator;
+};
+
+std::string k_text(double k) { return format_number(k); }
+
+// The theoretical limit for a method, or nullopt when it has none.
+std::optional<double> theory_dt(const IntegratorInfo& info, double w, double t_end, double blowup) {
+  if (w <= 0.0 || std::isinf(info.stability_limit)) return std::nullopt;
+  if (info.stability_limit > 0.0) return info.stability_limit / w;
+  if (!info.stability_function) return std::nullopt;
+  // (T / h) ln |R(i w h)|^2 = ln B, increasing in h: bisect on log h.
+  auto growth = [&](double h) {
+    return t_end / h * std::log(std::norm(info.stability_function({0.0, w * h})));
+  };
+  double lo = 1e-12 / w, hi = 10.0 / w;
+  const double target = std::log(blowup);
+  if (growth(hi) < target) return std::nullopt;
+  for (int iteration = 0; iteration < 200 && hi / lo > 1.0 + 1e-12; ++iteration) {
+    const double mid = std::sqrt(lo * hi);
+    (growth(mid) < target ? lo : hi) = mid;
+  }
+  return std::sqrt(lo * hi);
+}
+
+class StabilityExperiment final : public Experiment {
+ public:
+  explicit StabilityExperiment(const DefinitionObject& d) {
+    d.allow_only({"experiment", "name", "title", "description", "integrators", "rtol", "atol",
+                  "newton_tol", "periods", "dt_min_factor", "dt_max_factor", "rel_tol", "blowup",
+                  "cases", "map"});
+    options_ = definition_options(d);
+    integrators_ = definition_integrators(d, "integrators", "fixed-step");
+    for (const std::string& name : integrators_) {
+      if (make_integrator(name)->info().adaptive) {
+        d.fail("integrators", "'" + name + "' is adaptive: it has no step size to limit");
+      }
+    }
+    periods_ = d.positive("periods", 100.0);
+    dt_min_factor_ = d.positive("dt_min_factor", 1e-3);
+    dt_max_factor_ = d.positive("dt_max_factor", 10.0);
+    rel_tol_ = d.positive("rel_tol", 1e-3);
+    blowup_ = d.positive("blowup", 1000.0);
+    if (!(dt_max_factor_ > dt_min_factor_)) d.fail("dt_max_factor", "must exceed dt_min_factor");
+    for (const DefinitionObject& c : d.objects("cases")) {
+      c.allow_only({"scene", "parameters", "stiffness", "k"});
+      cases_.push_back(read_sweep(c));
+      for (std::size_t ki = 0; ki < cases_.back().k.size(); ++ki) {
+        for (const std::string& name : integrators_) {
+          limit_tasks_.push_back({cases_.size() - 1, ki, name});
+        }
+      }
+    }
+    if (d.has("map")) {
+      const DefinitionObject m = d.object("map");
+      m.allow_only({"scene", "parameters", "stiffness", "k", "dt", "t_end", "integrators"});
+      map_ = read_sweep(m);
+      map_integrators_ = definition_integrators(m, "integrators", "fixed-step");
+      map_t_end_ = m.positive("t_end");
+      for (double dt : m.positives("dt")) {
+        if (map_t_end_ / dt > 1e7) m.fail("dt", "more than 1e7 steps per run");
+        map_dt_.push_back(dt);
+      }
+      for (const std::string& name : map_integrators_) {
+        for (std::size_t ki = 0; ki < map_->k.size(); ++ki) {
+          for (double dt : map_dt_) map_tasks_.push_back({ki, dt, name});
+        }
+      }
+    }
+  }
+
+  std::vector<TableSpec> tables() const override {
+    return {{"", {"scene", "integrator", "k", "w_max", "t_end", "max_stable_dt", "bracket_lo",
+                  "bracket_hi", "theory_dt", "ratio"}},
+            {"map", {"scene", "integrator", "k", "dt", "w_max", "energy_ratio", "diverged"}}};
+  }
+
+  std::size_t task_count() const override { return limit_tasks_.size() + map_tasks_.size(); }
+
+  TaskOutput run_task(std::size_t index) const override {
+    TaskOutput out;
+    out.rows.resize(2);
+    if (index < limit_tasks_.size()) {
+      out.rows[0].push_back(run_limit(limit_tasks_[index]));
+    } else {
+      out.rows[1].push_back(run_map(map_tasks_[index - limit_tasks_.size()]));
+    }
+    return out;
+  }
+
+  nlohmann::json settings() const override {
+    nlohmann::json cases = nlohmann::json::array();
+    for (const StiffnessCase& c : cases_) {
+      cases.push_back({{"stiffness", c.stiffness_parameter}, {"k", c.k},
+                       {"scene", scene_as_json(c.scenes.front())}});
+    }
+    nlohmann::json s = {{"integrators", integrators_}, {"cases", cases},
+                        {"periods", periods_}, {"blowup", blowup_},
+                        {"dt_min_factor", dt_min_factor_}, {"dt_max_factor", dt_max_factor_}};
+    if (map_) {
+      s["map"] = {{"integrators", map_integrators_}, {"k", map_->k}, {"dt", map_dt_},
+                  {"t_end", map_t_end_}, {"scene", scene_as_json(map_->scenes.front())}};
+    }
+    return s;
+  }
+
+ private:
+  StiffnessCase read_sweep(const DefinitionObject& c) const {
+    StiffnessCase sweep;
+    sweep.stiffness_parameter = c.string("stiffness", "k");
+    sweep.k = c.positives("k");
+    for (double k : sweep.k) {
+      sweep.scenes.push_back(definition_scene(c, {{sweep.stiffness_parameter, k_text(k)}}));
+    }
+    return sweep;
+  }
+
+  std::string run_limit(const LimitTask& task) const {
+    const StiffnessCase& c = cases_[task.case_index];
+    const Scene& scene = c.scenes[task.k_index];
+    const MassSpringModel model(scene);
+    const double w = max_angular_frequency(model);
+    const double t_end = periods_ * 2.0 * std::numbers::pi / std::max(w, 1e-300);
+    StabilitySettings s;
+    s.run.integrator = task.integrator;
+    s.run.t_end = t_end;
+    s.run.blowup = blowup_;
+    s.run.options = options_;
+    s.dt_min = dt_min_factor_ / w;
+    s.dt_max = dt_max_factor_ / w;
+    s.rel_tol = rel_tol_;
+    const StabilityResult r = find_max_stable_dt(model, s);
+    const IntegratorInfo info = make_integrator(task.integrator)->info();
+    const std::optional<double> theory = theory_dt(info, w, t_end, blowup_);
+    Row row;
+    row.add(scene.name).add(task.integrator).add(c.k[task.k_index]).add(w).add(t_end)
+        .add(r.max_stable_dt).add(r.lo).add(r.hi);
+    if (theory) {
+      row.add(*theory).add(r.max_stable_dt / *theory);
+    } else {
+      row.add_empty().add_empty();
+    }
+    return row.str();
+  }
+
+  std::string run_map(const MapTask& task) const {
+    const Scene& scene = map_->scenes[task.k_index];
+    const MassSpringModel model(scene);
+    RunSettings s;
+    s.integrator = task.integrator;
+    s.dt = task.dt;
+    s.t_end = map_t_end_;
+    s.blowup = blowup_;
+    s.options = options_;
+    const RunResult r = simulate(model, s);
+    return Row().add(scene.name).add(task.integrator).add(map_->k[task.k_index]).add(task.dt)
+        .add(max_angular_frequency(model)).add(r.energy_final / r.energy_initial)
+        .add(r.diverged() ? 1L : 0L).str();
+  }
+
+  IntegratorOptions options_;
+  std::vector<std::string> integrators_, map_integrators_;
+  double periods_, dt_min_factor_, dt_max_factor_, rel_tol_, blowup_;
+  std::vector<StiffnessCase> cases_;
+  std::optional<StiffnessCase> map_;
+  std::vector<double> map_dt_;
+  double map_t_end_ = 0.0;
+  std::vector<LimitTask> limit_tasks_;
+  std::vector<MapTask> map_tasks_;
+};
+
+}  // namespace
+
+std::unique_ptr<Experiment> make_stability_experiment(const DefinitionObject& d) {
+  return std::make_unique<StabilityExperiment>(d);
+}
+
+}  // namespace springlab
