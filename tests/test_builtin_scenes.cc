@@ -128,7 +128,7 @@ TEST(BuiltinScenesTest, ExactMessages) {
             "unknown built-in scene 'xyz' (built-in scenes: chain, cloth, oscillator, spring)");
   EXPECT_EQ(build_error("chain", {{"foo", "1"}}),
             "scene 'chain': unknown parameter 'foo' (parameters: n, k, mass, length, drag, g, "
-            "horizontal)");
+            "horizontal, stretch)");
   EXPECT_EQ(build_error("chain", {{"k", "1x"}}),
             "scene 'chain': parameter 'k' must be a finite number (got '1x')");
   EXPECT_EQ(build_error("chain", {{"n", "2.5"}}),
