@@ -18,3 +18,41 @@ springlab_require(SUNDIALS libsundials-dev 6.4)
 if(SPRINGLAB_BUILD_TESTS)
   springlab_require(GTest libgtest-dev)
 endif()
+
+# The report is drawn by Python 3 with matplotlib and numpy. The python3
+# first on PATH may lack them (a pyenv build, say), so try each candidate
+# and keep the first that can import both.
+function(springlab_find_report_python out)
+  set(candidates)
+  if(SPRINGLAB_PYTHON)
+    list(APPEND candidates "${SPRINGLAB_PYTHON}")
+  endif()
+  list(APPEND candidates /usr/bin/python3)
+  find_program(_path_python3 NAMES python3 NO_CACHE)
+  if(_path_python3)
+    list(APPEND candidates "${_path_python3}")
+  endif()
+  foreach(candidate IN LISTS candidates)
+    execute_process(COMMAND "${candidate}" -c "import matplotlib, numpy"
+                    RESULT_VARIABLE status OUTPUT_QUIET ERROR_QUIET)
+    if(status EQUAL 0)
+      set(${out} "${candidate}" PARENT_SCOPE)
+      return()
+    endif()
+  endforeach()
+  message(FATAL_ERROR
+    "springlab: no Python 3 that can import matplotlib and numpy (tried: ${candidates}).\n"
+    "Install them with:  ${SPRINGLAB_APT_HINT} python3-matplotlib python3-numpy\n"
+    "or point -DSPRINGLAB_PYTHON=/path/to/python3 at one that has them.")
+endfunction()
+springlab_find_report_python(SPRINGLAB_REPORT_PYTHON)
+message(STATUS "springlab: report Python: ${SPRINGLAB_REPORT_PYTHON}")
+
+if(SPRINGLAB_BUILD_TESTS)
+  find_program(SPRINGLAB_CHROMIUM NAMES chromium chromium-browser)
+  if(NOT SPRINGLAB_CHROMIUM)
+    message(FATAL_ERROR
+      "springlab: the report test needs headless Chromium.\n"
+      "Install it with:  ${SPRINGLAB_APT_HINT} chromium")
+  endif()
+endif()

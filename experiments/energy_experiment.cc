@@ -42,7 +42,7 @@ class EnergyExperiment final : public Experiment {
       c.allow_only({"scene", "parameters", "dt", "t_end", "every"});
       cases_.push_back({definition_scene(c), c.positive("dt"), c.positive("t_end"),
                         c.count("every", 1, 1, 1000000)});
-      make_time_grid(cases_.back().dt, cases_.back().t_end);
+      check_time_grid(c, "dt", cases_.back().dt, cases_.back().t_end);
     }
   }
 

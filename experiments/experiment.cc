@@ -63,6 +63,8 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
         loaded.name[0] == '.') {
       top.fail("name", "must be a plain file name");
     }
+    top.string("title", "");  // both optional, but text when given
+    top.string("description", "");
     loaded.experiment = k.make(top);
     loaded.definition = json;
     return loaded;

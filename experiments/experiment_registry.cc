@@ -7,6 +7,8 @@ std::unique_ptr<Experiment> make_energy_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_convergence_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_work_precision_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_stability_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_damping_budget_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_cloth_showcase_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -14,6 +16,8 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"convergence", &make_convergence_experiment},
       {"work-precision", &make_work_precision_experiment},
       {"stability", &make_stability_experiment},
+      {"damping-budget", &make_damping_budget_experiment},
+      {"cloth-showcase", &make_cloth_showcase_experiment},
   };
   return kinds;
 }

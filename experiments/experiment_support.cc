@@ -32,6 +32,14 @@ std::optional<Vector> exact_oscillator_positions(const Scene& s, double t) {
   return Vector(x.head(s.dimension));
 }
 
+void check_time_grid(const DefinitionObject& o, const char* key, double dt, double t_end) {
+  try {
+    make_time_grid(dt, t_end);
+  } catch (const std::invalid_argument& e) {
+    o.fail(key, e.what());
+  }
+}
+
 double position_error(const Vector& x, const Vector& x_ref) {
   return (x - x_ref).lpNorm<Eigen::Infinity>();
 }
@@ -61,9 +69,13 @@ double base_dt_for_order(const DefinitionObject& o, const char* key, int order) 
   int best_order = 0;
   for (const auto& [name, value] : table.json().items()) {
     int k = 0;
+    std::size_t end = 0;
     try {
-      k = std::stoi(name);
+      k = std::stoi(name, &end);
     } catch (const std::exception&) {
+      end = 0;
+    }
+    if (end == 0 || end != name.size() || k < 1 || name[0] == '+') {
       table.fail(name, "keys are method orders (1, 2, 4, ...)");
     }
     const double dt = table.positive(name.c_str());

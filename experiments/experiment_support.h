@@ -9,6 +9,7 @@
 
 #include "experiments/definition.h"
 #include "experiments/simulation.h"
+#include "integrators/integrator.h"
 #include "models/mass_spring_model.h"
 
 namespace springlab {
@@ -31,8 +32,23 @@ double position_error(const Vector& x, const Vector& x_ref);
 std::optional<double> log_log_slope(const std::vector<double>& x, const std::vector<double>& y,
                                     double floor = 0.0);
 
+// Refuses a (dt, t_end) pair with no valid time grid, naming `key` of `o`.
+void check_time_grid(const DefinitionObject& o, const char* key, double dt, double t_end);
+
 // Fixed-step methods' dt by order: "base_dt": {"1": .., "2": .., "4": ..},
 // picking the entry for the largest order key <= the method's order.
 double base_dt_for_order(const DefinitionObject& o, const char* key, int order);
+
+// Accuracy sweeps shared by the convergence and work-precision experiments,
+// defined in convergence_experiment.cc (see there).
+nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, const Scene& scene,
+                                  double finest_dt);
+Vector accuracy_reference_positions(const nlohmann::json& reference, const MassSpringModel& model,
+                                    const Scene& scene, double t_end,
+                                    const IntegratorOptions& options, const std::string& where);
+std::vector<double> accuracy_sweep_values(const DefinitionObject& d, const IntegratorInfo& info);
+RunResult accuracy_run(const MassSpringModel& model, const std::string& integrator, bool adaptive,
+                       double value, double t_end, const IntegratorOptions& options,
+                       double atol_factor);
 
 }  // namespace springlab

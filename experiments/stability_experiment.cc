@@ -66,6 +66,17 @@ std::optional<double> theory_dt(const IntegratorInfo& info, double w, double t_e
   return std::sqrt(lo * hi);
 }
 
+// Adaptive methods choose their own steps: there is no step size to limit.
+std::vector<std::string> fixed_step_integrators(const DefinitionObject& d) {
+  std::vector<std::string> names = definition_integrators(d, "integrators", "fixed-step");
+  for (const std::string& name : names) {
+    if (make_integrator(name)->info().adaptive) {
+      d.fail("integrators", "'" + name + "' is adaptive: it has no step size to limit");
+    }
+  }
+  return names;
+}
+
 class StabilityExperiment final : public Experiment {
  public:
   explicit StabilityExperiment(const DefinitionObject& d) {
@@ -73,12 +84,7 @@ class StabilityExperiment final : public Experiment {
                   "newton_tol", "periods", "dt_min_factor", "dt_max_factor", "rel_tol", "blowup",
                   "cases", "map"});
     options_ = definition_options(d);
-    integrators_ = definition_integrators(d, "integrators", "fixed-step");
-    for (const std::string& name : integrators_) {
-      if (make_integrator(name)->info().adaptive) {
-        d.fail("integrators", "'" + name + "' is adaptive: it has no step size to limit");
-      }
-    }
+    integrators_ = fixed_step_integrators(d);
     periods_ = d.positive("periods", 100.0);
     dt_min_factor_ = d.positive("dt_min_factor", 1e-3);
     dt_max_factor_ = d.positive("dt_max_factor", 10.0);
@@ -98,7 +104,7 @@ class StabilityExperiment final : public Experiment {
       const DefinitionObject m = d.object("map");
       m.allow_only({"scene", "parameters", "stiffness", "k", "dt", "t_end", "integrators"});
       map_ = read_sweep(m);
-      map_integrators_ = definition_integrators(m, "integrators", "fixed-step");
+      map_integrators_ = fixed_step_integrators(m);
       map_t_end_ = m.positive("t_end");
       for (double dt : m.positives("dt")) {
         if (map_t_end_ / dt > 1e7) m.fail("dt", "more than 1e7 steps per run");
@@ -196,9 +202,15 @@ class StabilityExperiment final : public Experiment {
     s.blowup = blowup_;
     s.options = options_;
     const RunResult r = simulate(model, s);
-    return Row().add(scene.name).add(task.integrator).add(map_->k[task.k_index]).add(task.dt)
-        .add(max_angular_frequency(model)).add(r.energy_final / r.energy_initial)
-        .add(r.diverged() ? 1L : 0L).str();
+    Row row;
+    row.add(scene.name).add(task.integrator).add(map_->k[task.k_index]).add(task.dt)
+        .add(max_angular_frequency(model));
+    if (r.energy_initial != 0.0) {
+      row.add(r.energy_final / r.energy_initial);
+    } else {
+      row.add_empty();  // no ratio of a zero energy
+    }
+    return row.add(r.diverged() ? 1L : 0L).str();
   }
 
   IntegratorOptions options_;

@@ -61,6 +61,10 @@ void ArkodeArk::create() {
 
 int ArkodeArk::solve(double t_out, double& t_reached) {
   realtype t = t_;
+  // Every output time is reached by a step of the solver (a stop time), not
+  // by interpolating past it: ARKODE's interpolant in particular can be far
+  // less accurate than the tolerance.
+  if (const int stop = ARKStepSetStopTime(memory_.get(), t_out); stop < 0) return stop;
   const int flag = ARKStepEvolve(memory_.get(), t_out, y_.get(), &t, ARK_NORMAL);
   t_reached = t;
   return flag;

@@ -29,6 +29,10 @@ void ArkodeErk::create() {
 
 int ArkodeErk::solve(double t_out, double& t_reached) {
   realtype t = t_;
+  // Every output time is reached by a step of the solver (a stop time), not
+  // by interpolating past it: ARKODE's interpolant in particular can be far
+  // less accurate than the tolerance.
+  if (const int stop = ERKStepSetStopTime(memory_.get(), t_out); stop < 0) return stop;
   const int flag = ERKStepEvolve(memory_.get(), t_out, y_.get(), &t, ARK_NORMAL);
   t_reached = t;
   return flag;

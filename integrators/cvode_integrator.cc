@@ -64,6 +64,10 @@ void CvodeIntegrator::create() {
 
 int CvodeIntegrator::solve(double t_out, double& t_reached) {
   realtype t = t_;
+  // Every output time is reached by a step of the solver (a stop time), not
+  // by interpolating past it: ARKODE's interpolant in particular can be far
+  // less accurate than the tolerance.
+  if (const int stop = CVodeSetStopTime(memory_.get(), t_out); stop < 0) return stop;
   const int flag = CVode(memory_.get(), t_out, y_.get(), &t, CV_NORMAL);
   t_reached = t;
   return flag;

@@ -47,6 +47,10 @@ void IdaIntegrator::create() {
 
 int IdaIntegrator::solve(double t_out, double& t_reached) {
   realtype t = t_;
+  // Every output time is reached by a step of the solver (a stop time), not
+  // by interpolating past it: ARKODE's interpolant in particular can be far
+  // less accurate than the tolerance.
+  if (const int stop = IDASetStopTime(memory_.get(), t_out); stop < 0) return stop;
   const int flag = IDASolve(memory_.get(), t_out, &t, y_.get(), yp_.get(), IDA_NORMAL);
   t_reached = t;
   return flag;

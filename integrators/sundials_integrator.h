@@ -5,7 +5,9 @@
 //
 // These methods are adaptive: advance_to(t_out) takes as many internal steps
 // as the error control (--rtol, --atol) needs, and --dt is only the output
-// interval. A failed call ends the run with a message naming it, as a result.
+// interval. Each output time is a stop time, so the reported state is a
+// solver step, not an interpolation. A failed call ends the run with a
+// message naming it, as a result.
 #pragma once
 
 #include <memory>

@@ -1,0 +1,926 @@
+// The experiment framework (experiments/*.cc) in-process:
+//   - ExperimentDefinition: the exact one-line messages parse_experiment
+//     gives for broken definitions;
+//   - ExperimentKinds: energy, stability, damping-budget and cloth-showcase
+//     tasks run directly, their CSV rows read back and checked against what
+//     the mathematics says they must contain (explicit Euler's exact energy
+//     growth on the oscillator, stability limits against theory, the damping
+//     budget of an accurate method, the last good state of a diverged cloth);
+//   - ExperimentRunner: run_experiment writing files (shards and merge,
+//     thread count, the settings file, nothing left behind on errors).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "experiments/definition.h"
+#include "experiments/experiment.h"
+#include "experiments/experiment_runner.h"
+
+namespace springlab {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using Record = std::map<std::string, std::string>;
+
+// ---------------------------------------------------------------- helpers --
+
+// The project never writes quoted fields for the built-in scenes used here.
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> fields(1);
+  for (char c : line) {
+    if (c == ',') {
+      fields.emplace_back();
+    } else {
+      fields.back() += c;
+    }
+  }
+  return fields;
+}
+
+double number(const std::string& field) {
+  EXPECT_FALSE(field.empty()) << "expected a number, got an empty field";
+  if (field.empty()) return std::nan("");
+  std::size_t end = 0;
+  const double value = std::stod(field, &end);
+  EXPECT_EQ(end, field.size()) << "not a number: '" << field << "'";
+  return value;
+}
+
+bool close(double a, double b, double rel) {
+  return std::abs(a - b) <= rel * std::max(std::abs(a), std::abs(b));
+}
+
+// One task's rows of every table, as column -> field (rows carry no task column).
+std::vector<std::vector<Record>> run_task(const LoadedExperiment& loaded, std::size_t task) {
+  const std::vector<TableSpec> specs = loaded.experiment->tables();
+  const TaskOutput out = loaded.experiment->run_task(task);
+  EXPECT_EQ(out.rows.size(), specs.size());
+  std::vector<std::vector<Record>> tables(specs.size());
+  for (std::size_t t = 0; t < specs.size() && t < out.rows.size(); ++t) {
+    for (const std::string& line : out.rows[t]) {
+      const std::vector<std::string> fields = split(line);
+      EXPECT_EQ(fields.size(), specs[t].columns.size()) << "table " << t << ": " << line;
+      Record r;
+      for (std::size_t c = 0; c < fields.size() && c < specs[t].columns.size(); ++c) {
+        r[specs[t].columns[c]] = fields[c];
+      }
+      tables[t].push_back(r);
+    }
+  }
+  return tables;
+}
+
+LoadedExperiment parse(const Json& definition) {
+  return parse_experiment(definition.dump(), "def.json");
+}
+
+// The message of the DefinitionError parse_experiment throws ("" if none).
+std::string definition_error(const std::string& text) {
+  try {
+    parse_experiment(text, "def.json");
+  } catch (const DefinitionError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    return std::string("not a DefinitionError: ") + e.what();
+  }
+  return "";
+}
+std::string definition_error(const Json& definition) { return definition_error(definition.dump()); }
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  EXPECT_TRUE(in.good()) << path;
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> directory_entries(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A fresh directory under the system temporary directory, removed afterwards.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag) {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() /
+            ("springlab-test-experiments-" + std::to_string(::getpid()) + "-" + info->name() +
+             "-" + tag);
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const fs::path& path() const { return path_; }
+  // Writes a definition file into the directory; returns its path.
+  std::string write(const std::string& file, const Json& definition) const {
+    const fs::path p = path_ / file;
+    std::ofstream(p) << definition.dump(2) << "\n";
+    return p.string();
+  }
+
+ private:
+  fs::path path_;
+};
+
+ExperimentRunOptions quiet(const fs::path& out, int jobs = 1) {
+  ExperimentRunOptions o;
+  o.out_dir = out.string();
+  o.jobs = jobs;
+  o.progress = false;
+  return o;
+}
+
+// ------------------------------------------------------ ExperimentDefinition --
+
+const Json kEnergy = {{"experiment", "energy"},
+                      {"integrators", {"symplectic-euler"}},
+                      {"cases", {{{"scene", "oscillator"}, {"dt", 0.05}, {"t_end", 1}}}}};
+
+TEST(ExperimentDefinition, AValidDefinitionParses) {
+  const LoadedExperiment loaded = parse(kEnergy);
+  EXPECT_EQ(loaded.name, "energy");  // the kind when no name is given
+  EXPECT_EQ(loaded.experiment->task_count(), 1u);
+  EXPECT_EQ(loaded.definition, kEnergy);
+}
+
+TEST(ExperimentDefinition, MalformedJson) {
+  const std::string message = definition_error(std::string(R"({"experiment": "energy",)"));
+  EXPECT_EQ(message,
+            "def.json: malformed JSON: parse error at line 1, column 25: syntax error while "
+            "parsing object key - unexpected end of input; expected string literal");
+  EXPECT_EQ(message.rfind("def.json: malformed JSON: ", 0), 0u) << message;
+}
+
+TEST(ExperimentDefinition, TopLevelMustBeAnObjectWithAKind) {
+  EXPECT_EQ(definition_error(std::string("[1, 2]")), "def.json: top level: expected an object");
+  EXPECT_EQ(definition_error(Json{{"name", "x"}}), "def.json: experiment: missing");
+  EXPECT_EQ(definition_error(Json{{"experiment", 3}}),
+            "def.json: experiment: expected a string, got number");
+}
+
+TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
+  EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
+            "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
+            "work-precision, stability, damping-budget, cloth-showcase)");
+}
+
+TEST(ExperimentDefinition, UnknownTopLevelKey) {
+  Json d = kEnergy;
+  d["dtt"] = 0.01;
+  EXPECT_EQ(definition_error(d),
+            "def.json: unknown key 'dtt' (allowed: experiment, name, title, description, "
+            "integrators, rtol, atol, newton_tol, cases)");
+}
+
+TEST(ExperimentDefinition, UnknownKeyInsideASecondCase) {
+  Json d = kEnergy;
+  d["cases"].push_back({{"scene", "oscillator"}, {"dt", 0.05}, {"t_end", 1}, {"step", 2}});
+  EXPECT_EQ(definition_error(d),
+            "def.json: cases[1]: unknown key 'step' (allowed: scene, parameters, dt, t_end, "
+            "every)");
+}
+
+TEST(ExperimentDefinition, UnknownIntegratorName) {
+  Json d = kEnergy;
+  d["integrators"] = {"rk4", "forward-euler"};
+  EXPECT_EQ(definition_error(d), "def.json: integrators: unknown integrator 'forward-euler'");
+  d["integrators"] = "implicit";
+  EXPECT_EQ(definition_error(d),
+            "def.json: integrators: expected \"all\", \"fixed-step\", \"adaptive\" or a list of "
+            "names");
+}
+
+TEST(ExperimentDefinition, NonPositiveStep) {
+  Json d = kEnergy;
+  d["cases"][0]["dt"] = 0;
+  EXPECT_EQ(definition_error(d), "def.json: cases[0].dt: must be > 0 (got 0)");
+  d["cases"][0]["dt"] = -0.5;
+  EXPECT_EQ(definition_error(d), "def.json: cases[0].dt: must be > 0 (got -0.5)");
+  d["cases"][0]["dt"] = "0.1";
+  EXPECT_EQ(definition_error(d), "def.json: cases[0].dt: expected a number, got string");
+}
+
+TEST(ExperimentDefinition, BuiltinParameterErrorInsideACase) {
+  Json d = kEnergy;
+  d["cases"][0]["parameters"] = {{"k", -1}};
+  EXPECT_EQ(definition_error(d),
+            "def.json: cases[0].parameters: scene 'oscillator': parameter 'k' must be > 0 "
+            "(got -1)");
+  d["cases"][0]["parameters"] = {{"stiffness", 5}};
+  EXPECT_EQ(definition_error(d),
+            "def.json: cases[0].parameters: scene 'oscillator': unknown parameter 'stiffness' "
+            "(parameters: k, mass, rest, amplitude)");
+}
+
+TEST(ExperimentDefinition, StabilityRefusesAdaptiveIntegrators) {
+  const Json d = {{"experiment", "stability"},
+                  {"integrators", {"rk4", "cvode-bdf"}},
+                  {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}}};
+  EXPECT_EQ(definition_error(d),
+            "def.json: integrators: 'cvode-bdf' is adaptive: it has no step size to limit");
+}
+
+TEST(ExperimentDefinition, ClothFramesMustBeMultiplesOfTheStep) {
+  Json d = {{"experiment", "cloth-showcase"},
+            {"integrators", {"implicit-euler"}},
+            {"scene", "cloth"},
+            {"parameters", {{"n", 3}}},
+            {"dt", 0.02},
+            {"frames", {0.1, 0.13}}};
+  EXPECT_EQ(definition_error(d), "def.json: frames: must increase and be whole multiples of dt");
+  d["frames"] = {0.2, 0.1};
+  EXPECT_EQ(definition_error(d), "def.json: frames: must increase and be whole multiples of dt");
+  d["frames"] = {0.1, 0.2};
+  EXPECT_EQ(definition_error(d), "");
+}
+
+TEST(ExperimentDefinition, NameMustBeAPlainFileName) {
+  Json d = kEnergy;
+  d["name"] = "results/energy";
+  EXPECT_EQ(definition_error(d), "def.json: name: must be a plain file name");
+  d["name"] = "..";
+  EXPECT_EQ(definition_error(d), "def.json: name: must be a plain file name");
+  d["name"] = "";
+  EXPECT_EQ(definition_error(d), "def.json: name: must be a plain file name");
+}
+
+TEST(ExperimentDefinition, ShippedDefinitionsParse) {
+  for (const char* dir : {SPRINGLAB_TEST_DATA "/experiments", SPRINGLAB_TEST_DATA "/../../experiments"}) {
+    int count = 0;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      if (entry.path().extension() != ".json") continue;
+      ++count;
+      EXPECT_NO_THROW({
+        const LoadedExperiment loaded = load_experiment(entry.path().string());
+        EXPECT_EQ(loaded.name, entry.path().stem().string());
+        EXPECT_GT(loaded.experiment->task_count(), 0u);
+      }) << entry.path();
+    }
+    EXPECT_GE(count, 4) << dir;
+  }
+}
+
+// ----------------------------------------------------------- ExperimentKinds --
+
+TEST(ExperimentKinds, TablesStartWithSceneAndIntegrator) {
+  const std::vector<Json> definitions = {
+      kEnergy,
+      {{"experiment", "stability"},
+       {"integrators", {"rk4"}},
+       {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}}},
+      {{"experiment", "damping-budget"},
+       {"integrators", {"rk4"}},
+       {"cases", {{{"scene", "spring"}, {"dt", 0.01}, {"t_end", 1}}}}},
+      {{"experiment", "cloth-showcase"},
+       {"integrators", {"rk4"}},
+       {"scene", "cloth"},
+       {"parameters", {{"n", 3}}},
+       {"dt", 0.01},
+       {"frames", {0.1}}}};
+  for (const Json& d : definitions) {
+    const LoadedExperiment loaded = parse(d);
+    for (const TableSpec& spec : loaded.experiment->tables()) {
+      ASSERT_GE(spec.columns.size(), 3u);
+      EXPECT_EQ(spec.columns[0], "scene") << d["experiment"] << " " << spec.suffix;
+      EXPECT_EQ(spec.columns[1], "integrator") << d["experiment"] << " " << spec.suffix;
+      EXPECT_EQ(std::count(spec.columns.begin(), spec.columns.end(), "task"), 0);
+    }
+  }
+}
+
+// Explicit Euler on x'' = -w^2 x: E_{n+1} = (1 + w^2 dt^2) E_n exactly; at
+// w = 10, dt = 0.05 that is 1.25 per step, so E passes 1000 E_s = 1000 E_0
+// at step 31 (1.25^30 = 807.8, 1.25^31 = 1009.7).
+TEST(ExperimentKinds, EnergyExplicitEulerGrowsByExactFactor) {
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "energy"},
+       {"integrators", {"explicit-euler", "symplectic-euler"}},
+       {"cases",
+        {{{"scene", "oscillator"}, {"parameters", {{"k", 100}, {"mass", 1}, {"rest", 0}}},
+          {"dt", 0.05}, {"t_end", 3}},
+         {{"scene", "oscillator"}, {"dt", 0.05}, {"t_end", 1}, {"every", 3}},
+         {{"scene", "chain"}, {"parameters", {{"n", 4}, {"horizontal", 1}}}, {"dt", 0.005},
+          {"t_end", 0.2}}}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 6u);
+
+  const auto euler = run_task(loaded, 0);
+  const std::vector<Record>& energy = euler[0];
+  ASSERT_EQ(energy.size(), 31u);  // t = 0 .. 30 dt, the last good state
+  for (std::size_t k = 0; k < energy.size(); ++k) {
+    EXPECT_EQ(energy[k].at("scene"), "oscillator");
+    EXPECT_EQ(energy[k].at("integrator"), "explicit-euler");
+    EXPECT_EQ(number(energy[k].at("dt")), 0.05);
+    EXPECT_NEAR(number(energy[k].at("t")), static_cast<double>(k) * 0.05, 1e-12);
+    EXPECT_EQ(number(energy[k].at("gravity")), 0.0);
+    if (k > 0) {
+      const double ratio = number(energy[k].at("total")) / number(energy[k - 1].at("total"));
+      EXPECT_TRUE(close(ratio, 1.25, 1e-12)) << "step " << k << ": ratio " << ratio;
+    }
+  }
+  EXPECT_TRUE(close(number(energy[0].at("total")), 0.5, 1e-15));  // k a^2 / 2
+  ASSERT_EQ(euler[1].size(), 1u);
+  const Record& run = euler[1][0];
+  EXPECT_EQ(run.at("status"), "diverged");
+  EXPECT_EQ(number(run.at("diverged_at")), 31 * 0.05);
+  EXPECT_TRUE(close(number(run.at("energy_initial")), 0.5, 1e-15));
+  EXPECT_TRUE(close(number(run.at("energy_scale")), 0.5, 1e-15));
+  EXPECT_TRUE(close(number(run.at("energy_final")), 0.5 * std::pow(1.25, 30), 1e-12));
+  EXPECT_EQ(run.at("energy_final"), energy.back().at("total"));
+  EXPECT_GE(number(run.at("wall_seconds")), 0.0);
+
+  // Symplectic Euler on the same case completes with a bounded energy.
+  const auto symplectic = run_task(loaded, 1);
+  EXPECT_EQ(symplectic[0].size(), 61u);
+  EXPECT_EQ(symplectic[1][0].at("status"), "completed");
+  EXPECT_EQ(symplectic[1][0].at("diverged_at"), "");
+  // It conserves Q = |u|^2 + a u1 u2 exactly (u = (w x, v), a = w dt = 0.5),
+  // so E stays within E0 / (1 +- a/2), the upper bound reached near t = 1 s.
+  double highest = 0.0;
+  for (const Record& r : symplectic[0]) {
+    const double total = number(r.at("total"));
+    EXPECT_LT(total, 0.5 / (1 - 0.25) + 1e-12) << "t " << r.at("t");
+    EXPECT_GT(total, 0.5 / (1 + 0.25) - 1e-12) << "t " << r.at("t");
+    highest = std::max(highest, total);
+  }
+  EXPECT_GT(highest, 0.6);
+
+  // every = 3 over 20 steps: t = 0, 3, ..., 18 dt and always the last (20 dt).
+  const auto every = run_task(loaded, 3);
+  ASSERT_EQ(every[0].size(), 8u);
+  for (std::size_t k = 0; k + 1 < every[0].size(); ++k) {
+    EXPECT_NEAR(number(every[0][k].at("t")), 3.0 * static_cast<double>(k) * 0.05, 1e-12);
+  }
+  EXPECT_EQ(number(every[0].back().at("t")), 1.0);
+  EXPECT_EQ(every[1][0].at("steps"), "20");
+
+  // The parts add up to the total (the chain has gravity).
+  const auto chain = run_task(loaded, 4);
+  ASSERT_EQ(chain[0].size(), 41u);
+  bool gravity_seen = false;
+  for (const Record& r : chain[0]) {
+    const double kinetic = number(r.at("kinetic")), spring = number(r.at("spring")),
+                 gravity = number(r.at("gravity")), total = number(r.at("total"));
+    gravity_seen = gravity_seen || gravity != 0.0;
+    EXPECT_NEAR(kinetic + spring + gravity, total,
+                1e-12 * (std::abs(kinetic) + std::abs(spring) + std::abs(gravity)))
+        << "t = " << r.at("t");
+    EXPECT_GE(kinetic, 0.0);
+    EXPECT_GE(spring, 0.0);
+  }
+  EXPECT_TRUE(gravity_seen);
+}
+
+TEST(ExperimentKinds, StabilityLimitsMatchTheory) {
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "stability"},
+       {"integrators", {"symplectic-euler", "verlet", "rk4", "implicit-euler", "explicit-euler"}},
+       {"dt_max_factor", 5},
+       {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}},
+       {"map",
+        {{"scene", "oscillator"},
+         {"integrators", {"explicit-euler", "implicit-euler"}},
+         {"k", {100}},
+         {"dt", {0.01, 0.1, 0.3}},
+         {"t_end", 2}}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 5u + 6u);
+
+  const std::map<std::string, double> theory = {{"symplectic-euler", 2.0 / 10},
+                                                {"verlet", 2.0 / 10},
+                                                {"rk4", 2.0 * std::sqrt(2.0) / 10}};
+  for (std::size_t task = 0; task < 5; ++task) {
+    const auto tables = run_task(loaded, task);
+    ASSERT_EQ(tables[0].size(), 1u);
+    EXPECT_TRUE(tables[1].empty());
+    const Record& r = tables[0][0];
+    const std::string name = r.at("integrator");
+    const double w = number(r.at("w_max"));
+    EXPECT_TRUE(close(w, 10.0, 1e-9)) << name << ": w_max " << w;
+    EXPECT_EQ(number(r.at("k")), 100.0);
+    EXPECT_TRUE(close(number(r.at("t_end")), 100 * 2 * std::numbers::pi / w, 1e-12)) << name;
+    const double limit = number(r.at("max_stable_dt"));
+    EXPECT_EQ(limit, number(r.at("bracket_lo"))) << name;
+    if (theory.count(name) != 0) {
+      const double expected = theory.at(name);
+      EXPECT_TRUE(close(number(r.at("theory_dt")), expected, 1e-9)) << name;
+      EXPECT_TRUE(close(limit, expected, 0.01)) << name << ": " << limit << " vs " << expected;
+      EXPECT_TRUE(close(number(r.at("ratio")), limit / number(r.at("theory_dt")), 1e-12)) << name;
+      // The bracket is tight (rel_tol 1e-3) and straddles the limit.
+      EXPECT_LE(number(r.at("bracket_hi")) / limit, 1.001 + 1e-12) << name;
+    } else if (name == "implicit-euler") {
+      EXPECT_EQ(r.at("theory_dt"), "");
+      EXPECT_EQ(r.at("ratio"), "");
+      EXPECT_EQ(limit, 5.0 / w);  // dt_max: nothing diverged
+      EXPECT_EQ(number(r.at("bracket_hi")), limit);
+    } else {
+      ASSERT_EQ(name, "explicit-euler");
+      // Unstable at every step: the finite-time limit (T/h) ln(1 + w^2 h^2) = ln 1000
+      // is exact for the oscillator, whose energy is all in the top mode.
+      const double predicted = number(r.at("theory_dt"));
+      EXPECT_TRUE(close(limit, predicted, 0.01)) << limit << " vs " << predicted;
+      const double t_end = number(r.at("t_end"));
+      EXPECT_TRUE(close(t_end / predicted * std::log1p(w * w * predicted * predicted),
+                        std::log(1000.0), 1e-6));
+      EXPECT_TRUE(close(number(r.at("ratio")), limit / predicted, 1e-12));
+      EXPECT_LT(limit, 0.02);  // far below the symplectic limit 0.2
+    }
+  }
+
+  // Map rows: tasks by integrator, then k, then dt.
+  const std::vector<double> dts = {0.01, 0.1, 0.3};
+  for (std::size_t m = 0; m < 6; ++m) {
+    const auto tables = run_task(loaded, 5 + m);
+    EXPECT_TRUE(tables[0].empty());
+    ASSERT_EQ(tables[1].size(), 1u);
+    const Record& r = tables[1][0];
+    const double dt = dts[m % 3];
+    EXPECT_EQ(number(r.at("dt")), dt);
+    EXPECT_EQ(number(r.at("k")), 100.0);
+    const double ratio = number(r.at("energy_ratio"));
+    const double growth = 1 + 100 * dt * dt;  // per step, |R(i w h)|^2
+    if (m < 3) {
+      EXPECT_EQ(r.at("integrator"), "explicit-euler");
+      if (dt == 0.01) {
+        EXPECT_EQ(r.at("diverged"), "0");
+        EXPECT_TRUE(close(ratio, std::pow(growth, 200), 1e-10)) << ratio;  // 7.3
+      } else {
+        EXPECT_EQ(r.at("diverged"), "1") << "dt " << dt;
+        EXPECT_GT(ratio, 1.0);
+        EXPECT_LE(ratio, 1000.0);  // the last good state
+      }
+    } else {
+      EXPECT_EQ(r.at("integrator"), "implicit-euler");
+      EXPECT_EQ(r.at("diverged"), "0") << "dt " << dt;
+      EXPECT_LE(ratio, 1.0) << "dt " << dt;
+      // Linear problem: implicit Euler's energy shrinks by 1 / (1 + w^2 h^2) per step.
+      // 2 / 0.3 is not whole: six steps of 0.3, then one of 0.2 ending at t_end.
+      const double whole = std::floor(2 / dt + 1e-9), rest = 2 - whole * dt;
+      const double expected =
+          std::pow(growth, -whole) / (rest > 1e-9 ? 1 + 100 * rest * rest : 1.0);
+      EXPECT_TRUE(close(ratio, expected, 1e-6)) << "dt " << dt << ": " << ratio;
+    }
+  }
+}
+
+TEST(ExperimentKinds, DampingBudgetSeparatesPhysicsFromNumerics) {
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "damping-budget"},
+       {"integrators", {"rk4", "implicit-euler"}},
+       {"cases",
+        {{{"scene", "spring"}, {"dt", 0.001}, {"t_end", 1}, {"every", 100}},
+         {{"scene", "spring"}, {"dt", 0.01}, {"t_end", 1}, {"every", 3}}}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 4u);
+
+  auto check_rows = [](const std::vector<Record>& rows, const std::string& name) {
+    ASSERT_FALSE(rows.empty());
+    EXPECT_EQ(rows[0].at("t"), "0");
+    EXPECT_EQ(rows[0].at("work_nonconservative"), "0");
+    EXPECT_EQ(rows[0].at("numerical"), "0");
+    const double e0 = number(rows[0].at("mechanical"));
+    EXPECT_TRUE(close(e0, -9.81, 1e-12)) << "m g y at y = -rest";
+    double previous_work = 0.0;
+    for (const Record& r : rows) {
+      EXPECT_EQ(r.at("integrator"), name);
+      const double mechanical = number(r.at("mechanical")), work = number(r.at("work_nonconservative")),
+                   budget = number(r.at("budget")), numerical = number(r.at("numerical"));
+      EXPECT_NEAR(budget, mechanical - work, 1e-13 * std::abs(e0)) << name << " t " << r.at("t");
+      EXPECT_NEAR(numerical, budget - e0, 1e-13 * std::abs(e0)) << name << " t " << r.at("t");
+      EXPECT_LE(work, previous_work) << name << ": drag only ever removes energy";
+      previous_work = work;
+    }
+    EXPECT_EQ(number(rows.back().at("t")), 1.0);
+  };
+
+  const std::vector<Record> rk4 = run_task(loaded, 0)[0];
+  check_rows(rk4, "rk4");
+  EXPECT_EQ(rk4.size(), 11u);  // every 100 of 1000 steps
+  const double rk4_work = number(rk4.back().at("work_nonconservative"));
+  const double rk4_numerical = number(rk4.back().at("numerical"));
+  EXPECT_LT(rk4_work, -0.01) << "the drag dissipates";
+  EXPECT_LT(std::abs(rk4_numerical), 1e-6) << "RK4 at dt 1e-3 does not";
+
+  const std::vector<Record> implicit = run_task(loaded, 3)[0];
+  check_rows(implicit, "implicit-euler");
+  EXPECT_EQ(implicit.size(), 35u);  // 0, 3, ..., 99 and the last step 100
+  EXPECT_LT(number(implicit.back().at("numerical")), -1e-3) << "implicit Euler's own dissipation";
+  // The same physics, so the same order of dissipated work as the accurate run.
+  EXPECT_LT(number(implicit.back().at("work_nonconservative")), -0.01);
+}
+
+TEST(ExperimentKinds, ClothShowcaseKeepsTheLastGoodState) {
+  const int n = 5;
+  const LoadedExperiment loaded = parse({{"experiment", "cloth-showcase"},
+                                         {"integrators", {"explicit-euler", "implicit-euler"}},
+                                         {"scene", "cloth"},
+                                         {"parameters", {{"n", n}}},
+                                         {"dt", 0.02},
+                                         {"frames", {0.1, 0.2}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 2u);
+  EXPECT_EQ(loaded.experiment->settings().at("n"), n);
+
+  // Rows grouped by frame time, in order.
+  auto frames_of = [&](const std::vector<Record>& rows) {
+    std::vector<std::pair<double, std::vector<Record>>> frames;
+    for (const Record& r : rows) {
+      const double t = number(r.at("t"));
+      if (frames.empty() || frames.back().first != t) frames.push_back({t, {}});
+      frames.back().second.push_back(r);
+    }
+    for (const auto& [t, particles] : frames) {
+      EXPECT_EQ(particles.size(), static_cast<std::size_t>(n * n)) << "t " << t;
+      for (std::size_t i = 0; i < particles.size(); ++i) {
+        EXPECT_EQ(particles[i].at("i"), std::to_string(i));
+      }
+    }
+    return frames;
+  };
+
+  const auto euler = run_task(loaded, 0);
+  ASSERT_EQ(euler[1].size(), 1u);
+  EXPECT_EQ(euler[1][0].at("status"), "diverged");
+  const double diverged_at = number(euler[1][0].at("diverged_at"));
+  const auto euler_frames = frames_of(euler[0]);
+  ASSERT_GE(euler_frames.size(), 2u);
+  EXPECT_EQ(euler_frames.front().first, 0.0);
+  const double last = euler_frames.back().first;
+  EXPECT_LT(last, diverged_at);
+  EXPECT_NEAR(last, diverged_at - 0.02, 1e-12) << "every step is checked";
+  if (diverged_at < 0.1) {
+    EXPECT_EQ(euler_frames.size(), 2u) << "t = 0 and the last good state only";
+  }
+  for (const auto& [t, particles] : euler_frames) {
+    for (const Record& r : particles) {
+      for (const char* axis : {"x", "y", "z"}) {
+        EXPECT_TRUE(std::isfinite(number(r.at(axis)))) << "t " << t;
+      }
+    }
+  }
+
+  const auto implicit = run_task(loaded, 1);
+  EXPECT_EQ(implicit[1][0].at("status"), "completed");
+  EXPECT_EQ(implicit[1][0].at("diverged_at"), "");
+  EXPECT_EQ(implicit[1][0].at("steps"), "10");
+  const auto frames = frames_of(implicit[0]);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].first, 0.0);
+  EXPECT_NEAR(frames[1].first, 0.1, 1e-12);
+  EXPECT_NEAR(frames[2].first, 0.2, 1e-12);
+  for (const auto& [t, particles] : frames) {
+    for (int fixed : {0, n - 1}) {
+      for (const char* axis : {"x", "y", "z"}) {
+        EXPECT_EQ(particles[static_cast<std::size_t>(fixed)].at(axis),
+                  frames[0].second[static_cast<std::size_t>(fixed)].at(axis))
+            << "fixed particle " << fixed << " moved at t " << t;
+      }
+    }
+  }
+  // Initially flat in y = 0 on a grid of spacing 1/(n-1); the free corner falls.
+  EXPECT_EQ(number(frames[0].second[n * n - 1].at("y")), 0.0);
+  EXPECT_EQ(number(frames[0].second[n * n - 1].at("z")), 1.0);
+  EXPECT_EQ(number(frames[0].second[n - 1].at("x")), 1.0);
+  EXPECT_LT(number(frames[2].second[n * n - 1].at("y")), number(frames[1].second[n * n - 1].at("y")));
+  EXPECT_LT(number(frames[1].second[n * n - 1].at("y")), 0.0);
+}
+
+// ---------------------------------------------------------- ExperimentRunner --
+
+const Json kBudget = {
+    {"experiment", "damping-budget"},
+    {"name", "budget"},
+    {"integrators", {"symplectic-euler", "verlet", "implicit-euler", "rk4", "explicit-euler"}},
+    {"cases", {{{"scene", "spring"}, {"dt", 0.01}, {"t_end", 0.5}, {"every", 5}}}}};
+
+const Json kStability = {
+    {"experiment", "stability"},
+    {"name", "stab"},
+    {"integrators", {"symplectic-euler", "rk4"}},
+    {"periods", 10},
+    {"cases", {{{"scene", "oscillator"}, {"k", {10, 100}}}}},
+    {"map",
+     {{"scene", "oscillator"},
+      {"integrators", {"explicit-euler", "implicit-euler"}},
+      {"k", {10, 100}},
+      {"dt", {0.01, 0.1}},
+      {"t_end", 1}}}};
+
+// Task indices of a table's rows, checking the header and the leading column.
+std::vector<long> task_column(const std::string& text, const std::string& expected_header) {
+  const std::vector<std::string> lines = lines_of(text);
+  EXPECT_FALSE(lines.empty());
+  if (lines.empty()) return {};
+  EXPECT_EQ(lines[0], expected_header);
+  EXPECT_EQ(lines[0].rfind("task,", 0), 0u);
+  std::vector<long> tasks;
+  for (std::size_t k = 1; k < lines.size(); ++k) {
+    std::size_t end = 0;
+    const long task = std::stol(lines[k], &end);
+    EXPECT_LT(end, lines[k].size());
+    EXPECT_EQ(lines[k][end], ',') << lines[k];
+    EXPECT_EQ(split(lines[k]).size(), split(lines[0]).size()) << lines[k];
+    tasks.push_back(task);
+  }
+  return tasks;
+}
+
+const std::string kBudgetHeader =
+    "task,scene,integrator,dt,t,mechanical,work_nonconservative,budget,numerical";
+const std::string kMapHeader = "task,scene,integrator,k,dt,w_max,energy_ratio,diverged";
+const std::string kLimitHeader =
+    "task,scene,integrator,k,w_max,t_end,max_stable_dt,bracket_lo,bracket_hi,theory_dt,ratio";
+
+TEST(ExperimentRunner, ShardsMergeToTheUnshardedTables) {
+  ScratchDir dir("shards");
+  const std::string definition = dir.write("budget.json", kBudget);
+  const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
+  EXPECT_EQ(run_experiment(definition, quiet(whole, 2)), 5u);
+
+  const std::vector<std::size_t> expected_tasks = {2, 2, 1};  // 0 3 | 1 4 | 2
+  for (int i = 1; i <= 3; ++i) {
+    ExperimentRunOptions o = quiet(sharded);
+    o.shard_index = i;
+    o.shard_count = 3;
+    EXPECT_EQ(run_experiment(definition, o), expected_tasks[static_cast<std::size_t>(i - 1)]);
+    const fs::path shard = sharded / ("budget.shard-" + std::to_string(i) + "-of-3.csv");
+    ASSERT_TRUE(fs::is_regular_file(shard)) << shard;
+    for (long task : task_column(read_text(shard), kBudgetHeader)) EXPECT_EQ(task % 3, i - 1);
+  }
+  EXPECT_FALSE(fs::exists(sharded / "budget.csv"));
+
+  ExperimentRunOptions merge = quiet(sharded);
+  merge.merge = 3;
+  EXPECT_EQ(run_experiment(definition, merge), 3u);
+  const std::string merged = read_text(sharded / "budget.csv");
+  EXPECT_EQ(merged, read_text(whole / "budget.csv"));
+  const std::vector<long> tasks = task_column(merged, kBudgetHeader);
+  EXPECT_TRUE(std::is_sorted(tasks.begin(), tasks.end()));
+  EXPECT_EQ(std::set<long>(tasks.begin(), tasks.end()), (std::set<long>{0, 1, 2, 3, 4}));
+  // 0.5 s at 0.01 every 5: 11 rows per run (explicit Euler stays bounded here).
+  EXPECT_EQ(tasks.size(), 5u * 11u);
+  EXPECT_EQ(read_text(sharded / "budget.json"), read_text(whole / "budget.json"));
+}
+
+TEST(ExperimentRunner, ShardsMergeTwoTables) {
+  ScratchDir dir("shards2");
+  const std::string definition = dir.write("stab.json", kStability);
+  const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
+  EXPECT_EQ(run_experiment(definition, quiet(whole, 3)), 4u + 8u);
+  for (int i = 1; i <= 3; ++i) {
+    ExperimentRunOptions o = quiet(sharded, 2);
+    o.shard_index = i;
+    o.shard_count = 3;
+    run_experiment(definition, o);
+  }
+  ExperimentRunOptions merge = quiet(sharded);
+  merge.merge = 3;
+  run_experiment(definition, merge);
+  for (const char* table : {"stab.csv", "stab-map.csv"}) {
+    EXPECT_EQ(read_text(sharded / table), read_text(whole / table)) << table;
+  }
+  const std::vector<long> limits = task_column(read_text(whole / "stab.csv"), kLimitHeader);
+  EXPECT_EQ(limits, (std::vector<long>{0, 1, 2, 3}));
+  const std::vector<long> map = task_column(read_text(whole / "stab-map.csv"), kMapHeader);
+  EXPECT_EQ(map, (std::vector<long>{4, 5, 6, 7, 8, 9, 10, 11}));
+}
+
+TEST(ExperimentRunner, MergeRefusesAMissingShard) {
+  ScratchDir dir("missing");
+  const std::string definition = dir.write("budget.json", kBudget);
+  const fs::path out = dir.path() / "out";
+  for (int i : {1, 3}) {
+    ExperimentRunOptions o = quiet(out);
+    o.shard_index = i;
+    o.shard_count = 3;
+    run_experiment(definition, o);
+  }
+  ExperimentRunOptions merge = quiet(out);
+  merge.merge = 3;
+  const std::string missing = (out / "budget.shard-2-of-3.csv").string();
+  try {
+    run_experiment(definition, merge);
+    ADD_FAILURE() << "merge with a missing shard succeeded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), missing + ": missing shard (run --shard 2/3 first)");
+  }
+  EXPECT_FALSE(fs::exists(out / "budget.csv"));
+  EXPECT_EQ(directory_entries(out),
+            (std::vector<std::string>{"budget.json", "budget.shard-1-of-3.csv",
+                                      "budget.shard-3-of-3.csv"}));
+}
+
+TEST(ExperimentRunner, MoreShardsThanTasks) {
+  ScratchDir dir("many");
+  const std::string definition = dir.write("budget.json", kBudget);
+  const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
+  run_experiment(definition, quiet(whole, 4));
+  for (int i = 1; i <= 7; ++i) {
+    ExperimentRunOptions o = quiet(sharded, 3);
+    o.shard_index = i;
+    o.shard_count = 7;
+    EXPECT_EQ(run_experiment(definition, o), i <= 5 ? 1u : 0u);
+  }
+  EXPECT_EQ(read_text(sharded / "budget.shard-7-of-7.csv"), kBudgetHeader + "\n");
+  ExperimentRunOptions merge = quiet(sharded);
+  merge.merge = 7;
+  EXPECT_EQ(run_experiment(definition, merge), 7u);
+  EXPECT_EQ(read_text(sharded / "budget.csv"), read_text(whole / "budget.csv"));
+}
+
+TEST(ExperimentRunner, MergeRefusesForeignShards) {
+  ScratchDir dir("foreign");
+  const std::string definition = dir.write("budget.json", kBudget);
+  const fs::path out = dir.path() / "out";
+  for (int i : {1, 2}) {
+    ExperimentRunOptions o = quiet(out);
+    o.shard_index = i;
+    o.shard_count = 2;
+    run_experiment(definition, o);
+  }
+  ExperimentRunOptions merge = quiet(out);
+  merge.merge = 2;
+  const fs::path second = out / "budget.shard-2-of-2.csv";
+  const std::string original = read_text(second);
+  auto merge_error = [&]() -> std::string {
+    try {
+      run_experiment(definition, merge);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  std::ofstream(second) << "task,scene,integrator,t\n1,spring,rk4,0\n";
+  EXPECT_EQ(merge_error(), second.string() + ": unexpected header");
+  std::ofstream(second) << kBudgetHeader << "\n1,spring\nspring,rk4\n";
+  EXPECT_EQ(merge_error(), second.string() + ":3: no task index");
+  EXPECT_FALSE(fs::exists(out / "budget.csv"));
+  std::ofstream(second) << original;
+  EXPECT_EQ(merge_error(), "");
+  EXPECT_TRUE(fs::exists(out / "budget.csv"));
+}
+
+TEST(ExperimentRunner, ThreadCountDoesNotChangeTables) {
+  ScratchDir dir("jobs");
+  const std::string definition = dir.write("stab.json", kStability);
+  const fs::path one = dir.path() / "one", two = dir.path() / "two";
+  EXPECT_EQ(run_experiment(definition, quiet(one, 1)), 12u);
+  EXPECT_EQ(run_experiment(definition, quiet(two, 2)), 12u);
+  for (const char* table : {"stab.csv", "stab-map.csv", "stab.json"}) {
+    EXPECT_EQ(read_text(one / table), read_text(two / table)) << table;
+  }
+  const std::string budget = dir.write("budget.json", kBudget);
+  run_experiment(budget, quiet(one, 1));
+  run_experiment(budget, quiet(two, 2));
+  EXPECT_EQ(read_text(one / "budget.csv"), read_text(two / "budget.csv"));
+}
+
+TEST(ExperimentRunner, SettingsFileHoldsIntegratorsAndDefinition) {
+  ScratchDir dir("settings");
+  const std::string definition = dir.write("budget.json", kBudget);
+  run_experiment(definition, quiet(dir.path() / "out"));
+  const Json settings = Json::parse(read_text(dir.path() / "out" / "budget.json"));
+  EXPECT_EQ(settings.at("name"), "budget");
+  EXPECT_EQ(settings.at("experiment"), "damping-budget");
+  EXPECT_EQ(settings.at("title"), "budget");  // the name when no title is given
+  EXPECT_EQ(settings.at("description"), "");
+  EXPECT_EQ(settings.at("integrators"), kBudget.at("integrators"));
+  EXPECT_EQ(settings.at("definition"), kBudget);
+  ASSERT_EQ(settings.at("cases").size(), 1u);
+  EXPECT_EQ(settings.at("cases")[0].at("dt"), 0.01);
+
+  // A group name resolves to the list of registered methods.
+  Json fixed = kBudget;
+  fixed["integrators"] = "fixed-step";
+  fixed["cases"][0]["t_end"] = 0.05;
+  run_experiment(dir.write("fixed.json", fixed), quiet(dir.path() / "fixed"));
+  const Json resolved = Json::parse(read_text(dir.path() / "fixed" / "budget.json"));
+  EXPECT_EQ(resolved.at("definition").at("integrators"), "fixed-step");
+  ASSERT_TRUE(resolved.at("integrators").is_array());
+  const std::vector<std::string> names = resolved.at("integrators");
+  for (const char* method : {"explicit-euler", "implicit-euler", "rk4", "symplectic-euler", "verlet"}) {
+    EXPECT_EQ(std::count(names.begin(), names.end(), method), 1) << method;
+  }
+  EXPECT_EQ(std::count(names.begin(), names.end(), "cvode-bdf"), 0);
+}
+
+TEST(ExperimentRunner, ErrorsLeaveNoFiles) {
+  ScratchDir dir("errors");
+  const fs::path out = dir.path() / "out";
+  fs::create_directories(out);
+
+  // A definition error: nothing is written, not even a temporary.
+  Json bad = kBudget;
+  bad["cases"][0]["dtt"] = 0.1;
+  const std::string bad_path = dir.write("bad.json", bad);
+  try {
+    run_experiment(bad_path, quiet(out));
+    ADD_FAILURE() << "a bad definition ran";
+  } catch (const DefinitionError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              bad_path + ": cases[0]: unknown key 'dtt' (allowed: scene, parameters, dt, t_end, every)");
+  }
+  EXPECT_TRUE(directory_entries(out).empty());
+  EXPECT_THROW(run_experiment(bad_path, quiet(dir.path() / "never")), DefinitionError);
+  EXPECT_FALSE(fs::exists(dir.path() / "never"));
+
+  // An output that cannot be written (a directory in the way of the second
+  // table): the first table's temporary is removed again.
+  Json energy = kEnergy;
+  energy["name"] = "e";
+  const std::string good = dir.write("e.json", energy);
+  fs::create_directories(out / "e-runs.csv");
+  try {
+    run_experiment(good, quiet(out));
+    ADD_FAILURE() << "wrote over a directory";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), (out / "e-runs.csv").string() + ": is a directory, not a file");
+  }
+  EXPECT_EQ(directory_entries(out), (std::vector<std::string>{"e-runs.csv"}));
+  fs::remove(out / "e-runs.csv");
+
+  // The settings file in the way: no table appears either.
+  fs::create_directories(out / "e.json");
+  EXPECT_THROW(run_experiment(good, quiet(out)), std::runtime_error);
+  EXPECT_EQ(directory_entries(out), (std::vector<std::string>{"e.json"}));
+}
+
+TEST(ExperimentRunner, EveryTableStartsWithTheTaskColumn) {
+  ScratchDir dir("columns");
+  const Json energy = {{"experiment", "energy"},
+                       {"integrators", {"explicit-euler", "verlet", "cvode-bdf"}},
+                       {"cases",
+                        {{{"scene", "oscillator"}, {"dt", 0.05}, {"t_end", 0.5}},
+                         {{"scene", "spring"}, {"dt", 0.01}, {"t_end", 0.2}, {"every", 4}}}}};
+  const Json cloth = {{"experiment", "cloth-showcase"},
+                      {"integrators", {"explicit-euler", "implicit-euler"}},
+                      {"scene", "cloth"},
+                      {"parameters", {{"n", 3}}},
+                      {"dt", 0.02},
+                      {"frames", {0.04, 0.1}}};
+  const fs::path out = dir.path() / "out";
+  EXPECT_EQ(run_experiment(dir.write("energy.json", energy), quiet(out, 2)), 6u);
+  EXPECT_EQ(run_experiment(dir.write("cloth.json", cloth), quiet(out, 2)), 2u);
+  EXPECT_EQ(run_experiment(dir.write("budget.json", kBudget), quiet(out, 2)), 5u);
+  EXPECT_EQ(run_experiment(dir.write("stab.json", kStability), quiet(out, 2)), 12u);
+  EXPECT_EQ(directory_entries(out),
+            (std::vector<std::string>{"budget.csv", "budget.json", "cloth-showcase-runs.csv",
+                                      "cloth-showcase.csv", "cloth-showcase.json", "energy-runs.csv",
+                                      "energy.csv", "energy.json", "stab-map.csv", "stab.csv",
+                                      "stab.json"}));
+
+  const std::vector<long> runs = task_column(
+      read_text(out / "energy-runs.csv"),
+      "task,scene,integrator,dt,status,diverged_at,steps,force_evals,wall_seconds,"
+      "energy_initial,energy_final,energy_scale");
+  EXPECT_EQ(runs, (std::vector<long>{0, 1, 2, 3, 4, 5}));
+  const std::vector<long> rows =
+      task_column(read_text(out / "energy.csv"), "task,scene,integrator,dt,t,kinetic,spring,gravity,total");
+  EXPECT_TRUE(std::is_sorted(rows.begin(), rows.end()));
+  for (long t = 0; t < 3; ++t) EXPECT_EQ(std::count(rows.begin(), rows.end(), t), 11) << t;
+  for (long t = 3; t < 6; ++t) EXPECT_EQ(std::count(rows.begin(), rows.end(), t), 6) << t;
+
+  const std::vector<long> cloth_rows =
+      task_column(read_text(out / "cloth-showcase.csv"), "task,scene,integrator,dt,t,i,x,y,z");
+  EXPECT_TRUE(std::is_sorted(cloth_rows.begin(), cloth_rows.end()));
+  EXPECT_EQ(std::count(cloth_rows.begin(), cloth_rows.end(), 1L), 3 * 9);  // 3 frames x 9
+  EXPECT_EQ(task_column(read_text(out / "cloth-showcase-runs.csv"),
+                        "task,scene,integrator,dt,status,diverged_at,steps,wall_seconds"),
+            (std::vector<long>{0, 1}));
+  const std::vector<long> budget = task_column(read_text(out / "budget.csv"), kBudgetHeader);
+  EXPECT_TRUE(std::is_sorted(budget.begin(), budget.end()));
+  EXPECT_EQ(task_column(read_text(out / "stab.csv"), kLimitHeader), (std::vector<long>{0, 1, 2, 3}));
+  EXPECT_EQ(task_column(read_text(out / "stab-map.csv"), kMapHeader),
+            (std::vector<long>{4, 5, 6, 7, 8, 9, 10, 11}));
+  const Json cloth_settings = Json::parse(read_text(out / "cloth-showcase.json"));
+  EXPECT_EQ(cloth_settings.at("n"), 3);
+  EXPECT_EQ(cloth_settings.at("frames"), (Json{0.0, 0.04, 0.1}));
+}
+
+}  // namespace
+}  // namespace springlab
