@@ -156,12 +156,6 @@ struct ConvergenceCase {
   std::string where;  // "FILE: cases[i].reference", for messages
 };
 
-struct Method {
-  std::string name;
-  IntegratorInfo info;
-  std::vector<double> values;  // dt or rtol, largest first
-};
-
 class ConvergenceExperiment final : public Experiment {
  public:
   explicit ConvergenceExperiment(const DefinitionObject& d) {
@@ -171,7 +165,7 @@ class ConvergenceExperiment final : public Experiment {
     atol_factor_ = d.positive("atol_factor", 1e-2);
     double finest_dt = 0.0;
     for (const std::string& name : definition_integrators(d, "integrators", "all")) {
-      Method m{name, make_integrator(name)->info(), {}};
+      SweepMethod m{name, make_integrator(name)->info(), {}};
       m.values = accuracy_sweep_values(d, m.info);
       if (!m.info.adaptive) {
         finest_dt = finest_dt > 0.0 ? std::min(finest_dt, m.values.back()) : m.values.back();
@@ -200,7 +194,7 @@ class ConvergenceExperiment final : public Experiment {
 
   TaskOutput run_task(std::size_t index) const override {
     const ConvergenceCase& c = cases_[index / methods_.size()];
-    const Method& m = methods_[index % methods_.size()];
+    const SweepMethod& m = methods_[index % methods_.size()];
     const MassSpringModel model(c.scene);
     const Vector x_ref =
         accuracy_reference_positions(c.reference, model, c.scene, c.t_end, options_, c.where);
@@ -241,22 +235,17 @@ class ConvergenceExperiment final : public Experiment {
   }
 
   nlohmann::json settings() const override {
-    nlohmann::json names = nlohmann::json::array();
-    nlohmann::json sweeps = nlohmann::json::object();
-    for (const Method& m : methods_) {
-      names.push_back(m.name);
-      sweeps[m.name] = {{"adaptive", m.info.adaptive},
-                        {"parameter", m.info.adaptive ? "rtol" : "dt"},
-                        {"values", m.values},
-                        {"theoretical_order", m.info.adaptive ? 1 : m.info.order}};
+    nlohmann::json s = sweeps_json(methods_);
+    for (const SweepMethod& m : methods_) {
+      s["sweeps"][m.name]["theoretical_order"] = m.info.adaptive ? 1 : m.info.order;
     }
     nlohmann::json cases = nlohmann::json::array();
     for (const ConvergenceCase& c : cases_) {
       cases.push_back({{"scene", scene_as_json(c.scene)}, {"t_end", c.t_end},
                        {"reference", c.reference}});
     }
-    return {{"integrators", names}, {"cases", cases}, {"sweeps", sweeps},
-            {"atol_factor", atol_factor_}, {"error_floor", kErrorFloor}};
+    s.update({{"cases", cases}, {"atol_factor", atol_factor_}, {"error_floor", kErrorFloor}});
+    return s;
   }
 
  private:
@@ -267,7 +256,7 @@ class ConvergenceExperiment final : public Experiment {
 
   IntegratorOptions options_;
   double atol_factor_ = 1e-2;
-  std::vector<Method> methods_;
+  std::vector<SweepMethod> methods_;
   std::vector<ConvergenceCase> cases_;
 };
 

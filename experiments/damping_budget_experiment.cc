@@ -14,12 +14,6 @@
 namespace springlab {
 namespace {
 
-struct BudgetCase {
-  Scene scene;
-  double dt, t_end;
-  int every;
-};
-
 class BudgetRows final : public Observer {
  public:
   BudgetRows(const MassSpringModel& model, std::string prefix, int every,
@@ -65,12 +59,7 @@ class DampingBudgetExperiment final : public Experiment {
                   "newton_tol", "cases"});
     options_ = definition_options(d);
     integrators_ = definition_integrators(d, "integrators", "all");
-    for (const DefinitionObject& c : d.objects("cases")) {
-      c.allow_only({"scene", "parameters", "dt", "t_end", "every"});
-      cases_.push_back({definition_scene(c), c.positive("dt"), c.positive("t_end"),
-                        c.count("every", 1, 1, 1000000)});
-      check_time_grid(c, "dt", cases_.back().dt, cases_.back().t_end);
-    }
+    cases_ = read_timed_cases(d);
   }
 
   std::vector<TableSpec> tables() const override {
@@ -81,7 +70,7 @@ class DampingBudgetExperiment final : public Experiment {
   std::size_t task_count() const override { return cases_.size() * integrators_.size(); }
 
   TaskOutput run_task(std::size_t index) const override {
-    const BudgetCase& c = cases_[index / integrators_.size()];
+    const TimedCase& c = cases_[index / integrators_.size()];
     const std::string& name = integrators_[index % integrators_.size()];
     const MassSpringModel model(c.scene);
     RunSettings s;
@@ -99,17 +88,13 @@ class DampingBudgetExperiment final : public Experiment {
   }
 
   nlohmann::json settings() const override {
-    nlohmann::json cases = nlohmann::json::array();
-    for (const BudgetCase& c : cases_) {
-      cases.push_back({{"scene", scene_as_json(c.scene)}, {"dt", c.dt}, {"t_end", c.t_end}});
-    }
-    return {{"integrators", integrators_}, {"cases", cases}};
+    return {{"integrators", integrators_}, {"cases", timed_cases_json(cases_)}};
   }
 
  private:
   IntegratorOptions options_;
   std::vector<std::string> integrators_;
-  std::vector<BudgetCase> cases_;
+  std::vector<TimedCase> cases_;
 };
 
 }  // namespace

@@ -9,12 +9,6 @@
 namespace springlab {
 namespace {
 
-struct EnergyCase {
-  Scene scene;
-  double dt, t_end;
-  int every;
-};
-
 class EnergyRows final : public Observer {
  public:
   EnergyRows(const MassSpringModel& model, std::string prefix, std::vector<std::string>& rows)
@@ -38,12 +32,7 @@ class EnergyExperiment final : public Experiment {
                   "newton_tol", "cases"});
     options_ = definition_options(d);
     integrators_ = definition_integrators(d, "integrators", "all");
-    for (const DefinitionObject& c : d.objects("cases")) {
-      c.allow_only({"scene", "parameters", "dt", "t_end", "every"});
-      cases_.push_back({definition_scene(c), c.positive("dt"), c.positive("t_end"),
-                        c.count("every", 1, 1, 1000000)});
-      check_time_grid(c, "dt", cases_.back().dt, cases_.back().t_end);
-    }
+    cases_ = read_timed_cases(d);
   }
 
   std::vector<TableSpec> tables() const override {
@@ -55,7 +44,7 @@ class EnergyExperiment final : public Experiment {
   std::size_t task_count() const override { return cases_.size() * integrators_.size(); }
 
   TaskOutput run_task(std::size_t index) const override {
-    const EnergyCase& c = cases_[index / integrators_.size()];
+    const TimedCase& c = cases_[index / integrators_.size()];
     const std::string& name = integrators_[index % integrators_.size()];
     const MassSpringModel model(c.scene);
     RunSettings s;
@@ -70,30 +59,20 @@ class EnergyExperiment final : public Experiment {
     EnergyRows rows(model, prefix, out.rows[0]);
     const RunResult r = simulate(model, s, {&rows});
     Row run;
-    run.raw(prefix).add(to_string(r.status));
-    if (r.diverged_at) {
-      run.add(*r.diverged_at);
-    } else {
-      run.add_empty();
-    }
-    run.add(r.stats.steps).add(r.stats.force_evals).add(r.wall_seconds).add(r.energy_initial)
+    run.raw(prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps).add(r.stats.force_evals).add(r.wall_seconds).add(r.energy_initial)
         .add(r.energy_final).add(model.energy_scale());
     out.rows[1].push_back(run.str());
     return out;
   }
 
   nlohmann::json settings() const override {
-    nlohmann::json scenes = nlohmann::json::array();
-    for (const EnergyCase& c : cases_) {
-      scenes.push_back({{"scene", scene_as_json(c.scene)}, {"dt", c.dt}, {"t_end", c.t_end}});
-    }
-    return {{"integrators", integrators_}, {"cases", scenes}};
+    return {{"integrators", integrators_}, {"cases", timed_cases_json(cases_)}};
   }
 
  private:
   IntegratorOptions options_;
   std::vector<std::string> integrators_;
-  std::vector<EnergyCase> cases_;
+  std::vector<TimedCase> cases_;
 };
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,8 @@ class Row {
   Row& add(long value);
   Row& add(int value) { return add(static_cast<long>(value)); }
   Row& add_empty();
+  // The value, or an empty field when there is none.
+  Row& add(const std::optional<double>& value) { return value ? add(*value) : add_empty(); }
   // Appends fields that are already CSV text (a shared prefix of several rows).
   Row& raw(const std::string& csv_fields);
   const std::string& str() const { return text_; }

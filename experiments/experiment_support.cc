@@ -12,6 +12,38 @@ IntegratorOptions definition_options(const DefinitionObject& o) {
   return options;
 }
 
+std::vector<TimedCase> read_timed_cases(const DefinitionObject& d) {
+  std::vector<TimedCase> cases;
+  for (const DefinitionObject& c : d.objects("cases")) {
+    c.allow_only({"scene", "parameters", "dt", "t_end", "every"});
+    cases.push_back({definition_scene(c), c.positive("dt"), c.positive("t_end"),
+                     c.count("every", 1, 1, 1000000)});
+    check_time_grid(c, "dt", cases.back().dt, cases.back().t_end);
+  }
+  return cases;
+}
+
+nlohmann::json timed_cases_json(const std::vector<TimedCase>& cases) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const TimedCase& c : cases) {
+    out.push_back({{"scene", scene_as_json(c.scene)}, {"dt", c.dt}, {"t_end", c.t_end},
+                   {"every", c.every}});
+  }
+  return out;
+}
+
+nlohmann::json sweeps_json(const std::vector<SweepMethod>& methods) {
+  nlohmann::json names = nlohmann::json::array();
+  nlohmann::json sweeps = nlohmann::json::object();
+  for (const SweepMethod& m : methods) {
+    names.push_back(m.name);
+    sweeps[m.name] = {{"adaptive", m.info.adaptive},
+                      {"parameter", m.info.adaptive ? "rtol" : "dt"},
+                      {"values", m.values}};
+  }
+  return {{"integrators", names}, {"sweeps", sweeps}};
+}
+
 nlohmann::json scene_as_json(const Scene& scene) { return nlohmann::json::parse(scene_to_json(scene)); }
 
 std::optional<Vector> exact_oscillator_positions(const Scene& s, double t) {

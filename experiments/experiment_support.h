@@ -14,6 +14,27 @@
 
 namespace springlab {
 
+// A scene run to t_end at step dt (the output interval for adaptive methods),
+// recording every `every`-th output: the cases of the energy and
+// damping-budget experiments, read from "cases".
+struct TimedCase {
+  Scene scene;
+  double dt, t_end;
+  int every;
+};
+std::vector<TimedCase> read_timed_cases(const DefinitionObject& d);
+nlohmann::json timed_cases_json(const std::vector<TimedCase>& cases);
+
+// One integrator's accuracy sweep: dt values (fixed-step) or rtol values
+// (adaptive), largest first. Shared by convergence and work-precision.
+struct SweepMethod {
+  std::string name;
+  IntegratorInfo info;
+  std::vector<double> values;
+};
+// {"integrators": [...], "sweeps": {name: {adaptive, parameter, values}}}
+nlohmann::json sweeps_json(const std::vector<SweepMethod>& methods);
+
 // rtol/atol (adaptive methods), newton_tol (implicit ones) from a definition.
 IntegratorOptions definition_options(const DefinitionObject& o);
 

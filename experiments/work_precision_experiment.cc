@@ -16,12 +16,6 @@ namespace springlab {
 
 namespace {
 
-struct Method {
-  std::string name;
-  IntegratorInfo info;
-  std::vector<double> values;  // dt or rtol, largest first
-};
-
 class WorkPrecisionExperiment final : public Experiment {
  public:
   explicit WorkPrecisionExperiment(const DefinitionObject& d) {
@@ -33,7 +27,7 @@ class WorkPrecisionExperiment final : public Experiment {
     repeats_ = d.count("repeats", 3, 1, 1000);
     double finest_dt = 0.0;
     for (const std::string& name : definition_integrators(d, "integrators", "all")) {
-      Method m{name, make_integrator(name)->info(), {}};
+      SweepMethod m{name, make_integrator(name)->info(), {}};
       m.values = accuracy_sweep_values(d, m.info);
       if (!m.info.adaptive) {
         finest_dt = finest_dt > 0.0 ? std::min(finest_dt, m.values.back()) : m.values.back();
@@ -56,7 +50,7 @@ class WorkPrecisionExperiment final : public Experiment {
   std::size_t task_count() const override { return methods_.size(); }
 
   TaskOutput run_task(std::size_t index) const override {
-    const Method& m = methods_[index];
+    const SweepMethod& m = methods_[index];
     const MassSpringModel model(scene_);
     const Vector x_ref =
         accuracy_reference_positions(reference_, model, scene_, t_end_, options_, where_);
@@ -86,17 +80,10 @@ class WorkPrecisionExperiment final : public Experiment {
   }
 
   nlohmann::json settings() const override {
-    nlohmann::json names = nlohmann::json::array();
-    nlohmann::json sweeps = nlohmann::json::object();
-    for (const Method& m : methods_) {
-      names.push_back(m.name);
-      sweeps[m.name] = {{"adaptive", m.info.adaptive},
-                        {"parameter", m.info.adaptive ? "rtol" : "dt"},
-                        {"values", m.values}};
-    }
-    return {{"integrators", names}, {"scene", scene_as_json(scene_)}, {"t_end", t_end_},
-            {"reference", reference_}, {"sweeps", sweeps}, {"atol_factor", atol_factor_},
-            {"repeats", repeats_}};
+    nlohmann::json s = sweeps_json(methods_);
+    s.update({{"scene", scene_as_json(scene_)}, {"t_end", t_end_}, {"reference", reference_},
+              {"atol_factor", atol_factor_}, {"repeats", repeats_}});
+    return s;
   }
 
  private:
@@ -109,7 +96,7 @@ class WorkPrecisionExperiment final : public Experiment {
   IntegratorOptions options_;
   double atol_factor_ = 1e-2;
   int repeats_ = 3;
-  std::vector<Method> methods_;
+  std::vector<SweepMethod> methods_;
   Scene scene_;
   double t_end_ = 1.0;
   nlohmann::json reference_;
