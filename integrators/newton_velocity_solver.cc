@@ -44,6 +44,12 @@ bool ImplicitIntegrator::solve_newton_system(const Vector& rhs, Vector& dv) {
   return solver_.solve(rhs, dv);
 }
 
+StepResult ImplicitIntegrator::do_initialize() {
+  solver_.reset();
+  jacobian_ = SparseMatrix();
+  return StepResult::success();
+}
+
 StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitScheme& s,
                                               Vector& v) {
   auto fail = [&](const std::string& why) {

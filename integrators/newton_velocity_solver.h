@@ -36,6 +36,9 @@ class ImplicitIntegrator : public Integrator {
  protected:
   using Integrator::Integrator;
 
+  // A new run (maybe of another system): forget the symbolic analysis.
+  StepResult do_initialize() override;
+
   // Solves r(v) = 0 for v starting from v_n = v_; on success `v` holds the
   // solution. Counts force and Jacobian evaluations, factorizations, linear
   // solves and Newton iterations.

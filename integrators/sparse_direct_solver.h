@@ -21,6 +21,8 @@ class SparseDirectSolver {
  public:
   // False, with error() set, when the matrix is numerically singular.
   bool factorize(const SparseMatrix& a, bool symmetric);
+  // Forgets the symbolic analysis: the next matrix may have another pattern.
+  void reset() { ldlt_analyzed_ = lu_analyzed_ = using_lu_ = false; }
   // False when the solution is not finite.
   bool solve(const Vector& b, Vector& x) const;
   const std::string& error() const { return error_; }
