@@ -1,6 +1,8 @@
 #include "experiments/cli.h"
 
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -174,6 +176,10 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     if (f != nullptr) f->publish();
   }
 
+  // A run that diverged or failed still publishes its files: they hold the
+  // rows up to its last good state (t_final), and the summary says so.
+  const bool any_output = energy_file != nullptr || trajectory_file != nullptr;
+  const bool outputs_complete = r.status == RunStatus::kCompleted;
   if (common.json) {
     Json out;
     out["scene"] = scene.name;
@@ -188,6 +194,8 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     out["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
     out["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
     out["t_final"] = r.t_final;
+    out["outputs_complete"] = outputs_complete;
+    out["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
     out["energy_initial"] = r.energy_initial;
     out["energy_final"] = r.energy_final;
     out["energy_scale"] = model.energy_scale();
@@ -208,6 +216,10 @@ int command_run(CommonOptions& common, const std::string& energy_path,
               << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
               << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
               << "), wall " << r.wall_seconds << " s\n";
+    if (any_output && !outputs_complete) {
+      std::cout << "output files incomplete: rows up to t = " << r.t_final
+                << ", the last good state\n";
+    }
   }
   return 0;
 }
@@ -265,6 +277,32 @@ int command_list() {
   }
   return 0;
 }
+
+std::atomic<bool> interrupted{false};
+
+extern "C" void on_interrupt(int) { interrupted.store(true); }
+
+// Installs on_interrupt for SIGINT and SIGTERM while alive.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    interrupted.store(false);
+    struct sigaction action {};
+    action.sa_handler = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~InterruptGuard() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
 
 void parse_shard(const std::string& text, ExperimentRunOptions& o) {
   const auto slash = text.find('/');
@@ -362,7 +400,17 @@ int run_cli(int argc, char** argv) {
       if (!shard.empty()) parse_shard(shard, experiment_options);
       if (experiment_options.jobs < 0) throw UsageError("--jobs: must be >= 0");
       if (experiment_options.merge < 0) throw UsageError("--merge: must be >= 1");
-      run_experiment(experiment_file, experiment_options);
+      // Ctrl-C (or a job scheduler's SIGTERM) stops the sweep between tasks:
+      // the finished ones are written, whole, and marked incomplete.
+      InterruptGuard guard;
+      experiment_options.cancel = &interrupted;
+      const ExperimentRunSummary summary = run_experiment(experiment_file, experiment_options);
+      if (!summary.complete()) {
+        std::cerr << "springlab: interrupted: " << summary.tasks_done << " of "
+                  << summary.tasks_total << " tasks written, marked incomplete in "
+                  << experiment_options.out_dir << "\n";
+        return 130;
+      }
       return 0;
     }
   } catch (const std::exception& e) {

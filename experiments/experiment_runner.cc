@@ -10,6 +10,7 @@
 #include <fstream>
 #include <mutex>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include "experiments/experiment.h"
@@ -102,6 +103,31 @@ std::size_t merge_shards(const LoadedExperiment& loaded, const ExperimentRunOpti
     files.push_back(std::make_unique<AtomicFile>(stem + ".csv"));
     contents.push_back(std::move(text));
   }
+  // The shards' settings, with their task counts summed.
+  nlohmann::ordered_json settings;
+  std::size_t total = 0, done = 0;
+  for (int i = 1; i <= o.merge; ++i) {
+    const std::string path = (fs::path(o.out_dir) / loaded.name).string() + shard_suffix(o, i) + ".json";
+    std::ifstream in(path);
+    if (!in) {
+      throw std::runtime_error(path + ": missing shard (run --shard " + std::to_string(i) + "/" +
+                               std::to_string(o.merge) + " first)");
+    }
+    nlohmann::ordered_json shard;
+    try {
+      in >> shard;
+      total += shard.at("tasks_total").get<std::size_t>();
+      done += shard.at("tasks_done").get<std::size_t>();
+    } catch (const nlohmann::json::exception&) {
+      throw std::runtime_error(path + ": not a shard settings file");
+    }
+    if (i == 1) settings = shard;
+  }
+  settings["complete"] = total == done;
+  settings["tasks_total"] = total;
+  settings["tasks_done"] = done;
+  files.push_back(std::make_unique<AtomicFile>((fs::path(o.out_dir) / (loaded.name + ".json")).string()));
+  contents.push_back(settings.dump(2) + "\n");
   for (std::size_t k = 0; k < files.size(); ++k) files[k]->write(contents[k]);
   for (auto& f : files) f->finish();
   for (auto& f : files) f->publish();
@@ -110,7 +136,8 @@ std::size_t merge_shards(const LoadedExperiment& loaded, const ExperimentRunOpti
 
 }  // namespace
 
-std::size_t run_experiment(const std::string& definition_path, const ExperimentRunOptions& o) {
+ExperimentRunSummary run_experiment(const std::string& definition_path,
+                                    const ExperimentRunOptions& o) {
   if (o.shard_count < 1 || o.shard_index < 1 || o.shard_index > o.shard_count) {
     throw std::invalid_argument("--shard: expected i/N with 1 <= i <= N");
   }
@@ -120,7 +147,10 @@ std::size_t run_experiment(const std::string& definition_path, const ExperimentR
   if (!fs::is_directory(o.out_dir)) {
     throw std::runtime_error(o.out_dir + ": cannot create the output directory");
   }
-  if (o.merge > 0) return merge_shards(loaded, o);
+  if (o.merge > 0) {
+    const std::size_t merged = merge_shards(loaded, o);
+    return {merged, merged};
+  }
 
   const Experiment& experiment = *loaded.experiment;
   const std::vector<TableSpec> specs = experiment.tables();
@@ -132,8 +162,8 @@ std::size_t run_experiment(const std::string& definition_path, const ExperimentR
         shard_suffix(o, o.shard_index) + ".csv"));
     files.back()->write(header(spec));
   }
-  auto settings_file =
-      std::make_unique<AtomicFile>((fs::path(o.out_dir) / (loaded.name + ".json")).string());
+  auto settings_file = std::make_unique<AtomicFile>(
+      (fs::path(o.out_dir) / loaded.name).string() + shard_suffix(o, o.shard_index) + ".json");
 
   std::vector<std::size_t> tasks;
   for (std::size_t t = static_cast<std::size_t>(o.shard_index - 1); t < experiment.task_count();
@@ -142,12 +172,15 @@ std::size_t run_experiment(const std::string& definition_path, const ExperimentR
   }
   std::vector<TaskOutput> outputs(tasks.size());
   std::vector<std::exception_ptr> errors(tasks.size());
+  std::vector<char> done(tasks.size(), 0);
   Progress progress(loaded.name, tasks.size(), o.progress);
   std::atomic<std::size_t> next{0};
+  auto cancelled = [&] { return o.cancel != nullptr && o.cancel->load(); };
   auto worker = [&] {
-    for (std::size_t k = next++; k < tasks.size(); k = next++) {
+    for (std::size_t k = next++; k < tasks.size() && !cancelled(); k = next++) {
       try {
         outputs[k] = experiment.run_task(tasks[k]);
+        done[k] = 1;
       } catch (...) {
         errors[k] = std::current_exception();
       }
@@ -158,14 +191,27 @@ std::size_t run_experiment(const std::string& definition_path, const ExperimentR
   const std::size_t jobs =
       std::min<std::size_t>(o.jobs > 0 ? static_cast<std::size_t>(o.jobs) : cores, tasks.size());
   std::vector<std::thread> threads;
-  for (std::size_t j = 1; j < jobs; ++j) threads.emplace_back(worker);
+  for (std::size_t j = 1; j < jobs; ++j) {
+    // A huge --jobs runs into the system's thread limit: run on the threads
+    // there are (each takes tasks until none is left) instead of failing with
+    // threads still running.
+    try {
+      threads.emplace_back(worker);
+    } catch (const std::system_error&) {
+      break;
+    }
+  }
   worker();
   for (std::thread& t : threads) t.join();
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);
   }
 
+  ExperimentRunSummary summary;
+  summary.tasks_total = tasks.size();
   for (std::size_t k = 0; k < tasks.size(); ++k) {
+    if (!done[k]) continue;
+    ++summary.tasks_done;
     const std::string prefix = std::to_string(tasks[k]) + ",";
     for (std::size_t table = 0; table < outputs[k].rows.size(); ++table) {
       std::string text;
@@ -180,6 +226,9 @@ std::size_t run_experiment(const std::string& definition_path, const ExperimentR
   settings["description"] = loaded.definition.value("description", "");
   const nlohmann::json extra = experiment.settings();  // named: items() must not outlive it
   for (const auto& [key, value] : extra.items()) settings[key] = value;
+  settings["complete"] = summary.complete();
+  settings["tasks_total"] = summary.tasks_total;
+  settings["tasks_done"] = summary.tasks_done;
   settings["definition"] = loaded.definition;
   settings_file->write(settings.dump(2) + "\n");
 
@@ -187,7 +236,7 @@ std::size_t run_experiment(const std::string& definition_path, const ExperimentR
   settings_file->finish();
   for (auto& f : files) f->publish();
   settings_file->publish();
-  return tasks.size();
+  return summary;
 }
 
 }  // namespace springlab

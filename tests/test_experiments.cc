@@ -660,14 +660,14 @@ TEST(ExperimentRunner, ShardsMergeToTheUnshardedTables) {
   ScratchDir dir("shards");
   const std::string definition = dir.write("budget.json", kBudget);
   const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
-  EXPECT_EQ(run_experiment(definition, quiet(whole, 2)), 5u);
+  EXPECT_EQ(run_experiment(definition, quiet(whole, 2)).tasks_done, 5u);
 
   const std::vector<std::size_t> expected_tasks = {2, 2, 1};  // 0 3 | 1 4 | 2
   for (int i = 1; i <= 3; ++i) {
     ExperimentRunOptions o = quiet(sharded);
     o.shard_index = i;
     o.shard_count = 3;
-    EXPECT_EQ(run_experiment(definition, o), expected_tasks[static_cast<std::size_t>(i - 1)]);
+    EXPECT_EQ(run_experiment(definition, o).tasks_done, expected_tasks[static_cast<std::size_t>(i - 1)]);
     const fs::path shard = sharded / ("budget.shard-" + std::to_string(i) + "-of-3.csv");
     ASSERT_TRUE(fs::is_regular_file(shard)) << shard;
     for (long task : task_column(read_text(shard), kBudgetHeader)) EXPECT_EQ(task % 3, i - 1);
@@ -676,7 +676,7 @@ TEST(ExperimentRunner, ShardsMergeToTheUnshardedTables) {
 
   ExperimentRunOptions merge = quiet(sharded);
   merge.merge = 3;
-  EXPECT_EQ(run_experiment(definition, merge), 3u);
+  EXPECT_EQ(run_experiment(definition, merge).tasks_done, 3u);
   const std::string merged = read_text(sharded / "budget.csv");
   EXPECT_EQ(merged, read_text(whole / "budget.csv"));
   const std::vector<long> tasks = task_column(merged, kBudgetHeader);
@@ -691,7 +691,7 @@ TEST(ExperimentRunner, ShardsMergeTwoTables) {
   ScratchDir dir("shards2");
   const std::string definition = dir.write("stab.json", kStability);
   const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
-  EXPECT_EQ(run_experiment(definition, quiet(whole, 3)), 4u + 8u);
+  EXPECT_EQ(run_experiment(definition, quiet(whole, 3)).tasks_done, 4u + 8u);
   for (int i = 1; i <= 3; ++i) {
     ExperimentRunOptions o = quiet(sharded, 2);
     o.shard_index = i;
@@ -731,8 +731,8 @@ TEST(ExperimentRunner, MergeRefusesAMissingShard) {
   }
   EXPECT_FALSE(fs::exists(out / "budget.csv"));
   EXPECT_EQ(directory_entries(out),
-            (std::vector<std::string>{"budget.json", "budget.shard-1-of-3.csv",
-                                      "budget.shard-3-of-3.csv"}));
+            (std::vector<std::string>{"budget.shard-1-of-3.csv", "budget.shard-1-of-3.json",
+                                      "budget.shard-3-of-3.csv", "budget.shard-3-of-3.json"}));
 }
 
 TEST(ExperimentRunner, MoreShardsThanTasks) {
@@ -744,12 +744,12 @@ TEST(ExperimentRunner, MoreShardsThanTasks) {
     ExperimentRunOptions o = quiet(sharded, 3);
     o.shard_index = i;
     o.shard_count = 7;
-    EXPECT_EQ(run_experiment(definition, o), i <= 5 ? 1u : 0u);
+    EXPECT_EQ(run_experiment(definition, o).tasks_done, i <= 5 ? 1u : 0u);
   }
   EXPECT_EQ(read_text(sharded / "budget.shard-7-of-7.csv"), kBudgetHeader + "\n");
   ExperimentRunOptions merge = quiet(sharded);
   merge.merge = 7;
-  EXPECT_EQ(run_experiment(definition, merge), 7u);
+  EXPECT_EQ(run_experiment(definition, merge).tasks_done, 7u);
   EXPECT_EQ(read_text(sharded / "budget.csv"), read_text(whole / "budget.csv"));
 }
 
@@ -789,8 +789,8 @@ TEST(ExperimentRunner, ThreadCountDoesNotChangeTables) {
   ScratchDir dir("jobs");
   const std::string definition = dir.write("stab.json", kStability);
   const fs::path one = dir.path() / "one", two = dir.path() / "two";
-  EXPECT_EQ(run_experiment(definition, quiet(one, 1)), 12u);
-  EXPECT_EQ(run_experiment(definition, quiet(two, 2)), 12u);
+  EXPECT_EQ(run_experiment(definition, quiet(one, 1)).tasks_done, 12u);
+  EXPECT_EQ(run_experiment(definition, quiet(two, 2)).tasks_done, 12u);
   for (const char* table : {"stab.csv", "stab-map.csv", "stab.json"}) {
     EXPECT_EQ(read_text(one / table), read_text(two / table)) << table;
   }
@@ -884,10 +884,10 @@ TEST(ExperimentRunner, EveryTableStartsWithTheTaskColumn) {
                       {"dt", 0.02},
                       {"frames", {0.04, 0.1}}};
   const fs::path out = dir.path() / "out";
-  EXPECT_EQ(run_experiment(dir.write("energy.json", energy), quiet(out, 2)), 6u);
-  EXPECT_EQ(run_experiment(dir.write("cloth.json", cloth), quiet(out, 2)), 2u);
-  EXPECT_EQ(run_experiment(dir.write("budget.json", kBudget), quiet(out, 2)), 5u);
-  EXPECT_EQ(run_experiment(dir.write("stab.json", kStability), quiet(out, 2)), 12u);
+  EXPECT_EQ(run_experiment(dir.write("energy.json", energy), quiet(out, 2)).tasks_done, 6u);
+  EXPECT_EQ(run_experiment(dir.write("cloth.json", cloth), quiet(out, 2)).tasks_done, 2u);
+  EXPECT_EQ(run_experiment(dir.write("budget.json", kBudget), quiet(out, 2)).tasks_done, 5u);
+  EXPECT_EQ(run_experiment(dir.write("stab.json", kStability), quiet(out, 2)).tasks_done, 12u);
   EXPECT_EQ(directory_entries(out),
             (std::vector<std::string>{"budget.csv", "budget.json", "cloth-showcase-runs.csv",
                                       "cloth-showcase.csv", "cloth-showcase.json", "energy-runs.csv",

@@ -1,0 +1,75 @@
+// Ctrl-C during a sweep: the finished tasks are written as whole tables, the
+// settings say "complete": false, the exit status is 130, no temporary is
+// left, and no signal kills the process.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(Interrupt, CtrlCDuringASweepWritesFinishedTasksMarkedIncomplete) {
+  const fs::path dir = fs::temp_directory_path() / ("springlab-interrupt-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // 13 integrators x 3 chains, one at a time: several seconds of work.
+  const fs::path definition = dir / "sweep.json";
+  std::ofstream(definition) << R"({"experiment": "energy", "name": "sweep", "cases": [
+      {"scene": "chain", "parameters": {"n": 300, "horizontal": 1}, "dt": 0.0005, "t_end": 1, "every": 200},
+      {"scene": "chain", "parameters": {"n": 300}, "dt": 0.0005, "t_end": 1, "every": 200},
+      {"scene": "chain", "parameters": {"n": 200, "horizontal": 1}, "dt": 0.0005, "t_end": 1, "every": 200}]})";
+  const fs::path out = dir / "out";
+  std::vector<std::string> args = {SPRINGLAB_EXE, "experiment", definition.string(), "--out",
+                                   out.string(), "--jobs", "1", "--no-progress"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, nullptr, argv.data(), environ), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+
+  nlohmann::json settings;
+  std::ifstream(out / "sweep.json") >> settings;
+  EXPECT_EQ(settings["complete"], false);
+  const auto total = settings["tasks_total"].get<std::size_t>();
+  const auto done = settings["tasks_done"].get<std::size_t>();
+  EXPECT_EQ(total, 39u);
+  EXPECT_LT(done, total);
+  // The runs table has exactly one whole row per finished task, in order.
+  std::ifstream runs(out / "sweep-runs.csv");
+  std::string line;
+  std::getline(runs, line);
+  EXPECT_EQ(line.rfind("task,scene,integrator", 0), 0u);
+  std::size_t rows = 0;
+  long previous = -1;
+  while (std::getline(runs, line)) {
+    const long task = std::stol(line.substr(0, line.find(',')));
+    EXPECT_GT(task, previous);
+    previous = task;
+    ++rows;
+  }
+  EXPECT_EQ(rows, done);
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
