@@ -18,6 +18,10 @@ springlab_require(SUNDIALS libsundials-dev 6.4)
 if(SPRINGLAB_BUILD_TESTS)
   springlab_require(GTest libgtest-dev)
 endif()
+if(SPRINGLAB_BUILD_BENCHMARKS)
+  springlab_require(benchmark libbenchmark-dev)
+  springlab_require(Boost libboost-dev 1.71 CONFIG)  # header-only: Boost.Odeint
+endif()
 
 # The report is drawn by Python 3 with matplotlib and numpy. The python3
 # first on PATH may lack them (a pyenv build, say), so try each candidate

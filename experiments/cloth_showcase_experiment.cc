@@ -70,6 +70,12 @@ class ClothShowcaseExperiment final : public Experiment {
       }
     }
     check_time_grid(d, "dt", dt_, frames_.back());
+    // Each run writes every frame (and its last good state) of every particle.
+    check_output_rows(d, "frames",
+                      static_cast<double>(integrators_.size()) *
+                          (static_cast<double>(frames_.size() + 1) *
+                               static_cast<double>(scene_.particles.size()) +
+                           1.0));
   }
 
   std::vector<TableSpec> tables() const override {

@@ -172,15 +172,20 @@ class ConvergenceExperiment final : public Experiment {
       }
       methods_.push_back(std::move(m));
     }
+    SceneTotals totals;
     for (const DefinitionObject& c : d.objects("cases")) {
       c.allow_only({"scene", "parameters", "t_end", "reference"});
       ConvergenceCase k{definition_scene(c), c.positive("t_end"), {},
                         d.file() + ": cases[" + std::to_string(cases_.size()) + "].reference"};
+      totals.add(c, "scene", k.scene);
       k.reference = accuracy_reference(c, "reference", k.scene, finest_dt);
       check_grid(c, k.t_end, k.reference.is_object() ? k.reference.at("dt").get<double>() : 0.0);
       if (finest_dt > 0.0) check_grid(c, k.t_end, finest_dt);
       cases_.push_back(std::move(k));
     }
+    double rows_per_case = 0.0;  // one per sweep point, one fitted order per method
+    for (const SweepMethod& m : methods_) rows_per_case += static_cast<double>(m.values.size()) + 1.0;
+    check_output_rows(d, "cases", rows_per_case * static_cast<double>(cases_.size()));
   }
 
   std::vector<TableSpec> tables() const override {

@@ -33,6 +33,7 @@ class EnergyExperiment final : public Experiment {
     options_ = definition_options(d);
     integrators_ = definition_integrators(d, "integrators", "all");
     cases_ = read_timed_cases(d);
+    check_timed_case_rows(d, cases_, integrators_.size());
   }
 
   std::vector<TableSpec> tables() const override {

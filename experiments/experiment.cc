@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "experiments/experiment_support.h"
 #include "experiments/output_files.h"
 
 namespace springlab {
@@ -47,7 +48,8 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
   nlohmann::json json;
   try {
     json = nlohmann::json::parse(json_text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, or out_of_range 406 for a number beyond a double (1e999).
     std::string what = e.what();
     const auto bracket = what.find("] ");
     if (bracket != std::string::npos) what = what.substr(bracket + 2);
@@ -66,6 +68,12 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
     top.string("title", "");  // both optional, but text when given
     top.string("description", "");
     loaded.experiment = k.make(top);
+    // Each kind refuses its own large sweeps while reading; this is the net.
+    if (loaded.experiment->task_count() > kMaxExperimentTasks) {
+      throw DefinitionError(source + ": the experiment would have " +
+                            std::to_string(loaded.experiment->task_count()) +
+                            " tasks, over the cap of " + std::to_string(kMaxExperimentTasks));
+    }
     loaded.definition = json;
     return loaded;
   }

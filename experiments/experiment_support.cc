@@ -1,6 +1,9 @@
 #include "experiments/experiment_support.h"
 
 #include <cmath>
+#include <string>
+
+#include "experiments/output_files.h"
 
 namespace springlab {
 
@@ -12,15 +15,62 @@ IntegratorOptions definition_options(const DefinitionObject& o) {
   return options;
 }
 
+std::string format_count(double value) {
+  value = std::ceil(value);
+  return value < 1e15 ? std::to_string(static_cast<long long>(value)) : format_number(value);
+}
+
+void check_task_count(const DefinitionObject& o, const std::string& key, double tasks) {
+  if (tasks > static_cast<double>(kMaxExperimentTasks)) {
+    o.fail(key, "the experiment would have " + format_count(tasks) + " tasks, over the cap of " +
+                    std::to_string(kMaxExperimentTasks));
+  }
+}
+
+void check_output_rows(const DefinitionObject& o, const std::string& key, double rows) {
+  if (rows > static_cast<double>(kMaxExperimentRows)) {
+    o.fail(key, "the experiment would hold " + format_count(rows) +
+                    " output rows in memory, over the cap of " +
+                    std::to_string(kMaxExperimentRows));
+  }
+}
+
+void SceneTotals::add(const DefinitionObject& o, const std::string& key, const Scene& scene) {
+  particles_ += scene.particles.size();
+  springs_ += scene.springs.size();
+  auto check = [&](std::size_t total, std::size_t cap, const char* what) {
+    if (total > cap) {
+      o.fail(key, "the experiment's scenes would hold " + std::to_string(total) + " " + what +
+                      " in all, over the cap of " + std::to_string(cap));
+    }
+  };
+  check(particles_, kMaxSceneParticles, "particles");
+  check(springs_, kMaxSceneSprings, "springs");
+}
+
 std::vector<TimedCase> read_timed_cases(const DefinitionObject& d) {
   std::vector<TimedCase> cases;
+  SceneTotals totals;
   for (const DefinitionObject& c : d.objects("cases")) {
     c.allow_only({"scene", "parameters", "dt", "t_end", "every"});
     cases.push_back({definition_scene(c), c.positive("dt"), c.positive("t_end"),
                      c.count("every", 1, 1, 1000000)});
+    totals.add(c, "scene", cases.back().scene);
     check_time_grid(c, "dt", cases.back().dt, cases.back().t_end);
   }
   return cases;
+}
+
+void check_timed_case_rows(const DefinitionObject& d, const std::vector<TimedCase>& cases,
+                           std::size_t integrators) {
+  double rows = 0.0;
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const TimedCase& c = cases[k];
+    // t = 0, every K-th step, the last one (and a run summary row).
+    const double steps = static_cast<double>(make_time_grid(c.dt, c.t_end).steps);
+    rows += static_cast<double>(integrators) * (std::floor(steps / c.every) + 3.0);
+    check_output_rows(d, "cases[" + std::to_string(k) + "]", rows);
+  }
 }
 
 nlohmann::json timed_cases_json(const std::vector<TimedCase>& cases) {

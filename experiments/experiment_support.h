@@ -25,6 +25,31 @@ struct TimedCase {
 std::vector<TimedCase> read_timed_cases(const DefinitionObject& d);
 nlohmann::json timed_cases_json(const std::vector<TimedCase>& cases);
 
+// Resource caps of an experiment definition (README, "Reliability"), checked
+// while the definition is read, before any task runs: the tasks it makes, the
+// output rows it holds in memory until they are written in task order, and
+// the scenes it holds, all together (at most what one scene may have:
+// kMaxSceneParticles, kMaxSceneSprings). Each run has at most 1e9 steps
+// (make_time_grid).
+inline constexpr std::size_t kMaxExperimentTasks = 1'000'000;
+inline constexpr std::size_t kMaxExperimentRows = 10'000'000;  // about 1.5 GB of text
+
+// Each refuses a count over its cap with a message naming `key` of `o`.
+void check_task_count(const DefinitionObject& o, const std::string& key, double tasks);
+void check_output_rows(const DefinitionObject& o, const std::string& key, double rows);
+std::string format_count(double count);  // whole, rounded up: "12000000", not "1.2e+07"
+class SceneTotals {
+ public:
+  void add(const DefinitionObject& o, const std::string& key, const Scene& scene);
+
+ private:
+  std::size_t particles_ = 0, springs_ = 0;
+};
+// Rows the energy and damping-budget experiments hold for these cases, each
+// run by `integrators` methods: refused over kMaxExperimentRows.
+void check_timed_case_rows(const DefinitionObject& d, const std::vector<TimedCase>& cases,
+                           std::size_t integrators);
+
 // One integrator's accuracy sweep: dt values (fixed-step) or rtol values
 // (adaptive), largest first. Shared by convergence and work-precision.
 struct SweepMethod {

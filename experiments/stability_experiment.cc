@@ -91,9 +91,18 @@ class StabilityExperiment final : public Experiment {
     rel_tol_ = d.positive("rel_tol", 1e-3);
     blowup_ = d.positive("blowup", 1000.0);
     if (!(dt_max_factor_ > dt_min_factor_)) d.fail("dt_max_factor", "must exceed dt_min_factor");
+    // A bisection runs `periods` periods of the fastest mode at dt_min too.
+    const double steps_at_dt_min = periods_ * 2.0 * std::numbers::pi / dt_min_factor_;
+    if (steps_at_dt_min > 1e9) {
+      d.fail("periods", "a run at dt_min would take " + format_count(steps_at_dt_min) +
+                            " steps (periods x 2 pi / dt_min_factor), over the cap of 1e9");
+    }
     for (const DefinitionObject& c : d.objects("cases")) {
       c.allow_only({"scene", "parameters", "stiffness", "k"});
       cases_.push_back(read_sweep(c));
+      check_task_count(c, "k",
+                       static_cast<double>(limit_tasks_.size()) +
+                           static_cast<double>(cases_.back().k.size() * integrators_.size()));
       for (std::size_t ki = 0; ki < cases_.back().k.size(); ++ki) {
         for (const std::string& name : integrators_) {
           limit_tasks_.push_back({cases_.size() - 1, ki, name});
@@ -110,6 +119,11 @@ class StabilityExperiment final : public Experiment {
         if (map_t_end_ / dt > 1e7) m.fail("dt", "more than 1e7 steps per run");
         map_dt_.push_back(dt);
       }
+      check_task_count(m, "dt",
+                       static_cast<double>(limit_tasks_.size()) +
+                           static_cast<double>(map_integrators_.size()) *
+                               static_cast<double>(map_->k.size()) *
+                               static_cast<double>(map_dt_.size()));
       for (const std::string& name : map_integrators_) {
         for (std::size_t ki = 0; ki < map_->k.size(); ++ki) {
           for (double dt : map_dt_) map_tasks_.push_back({ki, dt, name});
@@ -154,12 +168,13 @@ class StabilityExperiment final : public Experiment {
   }
 
  private:
-  StiffnessCase read_sweep(const DefinitionObject& c) const {
+  StiffnessCase read_sweep(const DefinitionObject& c) {
     StiffnessCase sweep;
     sweep.stiffness_parameter = c.string("stiffness", "k");
     sweep.k = c.positives("k");
     for (double k : sweep.k) {
       sweep.scenes.push_back(definition_scene(c, {{sweep.stiffness_parameter, k_text(k)}}));
+      totals_.add(c, "k", sweep.scenes.back());
     }
     return sweep;
   }
@@ -222,6 +237,7 @@ class StabilityExperiment final : public Experiment {
   double map_t_end_ = 0.0;
   std::vector<LimitTask> limit_tasks_;
   std::vector<MapTask> map_tasks_;
+  SceneTotals totals_;  // of cases_ and map_ (read_sweep adds to it)
 };
 
 }  // namespace

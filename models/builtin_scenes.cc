@@ -23,10 +23,19 @@ struct ParameterSpec {
 
 using Values = std::map<std::string, double>;
 
+// How many particles and springs a generator would make: compared with the
+// caps of scene.h before anything is allocated.
+struct Counts {
+  double particles = 0.0;
+  double springs = 0.0;
+};
+
 struct Generator {
   BuiltinScene info;
   std::vector<ParameterSpec> specs;
   Scene (*build)(const Values&);
+  Counts (*counts)(const Values&) = nullptr;  // nullptr: a fixed, small scene
+  const char* size_parameter = nullptr;        // the parameter the counts grow with
 };
 
 std::string format_number(double value) {
@@ -45,6 +54,13 @@ std::optional<double> parse_number(const std::string& text) {
   const auto result = std::from_chars(first, last, value);
   if (result.ec != std::errc() || result.ptr != last || !std::isfinite(value)) return std::nullopt;
   return value;
+}
+
+// A count as a whole number (format_number would write 1e+07).
+std::string format_count(double value) {
+  return value == std::floor(value) && std::abs(value) < 1e15
+             ? std::to_string(static_cast<long long>(value))
+             : format_number(value);
 }
 
 Particle particle_at(const Eigen::Vector3d& x, double mass, bool fixed) {
@@ -163,6 +179,14 @@ Scene build_cloth(const Values& p) {
   return scene;
 }
 
+Counts chain_counts(const Values& p) { return {p.at("n"), p.at("n") - 1}; }
+
+// Structural 2 n (n-1), shear 2 (n-1)^2, bend 2 n (n-2), as build_cloth makes them.
+Counts cloth_counts(const Values& p) {
+  const double n = p.at("n");
+  return {n * n, 2 * n * (n - 1) + 2 * (n - 1) * (n - 1) + 2 * n * (n - 2)};
+}
+
 ParameterSpec param(const char* name, double value, const char* meaning, Range range,
                     double min = 0.0, double max = 0.0) {
   return {{name, value, meaning}, range, min, max};
@@ -186,7 +210,7 @@ const std::vector<Generator>& generators() {
                 Range::kZeroOrOne),
           param("stretch", 0, "initial strain: released with springs (1 + stretch) x rest long",
                 Range::kNonNegative)},
-         build_chain},
+         build_chain, chain_counts, "n"},
         {{"cloth",
           "n x n grid in 3-D with structural, shear and bend springs, two top corners fixed, "
           "gravity, optional wind",
@@ -200,7 +224,7 @@ const std::vector<Generator>& generators() {
           param("size", 1, "side length [m]", Range::kPositive),
           param("drag", 0, "drag coefficient per particle [kg/s]", Range::kNonNegative),
           param("wind", 0, "mean wind speed along +z, 0 for no wind [m/s]", Range::kAny)},
-         build_cloth},
+         build_cloth, cloth_counts, "n"},
         {{"oscillator",
           "one undamped linear spring, no gravity, mass released stretched: exact solution known",
           {}},
@@ -239,6 +263,23 @@ const Generator* find_generator(const std::string& name) {
     if (g.info.name == name) return &g;
   }
   return nullptr;
+}
+
+// Refuses a scene over the caps of scene.h before it is built.
+void check_counts(const std::string& label, const Generator& g, const Values& values) {
+  if (g.counts == nullptr) return;
+  const Counts counts = g.counts(values);
+  auto check = [&](double count, std::size_t cap, const char* what) {
+    if (count > static_cast<double>(cap)) {
+      const std::string parameter = g.size_parameter;
+      throw SceneError(label + ": parameter '" + parameter + "' = " +
+                       format_count(values.at(parameter)) + " would make " +
+                       format_count(count) + " " + what + ", over the cap of " +
+                       std::to_string(cap) + " per scene");
+    }
+  };
+  check(counts.particles, kMaxSceneParticles, "particles");
+  check(counts.springs, kMaxSceneSprings, "springs");
 }
 
 void check_range(const std::string& label, const ParameterSpec& spec, double value) {
@@ -293,7 +334,8 @@ Scene make_builtin_scene(const std::string& name,
     values[spec.parameter.name] = spec.parameter.default_value;
 
   // Each value is checked as given; a key given twice keeps the last value.
-  for (const auto& [key, text] : overrides) {
+  for (const auto& [key_binding, text] : overrides) {
+    const std::string& key = key_binding;  // clang 14 cannot capture a structured binding
     const auto spec = std::find_if(generator->specs.begin(), generator->specs.end(),
                                    [&](const ParameterSpec& s) { return s.parameter.name == key; });
     if (spec == generator->specs.end()) {
@@ -310,6 +352,7 @@ Scene make_builtin_scene(const std::string& name,
     values[key] = *value;
   }
 
+  check_counts(label, *generator, values);
   Scene scene = generator->build(values);
   scene.name = name;
   validate_scene(scene, label);  // a safety net: a generator bug is reported, not simulated

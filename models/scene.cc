@@ -13,7 +13,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
-#include <sstream>
+#include <unordered_set>
 #include <utility>
 
 namespace springlab {
@@ -102,6 +102,18 @@ void check_wind(const Reporter& r, const Wind& wind, int dimension) {
   check_nonnegative(r, "wind.coefficient", wind.coefficient);
   check_nonnegative(r, "wind.gust", wind.gust);
   check_nonnegative(r, "wind.frequency", wind.frequency);
+}
+
+// The resource caps of scene.h, on counts already known.
+void check_counts(const Reporter& r, std::size_t particles, std::size_t springs) {
+  if (particles > kMaxSceneParticles) {
+    r.fail("particles", std::to_string(particles) + " particles, over the cap of " +
+                            std::to_string(kMaxSceneParticles) + " per scene");
+  }
+  if (springs > kMaxSceneSprings) {
+    r.fail("springs", std::to_string(springs) + " springs, over the cap of " +
+                          std::to_string(kMaxSceneSprings) + " per scene");
+  }
 }
 
 void check_has_free_particle(const Reporter& r, const std::vector<Particle>& particles) {
@@ -217,6 +229,13 @@ void check_springs_in_order(const Reporter& r, const std::vector<Spring>& spring
 // and to name the element of a number too large for a double (the library
 // refuses 1e999 before we see it). nlohmann's callback parser would do this
 // too, but it rescans the parent array after every object: quadratic.
+//
+// The resource caps of scene.h are enforced here, as the document grows, so
+// that memory stays bounded whatever the file holds: nesting depth (each open
+// container keeps its path), the number of values, and the length of the
+// particles and springs arrays. Keys are looked up in a hash set and appended
+// without a search: an ordered_json object searches linearly, which made an
+// object of 10^5 keys take a minute.
 class DocumentBuilder {
  public:
   DocumentBuilder(Json& root, const Reporter& r) : root_(root), r_(r) {}
@@ -236,7 +255,7 @@ class DocumentBuilder {
 
   bool key(Json::string_t& key) {
     Frame& top = frames_.back();
-    if (top.container->contains(key)) r_.fail(top.path, "duplicate key '" + printable(key) + "'");
+    if (!top.keys.insert(key).second) r_.fail(top.path, "duplicate key '" + printable(key) + "'");
     top.key = std::move(key);
     return true;
   }
@@ -257,7 +276,8 @@ class DocumentBuilder {
   struct Frame {
     Json* container;
     std::string path;
-    std::string key;  // objects: the key of the value being read
+    std::string key;                       // objects: the key of the value being read
+    std::unordered_set<std::string> keys;  // objects: the keys read so far
   };
 
   // The path of the value being read now.
@@ -271,16 +291,33 @@ class DocumentBuilder {
   // Only the innermost open container grows, so pointers to the open ones
   // (each the last element of its parent) stay valid.
   Json* insert(Json&& value) {
+    if (++values_ > kMaxSceneJsonValues) {
+      r_.fail(next_path().empty() ? "top level" : next_path(),
+              "the file holds more than " + std::to_string(kMaxSceneJsonValues) +
+                  " JSON values, over the cap for a scene file");
+    }
     if (frames_.empty()) {
       root_ = std::move(value);
       return &root_;
     }
-    Json& top = *frames_.back().container;
+    Frame& frame = frames_.back();
+    Json& top = *frame.container;
     if (top.is_array()) {
+      if (frames_.size() == 2 && (frame.path == "particles" || frame.path == "springs")) {
+        const bool particles = frame.path == "particles";
+        const std::size_t cap = particles ? kMaxSceneParticles : kMaxSceneSprings;
+        if (top.size() >= cap) {
+          r_.fail(frame.path, "more than " + std::to_string(cap) + " " + frame.path +
+                                  ", over the cap of " + std::to_string(cap) + " per scene");
+        }
+      }
       top.push_back(std::move(value));
       return &top.back();
     }
-    return &(top[frames_.back().key] = std::move(value));
+    // key() has refused a duplicate, so the key is new: append, no search.
+    Json::object_t& object = top.get_ref<Json::object_t&>();
+    object.emplace_back(std::move(frame.key), std::move(value));
+    return &object.back().second;
   }
 
   bool add(Json&& value) {
@@ -290,7 +327,12 @@ class DocumentBuilder {
 
   bool open(Json&& container) {
     std::string path = next_path();
-    frames_.push_back({insert(std::move(container)), std::move(path), {}});
+    if (frames_.size() >= kMaxSceneNesting) {
+      r_.fail(path, "nested deeper than " + std::to_string(kMaxSceneNesting) +
+                        " levels, over the cap for a scene file");
+    }
+    Json* inserted = insert(std::move(container));
+    frames_.push_back({inserted, std::move(path), {}, {}});
     return true;
   }
 
@@ -302,6 +344,7 @@ class DocumentBuilder {
   Json& root_;
   const Reporter& r_;
   std::vector<Frame> frames_;
+  std::size_t values_ = 0;
 };
 
 Json parse_document(const std::string& text, const Reporter& r) {
@@ -415,6 +458,11 @@ Spring read_spring(const Reporter& r, const std::string& where, const Json& j,
   return s;
 }
 
+std::string file_size_error(const std::string& bytes) {
+  return bytes + " bytes, over the cap of " + std::to_string(kMaxSceneFileBytes) +
+         " bytes for a scene file";
+}
+
 // ---- Writing. ----
 
 // Like nlohmann's output: shortest round-trip text, ".0" on whole numbers.
@@ -435,6 +483,7 @@ std::string json_vector(const Eigen::Vector3d& v, int dimension) {
 
 Scene parse_scene(const std::string& json_text, const std::string& source) {
   const Reporter r(source);
+  if (json_text.size() > kMaxSceneFileBytes) r.fail("", file_size_error(std::to_string(json_text.size())));
   const Json doc = parse_document(json_text, r);
   require_object(r, "", doc);
   check_keys(r, "", doc, {"name", "dimension", "gravity", "drag", "wind", "particles", "springs"},
@@ -478,6 +527,7 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
 
 void validate_scene(const Scene& scene, const std::string& source) {
   const Reporter r(source);
+  check_counts(r, scene.particles.size(), scene.springs.size());
   const int dimension = check_dimension(r, scene.dimension);
   check_vector(r, "gravity", scene.gravity, dimension);
   check_nonnegative(r, "drag", scene.drag);
@@ -512,10 +562,26 @@ Scene load_scene_file(const std::string& path) {
   // A directory opens as a stream on Linux but cannot be read.
   if (!in || std::filesystem::is_directory(path, ignored))
     throw SceneError(path + ": cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();  // an empty file is left to the parser ("malformed JSON")
+  // The size cap is checked before reading: a huge file is refused, not loaded.
+  std::error_code size_error;
+  const std::uintmax_t size = std::filesystem::file_size(path, size_error);
+  if (!size_error && size > kMaxSceneFileBytes) {
+    throw SceneError(path + ": " + file_size_error(std::to_string(size)));
+  }
+  // Read in chunks up to one byte past the cap: a file whose size is not
+  // known in advance (a pipe, /proc) cannot grow without bound either.
+  std::string text;
+  char chunk[1 << 16];
+  while (in && text.size() <= kMaxSceneFileBytes) {
+    in.read(chunk, sizeof chunk);
+    text.append(chunk, static_cast<std::size_t>(in.gcount()));
+  }
   if (in.bad()) throw SceneError(path + ": cannot open file");
-  return parse_scene(text.str(), path);
+  if (text.size() > kMaxSceneFileBytes) {
+    throw SceneError(path + ": " +
+                     file_size_error("more than " + std::to_string(kMaxSceneFileBytes)));
+  }
+  return parse_scene(text, path);  // an empty file is left to the parser ("malformed JSON")
 }
 
 // One particle or spring per line: a scene file stays readable (and diffable)

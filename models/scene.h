@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -50,6 +51,19 @@ struct Scene {
   std::vector<Particle> particles;
   std::vector<Spring> springs;
 };
+
+// Resource caps (README, "Reliability"): a scene larger than this is refused
+// before it is built, so a typo like n=100000 is a message, not an
+// out-of-memory kill. The largest scene they allow (a 578 x 578 cloth, or a chain of
+// 1e6 particles) needs about 2 GB with an explicit method. A scene
+// file is also refused when it is larger than kMaxSceneFileBytes, nests deeper
+// than kMaxSceneNesting or holds more than kMaxSceneJsonValues values: each is
+// checked while reading, before the document is complete.
+inline constexpr std::size_t kMaxSceneParticles = 1'000'000;
+inline constexpr std::size_t kMaxSceneSprings = 2'000'000;
+inline constexpr std::size_t kMaxSceneFileBytes = std::size_t{512} << 20;  // 512 MiB
+inline constexpr std::size_t kMaxSceneNesting = 64;
+inline constexpr std::size_t kMaxSceneJsonValues = 32'000'000;
 
 // Parses and validates a scene (SPEC §3). `source` names the file in messages.
 // Throws SceneError on any violation; never returns a half-valid scene.

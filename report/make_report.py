@@ -5,9 +5,10 @@
 
 Reads only the files `springlab experiment FILE.json --out DIR` writes (the
 data contract is experiments/README.md): for each experiment `<name>.json`
-(the settings used) and its tidy CSV tables, plus optionally a Google
-Benchmark JSON file. Writes one PNG per figure into OUTDIR and OUTDIR/index.html
-with every figure embedded as a data URI, so the page alone is self-contained.
+(the settings used) and its tidy CSV tables, plus optionally springlab_bench's
+Google Benchmark JSON (--bench FILE.json, or else benchmarks.json in DIR when it
+is there). Writes one PNG per figure into OUTDIR and OUTDIR/index.html with
+every figure embedded as a data URI, so the page alone is self-contained.
 
 An experiment whose files are missing is skipped with a note in the page; a
 malformed file stops the script with a message naming the file and line
@@ -328,6 +329,8 @@ def load_data(data_dir):
     json_files = sorted(p for p in data_dir.glob("*.json") if p.is_file())
     for p in json_files:
         settings = read_json(p)
+        if is_bench_doc(settings):
+            continue  # benchmarks.json: the step-cost section reads it
         kind = experiment_kind(settings) if isinstance(settings, dict) else None
         if kind is None and p.stem in KINDS:
             kind = p.stem
@@ -423,7 +426,9 @@ def collect_styles(experiments, bench):
                 for n, a in zip(t["integrator"], t["adaptive"]):
                     adaptive[n] = bool(a)
     if bench:
-        names.update(b["integrator"] for b in bench["entries"])
+        for b in bench["entries"]:
+            names.add(b["integrator"])
+            adaptive.setdefault(b["integrator"], b["kind"] == "adaptive")
     return Styles(names, adaptive)
 
 
@@ -1417,128 +1422,461 @@ def _cube(pts):
 
 
 # --------------------------------------------------------------------------
-# Benchmarks (Google Benchmark JSON, optional)
+# Benchmarks (Google Benchmark JSON from springlab_bench, optional)
+#
+# Read from --bench FILE.json, or else from benchmarks.json in the data
+# directory (where `cmake --build --preset bench` writes it). Families, by
+# name (the size n is the scene's own parameter; counters carry the real
+# size: particles, unknowns, springs):
+#   BM_Step/<integrator>/<scene>/<n>        one step (adaptive: 1/60 s)
+#   BM_OdeintStep/<method>/<scene>/<n>      Boost.Odeint's peer of a step
+#   BM_OdeintPair/<method>/<scene>/<n>      both in alternation: the ratio
+#   BM_Force/<scene>/<n>, BM_ForceJacobian/<scene>/<n>
+#   BM_LinearSolver/<solver>/<scene>/<n>
+# Times shown are CPU time of the (single) benchmark thread: a one-core
+# figure that a busy machine disturbs less than wall time (both are in the
+# step table).
 
+BENCH_FILE = "benchmarks.json"
 TIME_UNITS = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 BENCH_STANDARD_KEYS = {"name", "family_index", "per_family_instance_index", "run_name", "run_type",
                        "repetitions", "repetition_index", "threads", "iterations", "real_time",
                        "cpu_time", "time_unit", "aggregate_name", "aggregate_unit", "label",
                        "error_occurred", "error_message"}
+# Family -> index of the size argument in the name.
+BENCH_FAMILIES = {"BM_Step": 3, "BM_OdeintStep": 3, "BM_OdeintPair": 3, "BM_Force": 2,
+                  "BM_ForceJacobian": 2, "BM_LinearSolver": 3}
+# Performance targets (issue 5), shown beside the measured figures.
+TARGET_FORCE_NS = 5.0            # force evaluation, cloth 128, ns per spring
+TARGET_PEER_RATIO = 0.7          # springlab / odeint time, rk4 and symplectic-euler
+TARGET_STEP_MS = {"implicit-euler": 15.0, "linear-implicit-euler": 8.0}  # cloth 64, dt 1/60
+TARGET_EXPONENT_EXPLICIT = (0.85, 1.15)  # "about 1.0"
+TARGET_EXPONENT_IMPLICIT = 1.3
+
+
+def is_bench_doc(doc):
+    """A Google Benchmark JSON file (not an experiment's settings)."""
+    return isinstance(doc, dict) and isinstance(doc.get("benchmarks"), list) \
+        and isinstance(doc.get("context"), dict)
 
 
 def read_bench(path):
-    """Entries named BM_Step/<integrator>/<scene>/<n>[/...]: time per step in s."""
+    """Every springlab_bench entry, by family; time per iteration in s."""
     doc = read_json(path)
     if not isinstance(doc, dict) or not isinstance(doc.get("benchmarks"), list):
         raise DataError(path, None, "not a Google Benchmark JSON file (no \"benchmarks\" list)")
     raw = {}
+    errors = []
     ignored = 0
     for j, b in enumerate(doc["benchmarks"]):
         if not isinstance(b, dict) or not isinstance(b.get("name"), str):
             raise DataError(path, None, "benchmarks[%d]: expected an object with a \"name\"" % j)
-        if b.get("error_occurred"):
-            ignored += 1
-            continue
         base = b.get("run_name") if isinstance(b.get("run_name"), str) else b["name"]
         parts = base.split("/")
-        if len(parts) < 4 or parts[0] != "BM_Step" or not re.fullmatch(r"\d+", parts[3]):
+        k = BENCH_FAMILIES.get(parts[0])
+        if k is None or len(parts) <= k or not re.fullmatch(r"\d+", parts[k]):
             ignored += 1
+            continue
+        key = (parts[0], parts[1] if k == 3 else "", parts[k - 1], int(parts[k]))
+        if b.get("error_occurred"):
+            if key not in [e[0] for e in errors]:
+                errors.append((key, str(b.get("error_message", ""))))
             continue
         unit = b.get("time_unit", "ns")
         if unit not in TIME_UNITS:
             raise DataError(path, None, "benchmarks[%d] (%s): unknown time_unit '%s'"
                             % (j, b["name"], unit))
-        for key in ("real_time",):
-            if not isinstance(b.get(key), (int, float)) or isinstance(b.get(key), bool):
+        for field in ("real_time", "cpu_time"):
+            if not isinstance(b.get(field), (int, float)) or isinstance(b.get(field), bool):
                 raise DataError(path, None, "benchmarks[%d] (%s): '%s' is not a number"
-                                % (j, b["name"], key))
+                                % (j, b["name"], field))
         run_type = b.get("run_type", "iteration")
         agg = b.get("aggregate_name") if run_type == "aggregate" else None
         if agg not in (None, "mean", "median"):
             continue  # stddev, cv, ...
-        counters = {k: float(v) for k, v in b.items()
-                    if k not in BENCH_STANDARD_KEYS and isinstance(v, (int, float))
+        counters = {c: float(v) for c, v in b.items()
+                    if c not in BENCH_STANDARD_KEYS and isinstance(v, (int, float))
                     and not isinstance(v, bool)}
-        entry = {"integrator": parts[1], "scene": parts[2], "n": int(parts[3]),
+        entry = {"family": key[0], "what": key[1], "scene": key[2], "n": key[3],
                  "real_time": float(b["real_time"]) * TIME_UNITS[unit],
-                 "cpu_time": float(b.get("cpu_time", math.nan)) * TIME_UNITS[unit],
-                 "counters": counters}
-        raw.setdefault((parts[1], parts[2], int(parts[3])), {}).setdefault(agg, []).append(entry)
-    entries = []
+                 "cpu_time": float(b["cpu_time"]) * TIME_UNITS[unit],
+                 "counters": counters, "label": str(b.get("label", ""))}
+        raw.setdefault(key, {}).setdefault(agg, []).append(entry)
+    families = {f: [] for f in BENCH_FAMILIES}
     for key in sorted(raw):
         by_agg = raw[key]
         pick = by_agg.get("median") or by_agg.get("mean")
         if pick:
-            entries.append(pick[0])
+            e = dict(pick[0])
         else:
             its = by_agg[None]
             e = dict(its[0])
             e["real_time"] = float(np.mean([x["real_time"] for x in its]))
             e["cpu_time"] = float(np.mean([x["cpu_time"] for x in its]))
-            entries.append(e)
+        e["size"] = e["counters"].get("particles", float(e["n"]))
+        families[key[0]].append(e)
+    entries = []
+    for e in families["BM_Step"]:
+        c = e["counters"]
+        e["integrator"] = e["what"]
+        e["kind"] = ("adaptive" if c.get("adaptive") else "implicit" if c.get("implicit")
+                     else "explicit")
+        entries.append(e)
     context = doc.get("context") if isinstance(doc.get("context"), dict) else {}
-    return {"entries": entries, "ignored": ignored, "context": context, "path": path}
+    return {"entries": entries, "families": families, "errors": errors, "ignored": ignored,
+            "context": context, "path": path}
 
 
-def bench_section(bench, styles, figs):
-    entries = bench["entries"]
-    if not entries:
-        return note_html("The benchmark file %s has no BM_Step/&lt;integrator&gt;/&lt;scene&gt;/"
-                         "&lt;n&gt; entries; nothing to show." % esc(Path(bench["path"]).name))
+def _fit_exponent(points):
+    """Least-squares slope of log(time) against log(size), or None."""
+    pts = [(x, y) for x, y in points if finite(x) and finite(y) and x > 0 and y > 0]
+    if len(set(x for x, _ in pts)) < 2:
+        return None
+    xs = np.log([x for x, _ in pts])
+    ys = np.log([y for _, y in pts])
+    return float(np.polyfit(xs, ys, 1)[0])
+
+
+def _met(ok):
+    return "met" if ok else "<b>not met</b>"
+
+
+def _ms(seconds, digits=3):
+    return fmt(seconds * 1e3, digits)
+
+
+def _bench_context_html(bench):
+    ctx = bench["context"]
+    bits = []
+    if ctx.get("date"):
+        bits.append("run %s" % esc(ctx["date"]))
+    if ctx.get("num_cpus"):
+        bits.append("%s CPUs at %s MHz" % (esc(ctx["num_cpus"]), esc(fmt(ctx.get("mhz_per_cpu"), 4))))
+    load = ctx.get("load_avg")
+    if isinstance(load, list) and load:
+        bits.append("load average at start %s" % esc(", ".join(fmt(x, 3) for x in load)))
+    if ctx.get("library_build_type"):
+        bits.append("Google Benchmark library built as %s" % esc(ctx["library_build_type"]))
+    text = ("Measured by <code>springlab_bench</code> (%s). Times are the CPU time of the one "
+            "benchmark thread (a one-core figure; wall time, which other processes on a busy "
+            "machine inflate, is in the step table too)." % "; ".join(bits))
+    return "<p>%s</p>\n" % text
+
+
+def _exponents(entries):
+    """{(integrator, scene): exponent} over the sizes measured (CPU time)."""
+    out = {}
+    for integ in set(e["integrator"] for e in entries):
+        for scene in set(e["scene"] for e in entries):
+            pts = [(e["size"], e["cpu_time"]) for e in entries
+                   if e["integrator"] == integ and e["scene"] == scene]
+            s = _fit_exponent(pts)
+            if s is not None:
+                out[(integ, scene)] = s
+    return out
+
+
+def _step_figure(entries, slopes, styles, figs):
     scenes = sorted(set(e["scene"] for e in entries))
-    fig = new_figure(12.5, 4.8 * len(scenes))
+    multi = [sc for sc in scenes if len(set(e["size"] for e in entries if e["scene"] == sc)) >= 2]
+    scenes = multi or scenes
+    fig = new_figure(12.5, 5.2 * len(scenes))
     axes = fig.subplots(len(scenes), 1, squeeze=False)[:, 0]
-    slopes = {}
     for ax, scene in zip(axes, scenes):
         mine = [e for e in entries if e["scene"] == scene]
         for integ in styles.order(set(e["integrator"] for e in mine)):
-            pts = sorted((e["n"], e["real_time"]) for e in mine if e["integrator"] == integ)
+            pts = sorted((e["size"], e["cpu_time"]) for e in mine if e["integrator"] == integ)
             n = np.array([p[0] for p in pts], dtype=float)
             t = np.array([p[1] for p in pts])
             ok = (n > 0) & np.isfinite(t) & (t > 0)
             label = integ
-            if len(np.unique(n[ok])) >= 2:
-                slope = float(np.polyfit(np.log(n[ok]), np.log(t[ok]), 1)[0])
-                slopes[(integ, scene)] = slope
-                label += "  (exponent %.2f)" % slope
+            if (integ, scene) in slopes:
+                label += "  (exponent %.2f)" % slopes[(integ, scene)]
             ax.plot(n[ok], t[ok], marker=styles.marker(integ), ms=6, mfc="none", mew=1.3, lw=1.4,
-                    color=styles.color(integ),
-                    ls=styles.linestyle(integ), label=label)
+                    color=styles.color(integ), ls=styles.linestyle(integ), label=label)
         has = log_log(ax)
-        sizes = sorted(set(e["n"] for e in mine if e["n"] > 0))
+        sizes = sorted(set(e["size"] for e in mine if e["size"] > 0))
+        if has and len(sizes) >= 2:
+            # A slope-1 guide (cost proportional to size) through the middle.
+            times = [e["cpu_time"] for e in mine if e["cpu_time"] > 0]
+            mid_t = math.exp(np.mean(np.log(times)))
+            mid_n = math.exp(np.mean(np.log(sizes)))
+            xs = np.array([sizes[0], sizes[-1]], dtype=float)
+            ax.plot(xs, mid_t * xs / mid_n, color="0.55", lw=1.0, ls=":",
+                    label="slope 1 (cost ∝ particles)")
         if has and 0 < len(sizes) <= 12:
             from matplotlib.ticker import NullFormatter, ScalarFormatter
             ax.set_xticks(sizes)
             ax.xaxis.set_major_formatter(ScalarFormatter())
             ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_xlabel("size n (the benchmark's size argument) [1]")
-        ax.set_ylabel("wall time per step [s]")
-        ax.set_title("%s — cost of one step" % scene, loc="left", fontweight="bold")
+        ax.set_xlabel("free particles [1]")
+        ax.set_ylabel("CPU time per step [s]")
+        ax.set_title("%s — cost of one step (adaptive methods, dashed: cost of 1/60 s)" % scene,
+                     loc="left", fontweight="bold")
         ax.grid(True, which="major", alpha=0.3)
         ax.grid(True, which="minor", alpha=0.1)
         outside_legend(ax)
-    saved = figs.save(fig, "bench-cost.png")
-    out = [figure_html(saved, "step cost against size", esc(
-        "Wall time of one step against the benchmark's size argument n, log-log; the exponent is "
-        "the least-squares slope of log time against log n (cost ~ n^exponent)."))]
-    counters = sorted(set(k for e in entries for k in e["counters"]))
-    out.append("<table><tr><th>integrator</th><th>scene</th><th>n</th><th>time / step [µs]</th>"
-               "<th>CPU / step [µs]</th>%s<th>fitted exponent</th></tr>\n"
-               % "".join("<th>%s</th>" % esc(c) for c in counters))
-    for e in sorted(entries, key=lambda e: (e["scene"], styles.order(
-            set(x["integrator"] for x in entries)).index(e["integrator"]), e["n"])):
+    return figs.save(fig, "bench-cost.png")
+
+
+def _step_table(entries, slopes, styles):
+    order = styles.order(set(e["integrator"] for e in entries))
+    out = ["<details open><summary>Step cost, every entry (%d)</summary>\n<table><tr>"
+           "<th>integrator</th><th>scene</th><th>n</th><th>particles</th><th>step</th>"
+           "<th>CPU / step [ms]</th><th>wall / step [ms]</th><th>CPU s per simulated s</th>"
+           "<th>force evals / step</th><th>Newton / step</th><th>linear solves / step</th>"
+           "<th>factorizations / step</th><th>internal steps / step</th><th>restarts</th>"
+           "<th>exponent</th></tr>\n" % len(entries)]
+    for e in sorted(entries, key=lambda e: (e["scene"], order.index(e["integrator"]), e["size"])):
+        c = e["counters"]
         s = slopes.get((e["integrator"], e["scene"]))
-        out.append("<tr><td>%s</td><td>%s</td><td>%d</td><td>%s</td><td>%s</td>%s<td>%s</td></tr>\n"
+        out.append("<tr><td>%s</td><td>%s</td><td>%d</td><td>%s</td><td>%s</td><td>%s</td>"
+                   "<td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td>"
+                   "<td>%s</td><td>%s</td></tr>\n"
                    % (swatch(styles, e["integrator"]), esc(e["scene"]), e["n"],
-                      fmt(e["real_time"] * 1e6, 4), fmt(e["cpu_time"] * 1e6, 4),
-                      "".join("<td>%s</td>" % fmt(e["counters"].get(c), 4) for c in counters),
+                      fmt(e["size"], 6), esc(e["label"]), _ms(e["cpu_time"], 4),
+                      _ms(e["real_time"], 4), fmt(c.get("cpu_per_sim_second"), 3),
+                      fmt(c.get("force_evals_per_step"), 3), fmt(c.get("newton_per_step"), 3),
+                      fmt(c.get("linear_solves_per_step"), 3),
+                      fmt(c.get("factorizations_per_step"), 3),
+                      fmt(c.get("internal_steps_per_step"), 3), fmt(c.get("restarts"), 3),
                       "%.2f" % s if s is not None else "–"))
-    out.append("</table>\n")
+    out.append("</table></details>\n")
+    return "".join(out)
+
+
+def _exponent_table(entries, slopes, styles):
+    kinds = {e["integrator"]: e["kind"] for e in entries}
+    rows = []
+    for integ in styles.order(kinds):
+        for scene in sorted(set(e["scene"] for e in entries)):
+            s = slopes.get((integ, scene))
+            if s is None:
+                continue
+            sizes = sorted(set(e["n"] for e in entries
+                               if e["integrator"] == integ and e["scene"] == scene))
+            kind = kinds[integ]
+            if kind == "explicit":
+                target = "≈ 1.0"
+                verdict = _met(TARGET_EXPONENT_EXPLICIT[0] <= s <= TARGET_EXPONENT_EXPLICIT[1])
+            elif kind == "implicit":
+                target = "≤ %.1f" % TARGET_EXPONENT_IMPLICIT
+                verdict = _met(s <= TARGET_EXPONENT_IMPLICIT)
+            else:
+                target, verdict = "– (cost of 1/60 s)", ""
+            rows.append("<tr><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%.2f</td><td>%s</td>"
+                        "<td>%s</td></tr>\n" % (swatch(styles, integ), esc(kind), esc(scene),
+                                                esc(", ".join(str(n) for n in sizes)), s,
+                                                esc(target), verdict))
+    if not rows:
+        return ""
+    return ("<h3>Step-cost exponents</h3>\n<p>Least-squares slope of log CPU time per step "
+            "against log free particles (cost ∝ particles<sup>exponent</sup>).</p>\n"
+            "<table><tr><th>integrator</th><th>kind</th><th>scene</th><th>n</th>"
+            "<th>exponent</th><th>target</th><th></th></tr>\n%s</table>\n" % "".join(rows))
+
+
+def _peer_ratios(bench, method=None):
+    """{(method, scene, n): (paired ratio or None, separate-run CPU ratio or None)}."""
+    fam = bench["families"]
+    mine = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_Step"]}
+    peer = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_OdeintStep"]}
+    pair = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_OdeintPair"]}
+    out = {}
+    for key in set(peer) | set(pair):
+        if method is not None and key[0] != method:
+            continue
+        paired = pair[key]["counters"].get("ratio") if key in pair else None
+        separate = None
+        if key in peer and key in mine and peer[key]["cpu_time"] > 0:
+            separate = mine[key]["cpu_time"] / peer[key]["cpu_time"]
+        out[key] = (paired, separate)
+    return out
+
+
+def _peer_table(bench):
+    fam = bench["families"]
+    mine = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_Step"]}
+    peer = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_OdeintStep"]}
+    pair = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_OdeintPair"]}
+    ratios = _peer_ratios(bench)
+    rows = []
+    for key in sorted(ratios, key=lambda k: (k[0], k[1], k[2])):
+        paired, separate = ratios[key]
+        s, o, p = mine.get(key), peer.get(key), pair.get(key)
+        best = paired if paired is not None else separate
+        rows.append("<tr><td>%s</td><td>%s</td><td>%d</td><td>%s</td><td>%s</td><td>%s</td>"
+                    "<td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>\n"
+                    % (esc(key[0]), esc(key[1]), key[2],
+                       fmt(s["cpu_time"] * 1e6, 4) if s else "–",
+                       fmt(o["cpu_time"] * 1e6, 4) if o else "–", fmt(separate, 3),
+                       fmt(p["counters"].get("springlab_us"), 4) if p else "–",
+                       fmt(p["counters"].get("odeint_us"), 4) if p else "–", fmt(paired, 3),
+                       _met(best <= TARGET_PEER_RATIO) if finite(best) else "–"))
+    if not rows:
+        return ""
+    return ("<h3>springlab against Boost.Odeint</h3>\n<p>The same model, scene and step "
+            "(dt = 0.5/w_max), odeint's <code>runge_kutta4</code> and "
+            "<code>symplectic_euler</code> calling the model's own force function. Separate "
+            "runs: BM_Step against BM_OdeintStep (CPU time, median of the repetitions). Paired: "
+            "BM_OdeintPair, which alternates batches of both inside one benchmark (wall clock), "
+            "so a change in the machine's load hits both alike; the verdict uses it when "
+            "present. Target: springlab at most %.1f× odeint's time.</p>\n"
+            "<table><tr><th>method</th><th>scene</th><th>n</th><th>springlab CPU / step [µs]"
+            "</th><th>odeint CPU / step [µs]</th><th>ratio (separate)</th>"
+            "<th>springlab / step, paired [µs]</th><th>odeint / step, paired [µs]</th>"
+            "<th>ratio (paired)</th><th>≤ %.1f</th></tr>\n%s</table>\n"
+            % (TARGET_PEER_RATIO, TARGET_PEER_RATIO, "".join(rows)))
+
+
+def _force_table(bench):
+    force = {(e["scene"], e["n"]): e for e in bench["families"]["BM_Force"]}
+    jac = {(e["scene"], e["n"]): e for e in bench["families"]["BM_ForceJacobian"]}
+    keys = sorted(set(force) | set(jac), key=lambda k: (k[0], k[1]))
+    if not keys:
+        return ""
+    rows = []
+    for k in keys:
+        f, j = force.get(k), jac.get(k)
+        any_e = f or j
+        c = any_e["counters"]
+        note = ""
+        if f and k == ("cloth", 128):
+            note = "target ≤ %g ns/spring: %s" % (TARGET_FORCE_NS, _met(
+                f["counters"].get("ns_per_spring", math.inf) <= TARGET_FORCE_NS))
+        rows.append("<tr><td>%s</td><td>%d</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td>"
+                    "<td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>\n"
+                    % (esc(k[0]), k[1], fmt(c.get("springs"), 6), fmt(c.get("unknowns"), 6),
+                       fmt(f["cpu_time"] * 1e6, 4) if f else "–",
+                       fmt(f["counters"].get("ns_per_spring"), 3) if f else "–",
+                       fmt(f["counters"].get("unknowns_per_second"), 3) if f else "–",
+                       fmt(j["cpu_time"] * 1e6, 4) if j else "–",
+                       fmt(j["counters"].get("ns_per_spring"), 3) if j else "–", note))
+    return ("<h3>Force evaluation</h3>\n<p>One evaluation of all forces "
+            "(<code>MassSpringModel::force</code>), and force plus both Jacobians on the "
+            "model's fixed pattern (what an implicit method assembles per Newton iteration).</p>\n"
+            "<table><tr><th>scene</th><th>n</th><th>springs</th><th>unknowns</th>"
+            "<th>force [µs]</th><th>force ns / spring</th><th>unknowns / s</th>"
+            "<th>force + Jacobians [µs]</th><th>ns / spring</th><th></th></tr>\n%s</table>\n"
+            % "".join(rows))
+
+
+def _linear_table(bench):
+    lin = bench["families"]["BM_LinearSolver"]
+    failed = [(key, msg) for key, msg in bench["errors"] if key[0] == "BM_LinearSolver"]
+    if not lin and not failed:
+        return ""
+    rows = []
+    keyed = [((e["scene"], e["n"], e["cpu_time"]), e, None) for e in lin]
+    keyed += [((key[2], key[3], math.inf), {"what": key[1], "scene": key[2], "n": key[3]}, msg)
+              for key, msg in failed]
+    for _, e, msg in sorted(keyed, key=lambda r: r[0]):
+        if msg is not None:
+            rows.append('<tr class="off"><td>%s</td><td>%s</td><td>%d</td><td colspan="7">%s</td>'
+                        '</tr>\n' % (esc(e["what"]), esc(e["scene"]), e["n"], esc(msg)))
+            continue
+        c = e["counters"]
+        rows.append("<tr><td>%s</td><td>%s</td><td>%d</td><td>%s</td><td>%s</td><td>%s</td>"
+                    "<td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>\n"
+                    % (esc(e["what"]), esc(e["scene"]), e["n"], fmt(c.get("unknowns"), 6),
+                       fmt(c.get("factor_nonzeros"), 4), fmt(c.get("factorize_ms"), 4),
+                       fmt(c.get("solve_ms"), 4), _ms(e["cpu_time"], 4),
+                       fmt(c.get("cg_iterations"), 4), fmt(c.get("initial_residual"), 3)))
+    label = next((e["label"] for e in lin if e["label"]), "")
+    return ("<h3>Linear solvers</h3>\n<p>The implicit methods' matrix A = M − h dF/dv − "
+            "h² dF/dx of the same cloth state (%s), one Newton-iteration's worth of work per "
+            "row: direct solvers factorize (symbolic analysis reused, except "
+            "<code>ldlt-scratch</code>) and solve; CG sets up its Jacobi preconditioner and "
+            "iterates to a relative residual of 1e-8 (warm: from the previous step's solution). "
+            "Factorize and solve are the wall-clock split of one iteration, CPU total is the "
+            "benchmark's CPU time. Sorted by size, fastest first.</p>\n"
+            "<table><tr><th>solver</th><th>scene</th><th>n</th><th>unknowns</th>"
+            "<th>factor nonzeros</th><th>factorize [ms]</th><th>solve [ms]</th>"
+            "<th>CPU total [ms]</th><th>CG iterations</th><th>CG initial residual</th></tr>\n"
+            "%s</table>\n" % (esc(label), "".join(rows)))
+
+
+def _targets_table(bench, slopes):
+    """The performance targets that this file can answer, with the measured figure."""
+    fam = bench["families"]
+    rows = []
+    f = next((e for e in fam["BM_Force"] if (e["scene"], e["n"]) == ("cloth", 128)), None)
+    if f and finite(f["counters"].get("ns_per_spring")):
+        v = f["counters"]["ns_per_spring"]
+        rows.append(("force evaluation, cloth 128: ns per spring", "≤ %g" % TARGET_FORCE_NS,
+                     fmt(v, 3), v <= TARGET_FORCE_NS))
+    steps = {(e["what"], e["scene"], e["n"]): e for e in fam["BM_Step"]}
+    for method in ("rk4", "symplectic-euler"):
+        ratios = []
+        for key, (paired, separate) in _peer_ratios(bench, method).items():
+            r = paired if paired is not None else separate
+            if finite(r):
+                ratios.append((r, "%s %d" % (key[1], key[2])))
+        if ratios:
+            worst = max(ratios)
+            rows.append(("%s / odeint time, worst scene (%s)" % (method, worst[1]),
+                         "≤ %.1f" % TARGET_PEER_RATIO, "%s (best %s)" % (
+                             fmt(worst[0], 3), fmt(min(ratios)[0], 3)),
+                         worst[0] <= TARGET_PEER_RATIO))
+    for method, limit in TARGET_STEP_MS.items():
+        e = steps.get((method, "cloth", 64))
+        if e:
+            ms = e["cpu_time"] * 1e3
+            rows.append(("%s, cloth 64, dt 1/60: ms per step" % method, "≤ %g" % limit,
+                         fmt(ms, 3), ms <= limit))
+    kinds = {e["integrator"]: e["kind"] for e in bench["entries"]}
+    for kind, test, target in (
+            ("explicit", lambda s: TARGET_EXPONENT_EXPLICIT[0] <= s <= TARGET_EXPONENT_EXPLICIT[1],
+             "≈ 1.0"),
+            ("implicit", lambda s: s <= TARGET_EXPONENT_IMPLICIT,
+             "≤ %.1f" % TARGET_EXPONENT_IMPLICIT)):
+        found = sorted((s, integ) for (integ, scene), s in slopes.items()
+                       if scene == "cloth" and kinds.get(integ) == kind)
+        if found:
+            rows.append(("step-cost exponent, %s methods (cloth)" % kind, target,
+                         ", ".join("%s %.2f" % (integ, s) for s, integ in found),
+                         all(test(s) for s, _ in found)))
+    if not rows:
+        return ""
+    body = "".join('<tr%s><td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>\n'
+                   % ("" if ok else ' class="off"', esc(what), esc(target), esc(value), _met(ok))
+                   for what, target, value, ok in rows)
+    return ("<h3>Measured against the performance targets</h3>\n<table><tr><th>figure</th>"
+            "<th>target</th><th>measured</th><th></th></tr>\n%s</table>\n" % body)
+
+
+def bench_section(bench, styles, figs):
+    entries = bench["entries"]
+    out = [_bench_context_html(bench)]
+    slopes = _exponents(entries)
+    if entries:
+        out.append(_targets_table(bench, slopes))
+        saved = _step_figure(entries, slopes, styles, figs)
+        out.append(figure_html(saved, "step cost against size", esc(
+            "CPU time of one step against the number of free particles, log-log, per scene with "
+            "more than one size; the exponent is the least-squares slope of log time against log "
+            "particles (cost ~ particles^exponent), the dotted grey line has slope 1. Explicit "
+            "methods step at dt = 0.5/w_max (which shrinks as the cloth gets finer), implicit "
+            "ones at dt = 1/60 s; adaptive methods (dashed) show the cost of 1/60 s of "
+            "simulated time at rtol 1e-6.")))
+        out.append(_exponent_table(entries, slopes, styles))
+        out.append(_step_table(entries, slopes, styles))
+    else:
+        out.append(note_html("The benchmark file %s has no BM_Step/&lt;integrator&gt;/&lt;scene&gt;/"
+                             "&lt;n&gt; entries: no step-cost figure."
+                             % esc(Path(bench["path"]).name)))
+    out.append(_peer_table(bench))
+    out.append(_force_table(bench))
+    out.append(_linear_table(bench))
+    other = [(key, msg) for key, msg in bench["errors"] if key[0] != "BM_LinearSolver"]
+    if other:
+        out.append(note_html("Entries that reported an error (not shown): %s." % esc("; ".join(
+            "%s: %s" % ("/".join(str(p) for p in key if p != ""), msg) for key, msg in other))))
     if bench["ignored"]:
-        out.append(note_html("%d benchmark entr%s not named BM_Step/&lt;integrator&gt;/&lt;scene&gt;"
-                             "/&lt;n&gt; (or reporting an error) %s not shown."
-                             % (bench["ignored"], "y" if bench["ignored"] == 1 else "ies",
-                                "is" if bench["ignored"] == 1 else "are")))
+        out.append(note_html("%d benchmark entr%s with a name this report does not know %s "
+                             "not shown." % (bench["ignored"],
+                                             "y" if bench["ignored"] == 1 else "ies",
+                                             "is" if bench["ignored"] == 1 else "are")))
     return "".join(out)
 
 
@@ -1583,10 +1921,12 @@ ABOUT = {
         "stays stable but its cloth looks sluggish and over-damped, and the accurate methods "
         "swing freely."),
     "bench": (
-        "The wall time of one step as the scene grows: on log-log axes the slope is the "
+        "The CPU time of one step as the scene grows: on log-log axes the slope is the "
         "exponent with which the cost grows. Explicit methods should be close to linear in the "
         "number of particles; implicit ones pay for a sparse factorisation per Newton "
-        "iteration."),
+        "iteration, which grows faster. Beside it: springlab's explicit steps against "
+        "Boost.Odeint's on the same model, the cost of one force evaluation per spring, and "
+        "the linear solvers an implicit method can use, on the same matrix."),
 }
 
 KIND_TITLES = {
@@ -1789,7 +2129,7 @@ def build_page(data_dir, experiments, page_notes, bench, bench_note, styles, fig
         about.append("<dt>%s <small>(%s)</small></dt><dd>%s%s</dd>\n" % (
             title, esc(k), esc(ABOUT[k]), "" if names else " <i>(not in this data set)</i>"))
     about.append("<dt>Step cost <small>(benchmarks)</small></dt><dd>%s%s</dd>\n" % (
-        esc(ABOUT["bench"]), "" if bench is not None else " <i>(no --bench file given)</i>"))
+        esc(ABOUT["bench"]), "" if bench is not None else " <i>(no benchmark file)</i>"))
     about.append("</dl></section>\n")
 
     notes = []
@@ -1829,7 +2169,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", required=True, help="directory with the experiment CSV/JSON files")
     ap.add_argument("--out", required=True, help="output directory (index.html and PNGs)")
-    ap.add_argument("--bench", help="Google Benchmark JSON file (optional)")
+    ap.add_argument("--bench", help="Google Benchmark JSON file from springlab_bench (default: "
+                    "%s in the data directory, when it is there)" % BENCH_FILE)
     args = ap.parse_args(argv)
 
     data_dir = Path(args.data)
@@ -1840,12 +2181,14 @@ def main(argv=None):
                          "path.simplify": True, "agg.path.chunksize": 20000})
     try:
         experiments, page_notes = load_data(data_dir)
-        bench = read_bench(Path(args.bench)) if args.bench else None
+        bench_path = Path(args.bench) if args.bench else data_dir / BENCH_FILE
+        bench = read_bench(bench_path) if args.bench or bench_path.is_file() else None
     except DataError as exc:
         sys.stderr.write("%s: error: %s\n" % (PROG, exc))
         return 1
-    bench_note = None if args.bench else \
-        "Step cost: no benchmark file given (--bench FILE.json): skipped."
+    bench_note = None if bench is not None else \
+        ("Step cost: no benchmark file (%s in the data directory, or --bench FILE.json): "
+         "skipped. `cmake --build --preset bench` makes one." % BENCH_FILE)
     outdir = Path(args.out)
     try:
         outdir.mkdir(parents=True, exist_ok=True)

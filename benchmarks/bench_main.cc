@@ -1,0 +1,30 @@
+// springlab_bench: every benchmark family in one executable.
+//
+//   springlab_bench [--benchmark_filter=REGEX] [--benchmark_out=FILE.json
+//                    --benchmark_out_format=json] [other Google Benchmark flags]
+//
+// Families (each file's header says what one iteration is and which counters
+// it reports):
+//   BM_Force/<scene>/<n>, BM_ForceJacobian/<scene>/<n>         bench_force.cc
+//   BM_Step/<integrator>/<scene>/<n>                            bench_step.cc
+//   BM_OdeintStep/<rk4|symplectic-euler>/<scene>/<n>            bench_odeint.cc
+//   BM_OdeintPair/<rk4|symplectic-euler>/<scene>/<n>            bench_odeint.cc
+//   BM_LinearSolver/<solver>/<scene>/<n>                        bench_linear_solver.cc
+// `cmake --build --preset bench` runs it all and writes
+// build/release/report-data/benchmarks.json, which report/make_report.py reads.
+#include <benchmark/benchmark.h>
+
+#include "benchmarks/bench_support.h"
+
+int main(int argc, char** argv) {
+  namespace sb = springlab::bench;
+  sb::register_force_benchmarks();
+  sb::register_step_benchmarks();
+  sb::register_odeint_benchmarks();
+  sb::register_linear_solver_benchmarks();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,86 @@
+#include "benchmarks/bench_support.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <memory>
+#include <utility>
+
+#include "models/builtin_scenes.h"
+#include "models/modal_analysis.h"
+
+namespace springlab::bench {
+
+const std::vector<SceneCase>& all_cases() {
+  static const std::vector<SceneCase> cases = {
+      {"cloth", 16}, {"cloth", 32}, {"cloth", 64}, {"cloth", 128}, {"chain", 1000}};
+  return cases;
+}
+
+namespace {
+
+struct Cached {
+  std::unique_ptr<MassSpringModel> model;
+  double w_max = -1.0;
+};
+
+Cached& cached(const SceneCase& c) {
+  static std::map<std::pair<std::string, int>, Cached> cache;
+  Cached& entry = cache[{c.scene, c.n}];
+  if (!entry.model) {
+    entry.model = std::make_unique<MassSpringModel>(
+        make_builtin_scene(c.scene, {{"n", std::to_string(c.n)}}));
+  }
+  return entry;
+}
+
+}  // namespace
+
+const MassSpringModel& model_for(const SceneCase& c) { return *cached(c).model; }
+
+double max_frequency_for(const SceneCase& c) {
+  Cached& entry = cached(c);
+  if (entry.w_max < 0.0) entry.w_max = max_angular_frequency(*entry.model);
+  return entry.w_max;
+}
+
+long spring_count(const MassSpringModel& model) {
+  return static_cast<long>(model.scene().springs.size());
+}
+
+void add_size_counters(benchmark::State& state, const MassSpringModel& model) {
+  state.counters["unknowns"] = static_cast<double>(model.dofs());
+  state.counters["particles"] = static_cast<double>(model.free_particle_count());
+  state.counters["springs"] = static_cast<double>(spring_count(model));
+}
+
+double shortest_rest_length(const MassSpringModel& model) {
+  double shortest = std::numeric_limits<double>::infinity();
+  for (const Spring& s : model.scene().springs) {
+    if (s.rest > 0.0) shortest = std::min(shortest, s.rest);
+  }
+  return std::isfinite(shortest) ? shortest : 1.0;
+}
+
+void perturbed_state(const MassSpringModel& model, Vector& x, Vector& v) {
+  x = model.initial_positions();
+  v = model.initial_velocities();
+  const double amplitude = 1e-3 * shortest_rest_length(model);
+  // A fixed linear congruential sequence: the same state on every run.
+  unsigned long long seed = 0x5eed5eedULL;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    const double u = static_cast<double>(seed >> 11) * 0x1.0p-53;  // [0, 1)
+    x[i] += amplitude * (2.0 * u - 1.0);
+  }
+}
+
+std::string short_number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", value);
+  return buffer;
+}
+
+}  // namespace springlab::bench

@@ -1,0 +1,57 @@
+// Shared pieces of springlab_bench: the scenes every family runs on, one
+// cached model per (scene, size), and the counters that make figures
+// comparable across sizes.
+//
+// Sizes: the benchmark's size argument is the scene's own `n` (cloth: n x n
+// grid, chain: n particles); every entry also carries `unknowns` (free
+// degrees of freedom), `particles` (free particles) and `springs` as counters
+// so a reader (and report/make_report.py) can plot against the real size.
+#pragma once
+
+#include <benchmark/benchmark.h>
+
+#include <string>
+#include <vector>
+
+#include "models/mass_spring_model.h"
+
+namespace springlab::bench {
+
+struct SceneCase {
+  std::string scene;  // a built-in scene with its default parameters
+  int n;              // its `n` parameter
+  std::string path() const { return scene + "/" + std::to_string(n); }
+};
+
+// cloth n = 16, 32, 64, 128 and chain n = 1000.
+const std::vector<SceneCase>& all_cases();
+
+// Built once, then shared (benchmarks run one at a time, so the model's
+// scratch arrays are never used concurrently).
+const MassSpringModel& model_for(const SceneCase& c);
+// w_max at the initial state (models/modal_analysis.h), cached.
+double max_frequency_for(const SceneCase& c);
+
+long spring_count(const MassSpringModel& model);
+
+// unknowns, particles, springs (plain values, not divided by anything).
+void add_size_counters(benchmark::State& state, const MassSpringModel& model);
+
+// The initial state moved off equilibrium by a small deterministic amount
+// (1e-3 of the rest spacing scale) so that no spring sits exactly at its rest
+// length: a generic state for force / Jacobian / matrix benchmarks.
+void perturbed_state(const MassSpringModel& model, Vector& x, Vector& v);
+
+// Rest spacing of a grid/chain: the length of the shortest spring.
+double shortest_rest_length(const MassSpringModel& model);
+
+// "7.07e-05"-style short number for labels.
+std::string short_number(double value);
+
+// Family registration (each file registers its own family).
+void register_force_benchmarks();
+void register_step_benchmarks();
+void register_linear_solver_benchmarks();
+void register_odeint_benchmarks();
+
+}  // namespace springlab::bench

@@ -1,0 +1,74 @@
+// Soak tests (ctest label "soak": not in the default test run, run by CI):
+// long runs whose peak memory must stay flat. Peak resident memory
+// (getrusage ru_maxrss) is sampled after 10% of the steps and at the end;
+// a leak or a growing buffer shows as growth between the two.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <cstdio>
+
+#include "experiments/simulation.h"
+#include "models/builtin_scenes.h"
+#include "models/mass_spring_model.h"
+
+namespace springlab {
+namespace {
+
+long peak_rss_kb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+// Samples the peak memory when the run passes t_sample.
+class MemorySampler final : public Observer {
+ public:
+  explicit MemorySampler(double t_sample) : t_sample_(t_sample) {}
+  void observe(double t, const Vector&, const Vector&) override {
+    if (sampled_ < 0 && t >= t_sample_) sampled_ = peak_rss_kb();
+  }
+  long sampled() const { return sampled_; }
+
+ private:
+  double t_sample_;
+  long sampled_ = -1;
+};
+
+void soak(const Scene& scene, const RunSettings& settings, long steps, long allowed_growth_kb) {
+  const MassSpringModel model(scene);
+  MemorySampler sampler(settings.t_end / 10);
+  const RunResult r = simulate(model, settings, {&sampler});
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  ASSERT_EQ(r.stats.steps, steps);
+  const long end = peak_rss_kb();
+  std::printf("soak %s on %s: %ld steps in %.1f s, peak RSS %ld KB after 10%%, %ld KB at the end\n",
+              settings.integrator.c_str(), scene.name.c_str(), r.stats.steps, r.wall_seconds,
+              sampler.sampled(), end);
+  ASSERT_GT(sampler.sampled(), 0);
+  EXPECT_LE(end - sampler.sampled(), allowed_growth_kb);
+}
+
+TEST(Soak, SymplecticEulerMillionStepsOnTheChain) {
+  RunSettings s;
+  s.integrator = "symplectic-euler";
+  s.dt = 1e-4;
+  s.t_end = 100.0;  // 10^6 steps
+  s.every = 1000;
+  soak(make_builtin_scene("chain"), s, 1000000, 64);
+}
+
+TEST(Soak, ImplicitEulerTenThousandStepsOnA32x32Cloth) {
+  RunSettings s;
+  s.integrator = "implicit-euler";
+  s.dt = 1e-3;
+  s.t_end = 10.0;  // 10^4 steps
+  s.every = 100;
+  // Memory, not accuracy, is under test: 1e-4 m/s takes one Newton
+  // iteration per step at this h (the default 1e-10 takes two, doubling the
+  // run to ~10 min on 2 cores).
+  s.options.newton_tol = 1e-4;
+  soak(make_builtin_scene("cloth", {{"n", "32"}}), s, 10000, 256);
+}
+
+}  // namespace
+}  // namespace springlab
