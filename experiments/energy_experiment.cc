@@ -60,8 +60,9 @@ class EnergyExperiment final : public Experiment {
     EnergyRows rows(model, prefix, out.rows[0]);
     const RunResult r = simulate(model, s, {&rows});
     Row run;
-    run.raw(prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps).add(r.stats.force_evals).add(r.wall_seconds).add(r.energy_initial)
-        .add(r.energy_final).add(model.energy_scale());
+    run.raw(prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps)
+        .add(r.stats.force_evals).add(r.wall_seconds).add(r.energy_initial).add(r.energy_final)
+        .add(model.energy_scale());
     out.rows[1].push_back(run.str());
     return out;
   }
