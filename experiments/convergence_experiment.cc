@@ -184,7 +184,9 @@ class ConvergenceExperiment final : public Experiment {
       cases_.push_back(std::move(k));
     }
     double rows_per_case = 0.0;  // one per sweep point, one fitted order per method
-    for (const SweepMethod& m : methods_) rows_per_case += static_cast<double>(m.values.size()) + 1.0;
+    for (const SweepMethod& m : methods_) {
+      rows_per_case += static_cast<double>(m.values.size()) + 1.0;
+    }
     check_output_rows(d, "cases", rows_per_case * static_cast<double>(cases_.size()));
   }
 

@@ -32,7 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::abort();
   }
   const springlab::MassSpringModel model(scene);
-  const springlab::Energies e = model.energies(model.initial_positions(), model.initial_velocities());
+  const springlab::Energies e =
+      model.energies(model.initial_positions(), model.initial_velocities());
   sink = e.total() + model.energy_scale();
   return 0;
 }

@@ -483,7 +483,9 @@ std::string json_vector(const Eigen::Vector3d& v, int dimension) {
 
 Scene parse_scene(const std::string& json_text, const std::string& source) {
   const Reporter r(source);
-  if (json_text.size() > kMaxSceneFileBytes) r.fail("", file_size_error(std::to_string(json_text.size())));
+  if (json_text.size() > kMaxSceneFileBytes) {
+    r.fail("", file_size_error(std::to_string(json_text.size())));
+  }
   const Json doc = parse_document(json_text, r);
   require_object(r, "", doc);
   check_keys(r, "", doc, {"name", "dimension", "gravity", "drag", "wind", "particles", "springs"},

@@ -5,6 +5,7 @@
 // files are still valid CSV: the exact header, then rows of finite numbers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -123,7 +124,8 @@ class FailurePaths : public ::testing::Test {
     for (std::size_t i = 0; i < particles; ++i) {
       const std::vector<double>& row = trajectory.rows[trajectory.rows.size() - particles + i];
       for (int r = 0; r < dimension; ++r) {
-        EXPECT_EQ(row[2 + static_cast<std::size_t>(r)], x[i][static_cast<std::size_t>(r)].get<double>());
+        const auto axis = static_cast<std::size_t>(r);
+        EXPECT_EQ(row[2 + axis], x[i][axis].get<double>());
       }
     }
   }
