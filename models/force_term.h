@@ -24,7 +24,9 @@ namespace springlab {
 struct Configuration {
   double t = 0.0;
   const double* x = nullptr;  // positions, particle p at x[p*dim .. p*dim+dim)
-  const double* v = nullptr;  // velocities, same layout (fixed particles: 0)
+  // Velocities, same layout (fixed particles: 0); null when no term of the
+  // model declares a velocity_dependence(), which spares the model copying v.
+  const double* v = nullptr;
   int dim = 2;
   int free_particles = 0;
   bool is_free(int p) const { return p < free_particles; }
@@ -106,6 +108,11 @@ class ForceTerm {
   // Conservative terms derive entirely from potential_energy; the others'
   // power F.v is the work rate the damping budget accounts for.
   virtual bool conservative() const = 0;
+
+  // A constant force (gravity) depends on none of t, x, v: the model
+  // evaluates it once and starts every evaluation of f from it instead of
+  // from zero, which saves a pass over f per evaluation.
+  virtual bool constant() const { return false; }
 
   // Stiff forces (large Jacobians: springs, damping) are the ones an IMEX
   // method treats implicitly; the others (gravity, wind) explicitly.

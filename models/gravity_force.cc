@@ -16,6 +16,7 @@ class GravityForce final : public ForceTerm {
   std::string_view name() const override { return "gravity"; }
   bool conservative() const override { return true; }
   bool stiff() const override { return false; }
+  bool constant() const override { return true; }
   EnergyKind energy_kind() const override { return EnergyKind::kGravity; }
 
   void add_force(const Configuration&, double* f) const override {

@@ -29,6 +29,10 @@ ParticleOrder make_order(const Scene& scene) {
   return order;
 }
 
+bool in_part(const ForceTerm& term, ForcePart part) {
+  return part == ForcePart::kAll || term.stiff() == (part == ForcePart::kStiff);
+}
+
 }  // namespace
 
 MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
@@ -78,6 +82,16 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
     symmetric_ = symmetric_ && term->symmetric_jacobians();
     velocity_dependence_ = std::max(velocity_dependence_, term->velocity_dependence());
   }
+  reads_velocity_ = velocity_dependence_ != VelocityDependence::kNone;
+
+  const Configuration initial = configure(0.0, x0_, v0_);
+  for (ForcePart part : {ForcePart::kAll, ForcePart::kStiff, ForcePart::kNonstiff}) {
+    Vector& base = constant_force_[static_cast<std::size_t>(part)];
+    base.setZero(x_all_.size());
+    for (const auto& term : terms_) {
+      if (term->constant() && in_part(*term, part)) term->add_force(initial, base.data());
+    }
+  }
 
   // SPEC §6: E_s = T(0) + U_spring(0) + sum_free m_i (|g| d + |w_max|^2 / 2),
   // d the diameter of the initial positions' bounding box.
@@ -102,28 +116,24 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
 Configuration MassSpringModel::configure(double t, const Vector& x, const Vector& v) const {
   const Eigen::Index n = dofs();
   x_all_.head(n) = x;
-  v_all_.head(n) = v;
+  if (reads_velocity_) v_all_.head(n) = v;
   Configuration c;
   c.t = t;
   c.x = x_all_.data();
-  c.v = v_all_.data();
+  c.v = reads_velocity_ ? v_all_.data() : nullptr;
   c.dim = order_.dim;
   c.free_particles = order_.free_particles;
   return c;
 }
 
-namespace {
-bool in_part(const ForceTerm& term, ForcePart part) {
-  return part == ForcePart::kAll || term.stiff() == (part == ForcePart::kStiff);
-}
-}  // namespace
-
 void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
                             Vector& f) const {
   const Configuration c = configure(t, x, v);
-  f_all_.setZero();
+  // One pass initializes f with the constant forces (instead of zero-fill,
+  // then a pass that adds gravity).
+  f_all_ = constant_force_[static_cast<std::size_t>(part)];
   for (const auto& term : terms_) {
-    if (in_part(*term, part)) term->add_force(c, f_all_.data());
+    if (!term->constant() && in_part(*term, part)) term->add_force(c, f_all_.data());
   }
   f = f_all_.head(dofs());
 }

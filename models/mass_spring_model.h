@@ -6,6 +6,7 @@
 // per thread (they are cheap to build from the Scene).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -76,6 +77,12 @@ class MassSpringModel final : public MechanicalSystem {
   bool symmetric_ = true;
   VelocityDependence velocity_dependence_ = VelocityDependence::kNone;
   double energy_scale_ = 0.0;
+
+  // Sum of the constant terms (gravity) in each ForcePart, all particles:
+  // force() starts f from it (see ForceTerm::constant()).
+  std::array<Vector, 3> constant_force_;
+  // Whether any term reads Configuration::v (else configure() skips copying v).
+  bool reads_velocity_ = false;
 
   // Scratch: all particles, internal order. The fixed tail of x_all_ holds
   // the fixed positions and never changes; v_all_'s fixed tail stays 0.
