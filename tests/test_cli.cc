@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "run_process.h"
+
 #ifndef SPRINGLAB_EXE
 #error "SPRINGLAB_EXE must name the springlab executable"
 #endif
@@ -38,23 +40,10 @@ const std::string kCliData = std::string(SPRINGLAB_TEST_DATA) + "/cli";
 
 // ------------------------------------------------------------------ helpers
 
-struct Output {
-  bool exited = false;  // false: killed by a signal (always a test failure)
-  int status = -1;      // exit status when exited
-  std::string out, err;
-};
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
+using Output = testing::ProcessResult;
+using testing::describe;
+using testing::read_text;
+using testing::write_text;
 
 std::string number(double value) {
   char buffer[64];
@@ -97,60 +86,20 @@ class Workspace {
 
   // Runs `springlab args...` in work(); a signal is reported as a failure.
   Output run(const std::vector<std::string>& args) {
-    const std::string tag = std::to_string(runs_++);
-    const std::string out_path = (root_ / "io" / (tag + ".out")).string();
-    const std::string err_path = (root_ / "io" / (tag + ".err")).string();
-    const std::string work_dir = work().string();
-    std::vector<std::string> strings = {SPRINGLAB_EXE};
-    strings.insert(strings.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& s : strings) argv.push_back(s.data());
-    argv.push_back(nullptr);
-
     std::cout.flush();
     std::cerr.flush();
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (out < 0 || err < 0 || ::chdir(work_dir.c_str()) != 0 || ::dup2(out, 1) < 0 ||
-          ::dup2(err, 2) < 0) {
-        ::_exit(126);
-      }
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    Output result;
-    if (pid < 0) {
-      ADD_FAILURE() << "fork failed: " << std::strerror(errno);
-      return result;
-    }
-    int wstatus = 0;
-    while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
-    }
-    result.out = read_text(out_path);
-    result.err = read_text(err_path);
-    if (WIFEXITED(wstatus)) {
-      result.exited = true;
-      result.status = WEXITSTATUS(wstatus);
-    } else {
-      ADD_FAILURE() << "springlab killed by signal "
-                    << (WIFSIGNALED(wstatus) ? WTERMSIG(wstatus) : -1) << "\nstderr: " << result.err;
+    Output result = testing::run_springlab(args, work(), root_ / "io");
+    if (!result.started) {
+      ADD_FAILURE() << "could not start springlab";
+    } else if (!result.exited) {
+      ADD_FAILURE() << "springlab killed by signal " << result.signal << "\nstderr: " << result.err;
     }
     return result;
   }
 
  private:
   fs::path root_;
-  int runs_ = 0;
 };
-
-std::string describe(const std::vector<std::string>& args, const Output& o) {
-  std::string command = "springlab";
-  for (const std::string& a : args) command += " " + a;
-  return command + "\nexit " + (o.exited ? std::to_string(o.status) : "by signal") +
-         "\nstdout: " + o.out + "\nstderr: " + o.err;
-}
 
 // Parses one JSON object (a failure, not an exception, when it is not one).
 Json parse_object(const std::string& text) {
