@@ -104,6 +104,10 @@ class Integrator {
   void eval_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
                       SparseMatrix* dfdv);
 
+  // M^-1 as a vector, computed once in initialize(): methods that fuse the
+  // acceleration into their own loop over the state multiply by it there.
+  const Vector& inv_mass() const { return inv_mass_; }
+
   const MechanicalSystem& system() const { return *system_; }
   const IntegratorOptions& options() const { return options_; }
   IntegratorStats& mutable_stats() { return stats_; }

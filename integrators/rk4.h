@@ -22,7 +22,9 @@ class RungeKutta4 final : public Integrator {
   StepResult do_step(double h) override;
 
  private:
-  Vector xs_, v2_, v3_, v4_, a1_, a2_, a3_, a4_;
+  // Stage state (xs_, vs_), the last force, and the running weighted sums
+  // of the stage velocities and accelerations.
+  Vector xs_, vs_, f_, sum_v_, sum_a_;
 };
 
 }  // namespace springlab

@@ -22,7 +22,7 @@ class SymplecticEuler final : public Integrator {
   StepResult do_step(double h) override;
 
  private:
-  Vector a_;
+  Vector f_;
 };
 
 }  // namespace springlab
