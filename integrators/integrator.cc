@@ -42,4 +42,10 @@ void Integrator::eval_jacobians(double t, const Vector& x, const Vector& v, Spar
   system_->jacobians(t, x, v, dfdx, dfdv);
 }
 
+void Integrator::eval_definite_jacobians(double t, const Vector& x, const Vector& v,
+                                         SparseMatrix* dfdx, SparseMatrix* dfdv) {
+  ++stats_.jacobian_evals;
+  system_->definite_jacobians(t, x, v, dfdx, dfdv);
+}
+
 }  // namespace springlab

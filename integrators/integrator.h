@@ -103,6 +103,9 @@ class Integrator {
   void eval_acceleration(double t, const Vector& x, const Vector& v, Vector& a);
   void eval_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
                       SparseMatrix* dfdv);
+  // The same, counted alike, of MechanicalSystem::definite_jacobians.
+  void eval_definite_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                               SparseMatrix* dfdv);
 
   // M^-1 as a vector, computed once in initialize(): methods that fuse the
   // acceleration into their own loop over the state multiply by it there.

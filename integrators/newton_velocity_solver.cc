@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace springlab {
@@ -20,9 +21,13 @@ double ImplicitIntegrator::converged_norm(const Vector& r) const {
 
 bool ImplicitIntegrator::factorize_newton_matrix(double t, const Vector& x, const Vector& v,
                                                  double h, double c, double b,
-                                                 std::string& error) {
+                                                 std::string& error, bool definite) {
   factor_h_ = 0.0;  // refresh() records what the new matrix is for
-  eval_jacobians(t, x, v, &dfdx_, &dfdv_);
+  if (definite) {
+    eval_definite_jacobians(t, x, v, &dfdx_, &dfdv_);
+  } else {
+    eval_jacobians(t, x, v, &dfdx_, &dfdv_);
+  }
   // All three share the model's pattern: combine value by value.
   if (jacobian_.nonZeros() != dfdx_.nonZeros()) jacobian_ = dfdx_;
   const Vector& m = system().mass();
@@ -66,27 +71,35 @@ constexpr double kMaxStepChange = 0.2;
 }  // namespace
 
 bool ImplicitIntegrator::refresh(double h, const VelocityImplicitScheme& s, const Vector& v,
-                                 std::string& error) {
+                                 bool definite, std::string& error) {
   xs_ = x_ + h * (s.a * v_ + s.b * v);
   vs_ = (1.0 - s.c) * v_ + s.c * v;
-  if (!factorize_newton_matrix(t_ + s.t_eval_offset * h, xs_, vs_, h, s.c, s.b, error)) {
+  if (!factorize_newton_matrix(t_ + s.t_eval_offset * h, xs_, vs_, h, s.c, s.b, error, definite)) {
     return false;
   }
   factor_h_ = h;
   factor_b_ = s.b;
   factor_c_ = s.c;
+  factor_definite_ = definite;
   return true;
 }
 
 StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitScheme& s,
                                               Vector& v) {
-  StepResult result = newton(h, s, v, /*keep_matrix=*/true);
+  // On the incremental potential when the forces derive from potentials,
+  // else on ||r||: first with kept matrices, then with a fresh one at every
+  // iteration (the classic Newton-Raphson) -- kept matrices lead Newton along
+  // another path than fresh ones -- and, if the potential path fails too (a
+  // term whose projected stiffness is not definite), the classic one on ||r||.
+  const bool potential = system().derives_from_potentials() && s.b > 0.0 && s.c > 0.0;
+  StepResult result = newton(h, s, v, /*keep_matrix=*/true, potential);
   if (!result.ok) {
-    // Kept matrices lead Newton along another path than fresh ones, and the
-    // line search on ||r|| can stall on either: redo the step the classic
-    // way, with a fresh matrix at every iteration, before calling it failed.
     factor_h_ = 0.0;
-    result = newton(h, s, v, /*keep_matrix=*/false);
+    result = newton(h, s, v, /*keep_matrix=*/false, potential);
+  }
+  if (!result.ok && potential) {
+    factor_h_ = 0.0;
+    result = newton(h, s, v, /*keep_matrix=*/false, /*potential=*/false);
   }
   if (!result.ok) {
     ++mutable_stats().nonlinear_failures;
@@ -95,19 +108,34 @@ StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitSc
   return result;
 }
 
+double ImplicitIntegrator::merit(double h, const VelocityImplicitScheme& s, const Vector& v,
+                                 double& magnitude) const {
+  // xs_ and vs_ are those of the last residual(), at this v.
+  const double t = t_ + s.t_eval_offset * h;
+  const double inertia = 0.5 * (v - v_).cwiseAbs2().dot(system().mass());
+  const double stored = system().position_potential(t, xs_) / s.b;
+  const double dissipated = h / s.c * system().velocity_potential(t, vs_);
+  magnitude = inertia + std::abs(stored) + std::abs(dissipated);
+  return inertia + stored + dissipated;
+}
+
 StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s, Vector& v,
-                                      bool keep_matrix) {
+                                      bool keep_matrix, bool potential) {
   auto fail = [&](const std::string& why) {
     std::ostringstream message;
     message << name() << ": Newton failed at t = " << t_ << " (h = " << h << "): " << why;
     return StepResult::failure(message.str());
   };
   std::string error;
-  // `exact`: the kept matrix is the Jacobian at the current iterate v, so its
-  // update is a true Newton update.
+  // `exact`: the kept matrix is the one made at the current iterate v (on the
+  // potential path: the definite part of the Jacobian there).
   bool exact = false;
-  auto make_exact = [&]() {
-    if (!refresh(h, s, v, error)) return false;
+  // Far from the root, where the Jacobian's update needed a line search, the
+  // definite part of the Jacobian leads the way (longer steps); near it, the
+  // Jacobian itself (quadratic convergence).
+  bool prefer_definite = false;
+  auto make_exact = [&](bool definite = false) {
+    if (!refresh(h, s, v, definite || prefer_definite, error)) return false;
     exact = true;
     return true;
   };
@@ -115,9 +143,11 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   const double tol = options().newton_tol;
   v = v_;
   residual(h, s, v, r_);
+  double magnitude = 0.0, magnitude_try = 0.0;
+  double phi = potential ? merit(h, s, v, magnitude) : 0.0;
   const bool kept_fits = factor_h_ > 0.0 && factor_b_ == s.b && factor_c_ == s.c &&
                          std::abs(h / factor_h_ - 1.0) <= kMaxStepChange;
-  const bool refresh_first = !kept_fits || refresh_next_step_;
+  bool refresh_first = !kept_fits || refresh_next_step_;
   refresh_next_step_ = false;
   double previous_update = 0.0;  // ||dv||_inf of the last full update with the kept matrix
   double rate = 0.0;             // observed contraction rate (0: not observed yet)
@@ -134,9 +164,10 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
           << ", tolerance " << tol << ")";
       return fail(why.str());
     }
-    if (((iteration == 0 && refresh_first) || (!keep_matrix && !exact)) && !make_exact()) {
+    if ((refresh_first || (!keep_matrix && !exact)) && !make_exact()) {
       return fail("Newton matrix is singular (" + error + ")");
     }
+    refresh_first = false;
 
     bool finite = solve_newton_system(-r_, dv_);
     double update = dv_.lpNorm<Eigen::Infinity>();
@@ -160,6 +191,22 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       update = dv_.lpNorm<Eigen::Infinity>();
     }
     if (!finite) return fail("the Newton update is not finite");
+    // The slope of the merit function along dv: negative with a positive
+    // definite matrix, fresh or kept.
+    const double slope = r_.dot(dv_);
+    if (potential && !(slope < 0.0)) {
+      // The Jacobian is indefinite (compressed springs) and its update
+      // climbs the potential: take the update of its definite part instead.
+      if (exact && factor_definite_) {
+        return fail("the Newton update does not descend the incremental potential");
+      }
+      if (!make_exact(/*definite=*/exact)) {
+        return fail("Newton matrix is singular (" + error + ")");
+      }
+      previous_update = 0.0;
+      rate = 0.0;
+      continue;
+    }
     if (previous_update > 0.0) rate = update / previous_update;
 
     // The update shows the error left after it below the tolerance: take it
@@ -174,14 +221,30 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       return StepResult::success();
     }
 
-    // The full update, if it decreases ||r||_2; else a kept matrix is
-    // refactorized and the iteration redone, an exact one backtracks.
+    // Whether the update scaled by alpha is taken: on the potential path,
+    // when the incremental potential decreases by 1e-4 of its first-order
+    // prediction (Armijo) -- or, once that prediction is below the
+    // potential's round-off, when ||r|| decreases; on the other path, when
+    // ||r|| decreases by 1e-4 alpha.
     const double r_norm = r_.norm();
+    double phi_try = 0.0;
+    auto accept = [&](double alpha) {
+      const double r_try_norm = r_try_.norm();
+      if (!std::isfinite(r_try_norm)) return false;
+      const bool residual_decreases = r_try_norm <= (1.0 - 1e-4 * alpha) * r_norm;
+      if (!potential) return residual_decreases;
+      phi_try = merit(h, s, v_try_, magnitude_try);
+      if (!std::isfinite(phi_try)) return false;
+      if (phi_try - phi <= 1e-4 * alpha * slope) return true;
+      const double noise = 1e3 * std::numeric_limits<double>::epsilon() *
+                           std::max(magnitude, magnitude_try);
+      return alpha * -slope <= noise && residual_decreases;
+    };
     v_try_ = v + dv_;
     residual(h, s, v_try_, r_try_);
-    double r_try_norm = r_try_.norm();
-    if (std::isfinite(r_try_norm) && r_try_norm <= (1.0 - 1e-4) * r_norm) {
+    if (accept(1.0)) {
       previous_update = update;
+      if (exact && factor_definite_) prefer_definite = false;
     } else if (!exact) {
       // Refused at the first iteration: the kept matrix is too old for this
       // motion; the next step starts with a fresh one instead of trying it.
@@ -197,8 +260,8 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
         if (alpha < 1.0 / 1024.0) return fail("the line search could not reduce the residual");
         v_try_ = v + alpha * dv_;
         residual(h, s, v_try_, r_try_);
-        r_try_norm = r_try_.norm();
-      } while (!(std::isfinite(r_try_norm) && r_try_norm <= (1.0 - 1e-4 * alpha) * r_norm));
+      } while (!accept(alpha));
+      if (potential) prefer_definite = true;
       previous_update = 0.0;  // a partial update says nothing of the contraction rate
       rate = 0.0;
     }
@@ -206,6 +269,8 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     ++iteration;
     v.swap(v_try_);
     r_.swap(r_try_);
+    phi = phi_try;
+    magnitude = magnitude_try;
     exact = false;
   }
   refresh_next_step_ = refresh_next_step_ || (!exact && rate > kRefreshNextStep);

@@ -28,13 +28,25 @@
 // The residual is always the exact one, so the root is the same as with a
 // fresh matrix; only the path to it changes.
 //
-// With a fresh matrix, an update that fails to decrease ||r|| backtracks
-// (alpha = 1, 1/2, ... 1/1024) until ||r|| decreases by at least 1e-4 alpha:
-// the exact Newton direction is a descent direction for ||r||^2 whether or
-// not J is definite, which it is not when springs are compressed. That line
-// search can still stall (a local minimum of ||r||), on either path: a step
-// that fails with kept matrices is solved again with a fresh matrix at every
-// iteration (the classic Newton-Raphson) before the failure is reported.
+// The line search. When every force derives from potentials (Mechanical-
+// System::derives_from_potentials), r is the gradient of the step's
+// incremental potential
+//   Phi(v) = |v - v_n|^2_M / 2 + V(x*(v)) / b + (h / c) W(t*, v*(v)),
+// and Newton minimizes it: an update is taken when Phi decreases by at least
+// 1e-4 of its first-order prediction (Armijo; below Phi's round-off, when
+// ||r|| decreases), else a fresh matrix backtracks (alpha = 1, 1/2, ...
+// 1/1024). Phi is not convex where springs are compressed, and there the
+// Jacobian's update may climb it: then, and for the rest of the solve once a
+// line search was needed, the matrix is made of the definite part of the
+// Jacobian (MechanicalSystem::definite_jacobians), whose updates always
+// descend; a full update taken with it goes back to the Jacobian, which
+// converges quadratically near the root. Without such a potential (spring
+// damping), the merit function is ||r||^2, for which the exact Newton update
+// is a descent direction whether or not J is definite -- but that search can
+// stall at a local minimum of ||r||. A step that fails with kept matrices is
+// solved again with a fresh matrix at every iteration (the classic
+// Newton-Raphson), and a potential-path failure once more on ||r||, before
+// the failure is reported.
 //
 // Converged when ||M^-1 r||_inf <= newton_tol * max(1, ||v||_inf) (a
 // velocity, in m/s), or when the update dv just taken shows the remaining
@@ -72,8 +84,10 @@ class ImplicitIntegrator : public Integrator {
 
   // Assembles J = M - h c dF/dv - h^2 b dF/dx at the given point and
   // factorizes it; false (with message) when it is singular.
+  // With `definite`, of the definite part of the Jacobians (MechanicalSystem::
+  // definite_jacobians), which makes J positive definite.
   bool factorize_newton_matrix(double t, const Vector& x, const Vector& v, double h, double c,
-                               double b, std::string& error);
+                               double b, std::string& error, bool definite = false);
   // dv = J^-1 rhs with the last factorization.
   bool solve_newton_system(const Vector& rhs, Vector& dv);
   // dF/dx from the last factorize_newton_matrix().
@@ -82,14 +96,22 @@ class ImplicitIntegrator : public Integrator {
  private:
   void residual(double h, const VelocityImplicitScheme& s, const Vector& v, Vector& r);
   double converged_norm(const Vector& r) const;
-  // One Newton solve; keep_matrix false: a fresh matrix at every iteration.
-  StepResult newton(double h, const VelocityImplicitScheme& s, Vector& v, bool keep_matrix);
+  // The incremental potential at v, whose gradient is r(v) (after residual()
+  // at this v), and the sum of its parts' magnitudes (its round-off scale).
+  double merit(double h, const VelocityImplicitScheme& s, const Vector& v,
+               double& magnitude) const;
+  // One Newton solve; keep_matrix false: a fresh matrix at every iteration;
+  // potential: definite matrices, line search on the incremental potential.
+  StepResult newton(double h, const VelocityImplicitScheme& s, Vector& v, bool keep_matrix,
+                    bool potential);
   // Factorizes the Newton matrix at iterate v of the step (x_n, v_n, h).
-  bool refresh(double h, const VelocityImplicitScheme& s, const Vector& v, std::string& error);
+  bool refresh(double h, const VelocityImplicitScheme& s, const Vector& v, bool definite,
+               std::string& error);
 
   // The kept factorization: made for step size factor_h_ and weights
   // (b, c) = (factor_b_, factor_c_); none when factor_h_ == 0.
   double factor_h_ = 0.0, factor_b_ = 0.0, factor_c_ = 0.0;
+  bool factor_definite_ = false;
   bool refresh_next_step_ = false;
   double last_rate_ = 0.0;  // contraction rate observed at the end of the last solve
 

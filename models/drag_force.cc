@@ -1,5 +1,6 @@
 // Drag, the course's F^dp = -gamma v, on every free particle (SPEC §2).
 // dF/dv = -gamma I (diagonal), dF/dx = 0. Dissipates power gamma |v|^2.
+// Derives from the dissipation potential W(v) = gamma |v|^2 / 2.
 #include <memory>
 #include <vector>
 
@@ -19,6 +20,14 @@ class DragForce final : public ForceTerm {
 
   void add_force(const Configuration& c, double* f) const override {
     for (int k = 0; k < free_dofs_; ++k) f[k] -= gamma_ * c.v[k];
+  }
+
+  // F = -dW/dv with W = gamma |v|^2 / 2.
+  bool derives_from_potentials() const override { return true; }
+  double velocity_potential(const Configuration& c) const override {
+    double sum = 0.0;
+    for (int k = 0; k < free_dofs_; ++k) sum += c.v[k] * c.v[k];
+    return 0.5 * gamma_ * sum;
   }
 
   void bind_jacobian(const SparseMatrix& pattern) override { diagonal_ = diagonal_slots(pattern); }

@@ -127,6 +127,18 @@ class ForceTerm {
   virtual void declare_jacobian_blocks(JacobianPatternBuilder&) const {}
   virtual void bind_jacobian(const SparseMatrix& /*pattern*/) {}
   virtual void add_jacobians(const Configuration&, double* /*dfdx*/, double* /*dfdv*/) const {}
+  // dF/dx made negative semidefinite where it is not (MechanicalSystem::
+  // definite_jacobians); a term whose dF/dx always is one keeps the default.
+  virtual void add_definite_stiffness(const Configuration& c, double* dfdx) const {
+    add_jacobians(c, dfdx, nullptr);
+  }
+
+  // Whether F = -d potential_energy/dx - d velocity_potential/dv, with the
+  // velocity potential W(t, v) a function of t and v alone (see
+  // MechanicalSystem::derives_from_potentials). Conservative terms do;
+  // dissipative ones that do (drag, wind) say so and supply W.
+  virtual bool derives_from_potentials() const { return conservative(); }
+  virtual double velocity_potential(const Configuration&) const { return 0.0; }
 };
 
 }  // namespace springlab

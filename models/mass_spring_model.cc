@@ -80,6 +80,7 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
   for (const auto& term : terms_) {
     term->bind_jacobian(pattern_);
     symmetric_ = symmetric_ && term->symmetric_jacobians();
+    derives_from_potentials_ = derives_from_potentials_ && term->derives_from_potentials();
     velocity_dependence_ = std::max(velocity_dependence_, term->velocity_dependence());
   }
   reads_velocity_ = velocity_dependence_ != VelocityDependence::kNone;
@@ -140,6 +141,40 @@ void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vec
 
 void MassSpringModel::jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
                                 SparseMatrix* dfdx, SparseMatrix* dfdv) const {
+  assemble_jacobians(part, /*definite=*/false, t, x, v, dfdx, dfdv);
+}
+
+void MassSpringModel::definite_jacobians(double t, const Vector& x, const Vector& v,
+                                         SparseMatrix* dfdx, SparseMatrix* dfdv) const {
+  assemble_jacobians(ForcePart::kAll, /*definite=*/true, t, x, v, dfdx, dfdv);
+}
+
+double MassSpringModel::position_potential(double t, const Vector& x) const {
+  if (!derives_from_potentials_) return 0.0;
+  const Configuration c = configure(t, x, v0_);
+  double sum = 0.0;
+  for (const auto& term : terms_) sum += term->potential_energy(c);
+  return sum;
+}
+
+double MassSpringModel::velocity_potential(double t, const Vector& v) const {
+  if (!derives_from_potentials_) return 0.0;
+  // The terms read c.v only; c.x is whatever configure() last stored.
+  if (reads_velocity_) v_all_.head(dofs()) = v;
+  Configuration c;
+  c.t = t;
+  c.x = x_all_.data();
+  c.v = reads_velocity_ ? v_all_.data() : nullptr;
+  c.dim = order_.dim;
+  c.free_particles = order_.free_particles;
+  double sum = 0.0;
+  for (const auto& term : terms_) sum += term->velocity_potential(c);
+  return sum;
+}
+
+void MassSpringModel::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
+                                         const Vector& v, SparseMatrix* dfdx,
+                                         SparseMatrix* dfdv) const {
   const Configuration c = configure(t, x, v);
   for (SparseMatrix* m : {dfdx, dfdv}) {
     if (m == nullptr) continue;
@@ -149,7 +184,13 @@ void MassSpringModel::jacobians(ForcePart part, double t, const Vector& x, const
   double* dx = dfdx != nullptr ? dfdx->valuePtr() : nullptr;
   double* dv = dfdv != nullptr ? dfdv->valuePtr() : nullptr;
   for (const auto& term : terms_) {
-    if (in_part(*term, part)) term->add_jacobians(c, dx, dv);
+    if (!in_part(*term, part)) continue;
+    if (definite) {
+      if (dx != nullptr) term->add_definite_stiffness(c, dx);
+      if (dv != nullptr) term->add_jacobians(c, nullptr, dv);
+    } else {
+      term->add_jacobians(c, dx, dv);
+    }
   }
 }
 

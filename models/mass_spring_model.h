@@ -37,6 +37,11 @@ class MassSpringModel final : public MechanicalSystem {
              Vector& f) const override;
   void jacobians(ForcePart part, double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
                  SparseMatrix* dfdv) const override;
+  void definite_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                          SparseMatrix* dfdv) const override;
+  bool derives_from_potentials() const override { return derives_from_potentials_; }
+  double position_potential(double t, const Vector& x) const override;
+  double velocity_potential(double t, const Vector& v) const override;
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
@@ -67,6 +72,8 @@ class MassSpringModel final : public MechanicalSystem {
 
  private:
   Configuration configure(double t, const Vector& x, const Vector& v) const;
+  void assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
+                          const Vector& v, SparseMatrix* dfdx, SparseMatrix* dfdv) const;
 
   Scene scene_;
   ParticleOrder order_;
@@ -75,6 +82,7 @@ class MassSpringModel final : public MechanicalSystem {
   std::vector<std::unique_ptr<ForceTerm>> terms_;
   SparseMatrix pattern_;
   bool symmetric_ = true;
+  bool derives_from_potentials_ = true;
   VelocityDependence velocity_dependence_ = VelocityDependence::kNone;
   double energy_scale_ = 0.0;
 

@@ -56,6 +56,28 @@ class MechanicalSystem {
     jacobians(ForcePart::kAll, t, x, v, dfdx, dfdv);
   }
 
+  // dF/dx and dF/dv as jacobians(), except that each force replaces an
+  // indefinite dF/dx by the nearest negative semidefinite one it can give
+  // (a compressed spring drops its negative transverse stiffness), so that
+  // M - a dF/dv - b dF/dx is positive definite for a, b >= 0: the implicit
+  // methods' Newton matrix, whose steps are then descent directions of the
+  // incremental potential below.
+  virtual void definite_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                                  SparseMatrix* dfdv) const = 0;
+
+  // When every force derives from potentials,
+  //   F(t, x, v) = -dV/dx (t, x) - dW/dv (t, v),
+  // V the stored energy (springs, gravity) and W a dissipation potential of v
+  // alone (drag: gamma |v|^2 / 2, wind: c |v - w(t)|^2 / 2), the residual of
+  // an implicit step is the gradient of a scalar (its incremental potential)
+  // that Newton can minimize: the merit function of its line search. False
+  // when some force has no such form (spring damping depends on x and v
+  // together).
+  virtual bool derives_from_potentials() const = 0;
+  // V(t, x) and W(t, v); zero when !derives_from_potentials().
+  virtual double position_potential(double t, const Vector& x) const = 0;
+  virtual double velocity_potential(double t, const Vector& v) const = 0;
+
   // The shared pattern (union of both Jacobians' entries plus the full
   // diagonal), values all zero. Built once per scene.
   virtual const SparseMatrix& jacobian_pattern() const = 0;

@@ -156,7 +156,14 @@ class SpringForce final : public ForceTerm {
 
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx == nullptr) return;
-    if (dim_ == 2) add_stiffness_d<2>(c, dfdx); else add_stiffness_d<3>(c, dfdx);
+    if (dim_ == 2) add_stiffness_d<2, false>(c, dfdx); else add_stiffness_d<3, false>(c, dfdx);
+  }
+
+  // K = k u u^T + k (1 - L/l) (I - u u^T) is indefinite when the spring is
+  // compressed (l < L): the transverse term is clamped at 0, which leaves
+  // the positive semidefinite K = k u u^T.
+  void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
+    if (dim_ == 2) add_stiffness_d<2, true>(c, dfdx); else add_stiffness_d<3, true>(c, dfdx);
   }
 
  private:
@@ -211,17 +218,17 @@ class SpringForce final : public ForceTerm {
     }
   }
 
-  template <int D>
+  template <int D, bool kDefinite>
   void add_stiffness_d(const Configuration& c, double* values) const {
     for (std::size_t n = 0; n < springs_.size(); ++n) {
       const SpringData& s = springs_[n];
       double K[D][D];
-      spring_stiffness<D>(c.x + s.a * D, c.x + s.b * D, s.k, s.rest, K);
+      spring_stiffness<D, kDefinite>(c.x + s.a * D, c.x + s.b * D, s.k, s.rest, K);
       add_pair_blocks<D>(values, slots_[n], K, -1.0);  // dF_a/dx_a = -K
     }
   }
 
-  template <int D>
+  template <int D, bool kDefinite>
   static void spring_stiffness(const double* xa, const double* xb, double k, double rest,
                                double (&K)[D][D]) {
     double d[D];
@@ -239,7 +246,8 @@ class SpringForce final : public ForceTerm {
         for (int q = 0; q < D; ++q) K[r][q] = r == q ? diag : 0.0;
       return;
     }
-    const double transverse = k * (1.0 - rest / l);
+    double transverse = k * (1.0 - rest / l);
+    if (kDefinite && transverse < 0.0) transverse = 0.0;
     const double axial_minus_transverse = k - transverse;  // k L / l
     for (int r = 0; r < D; ++r) {
       for (int q = 0; q < D; ++q) {

@@ -23,15 +23,29 @@ class WindForce final : public ForceTerm {
   VelocityDependence velocity_dependence() const override { return VelocityDependence::kDiagonal; }
 
   void add_force(const Configuration& c, double* f) const override {
-    const double gust = 1.0 + wind_.gust * std::sin(2.0 * std::numbers::pi * wind_.frequency * c.t);
     double w[3];
-    for (int r = 0; r < dim_; ++r) w[r] = wind_.velocity[r] * gust;
+    wind_at(c.t, w);
     for (int p = 0; p < free_particles_; ++p) {
       for (int r = 0; r < dim_; ++r) {
         const int k = p * dim_ + r;
         f[k] += wind_.coefficient * (w[r] - c.v[k]);
       }
     }
+  }
+
+  // F = -dW/dv with W(t, v) = c_w sum_i |v_i - w(t)|^2 / 2.
+  bool derives_from_potentials() const override { return true; }
+  double velocity_potential(const Configuration& c) const override {
+    double w[3];
+    wind_at(c.t, w);
+    double sum = 0.0;
+    for (int p = 0; p < free_particles_; ++p) {
+      for (int r = 0; r < dim_; ++r) {
+        const double relative = c.v[p * dim_ + r] - w[r];
+        sum += relative * relative;
+      }
+    }
+    return 0.5 * wind_.coefficient * sum;
   }
 
   void bind_jacobian(const SparseMatrix& pattern) override { diagonal_ = diagonal_slots(pattern); }
@@ -42,6 +56,11 @@ class WindForce final : public ForceTerm {
   }
 
  private:
+  void wind_at(double t, double (&w)[3]) const {
+    const double gust = 1.0 + wind_.gust * std::sin(2.0 * std::numbers::pi * wind_.frequency * t);
+    for (int r = 0; r < dim_; ++r) w[r] = wind_.velocity[r] * gust;
+  }
+
   Wind wind_;
   int dim_;
   int free_particles_;

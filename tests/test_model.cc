@@ -4,6 +4,8 @@
 // conservative terms.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <random>
 
 #include "models/mass_spring_model.h"
@@ -123,6 +125,66 @@ TEST_P(ModelDerivatives, DampingDissipatesAndSymmetryIsReported) {
                      nullptr);
   const Eigen::MatrixXd K(dfdx);
   EXPECT_LT((K - K.transpose()).norm(), 1e-12 * K.norm());
+}
+
+// Without spring damping every force derives from potentials: F = -dV/dx
+// (springs, gravity) - dW/dv (drag, wind), the form the implicit methods'
+// line search minimizes; spring damping (x and v together) has none.
+TEST_P(ModelDerivatives, ForceIsMinusGradientOfBothPotentials) {
+  const int dim = GetParam();
+  Scene s = random_scene(dim, 5);
+  EXPECT_FALSE(MassSpringModel(s).derives_from_potentials());
+  for (Spring& spring : s.springs) spring.damping = 0.0;
+  const MassSpringModel model(s);
+  ASSERT_TRUE(model.derives_from_potentials());
+  const double t = 0.8;
+  const Vector x = model.initial_positions();
+  const Vector v = model.initial_velocities();
+  Vector f;
+  model.force(t, x, v, f);
+  const double eps = 1e-6;
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    Vector xp = x, xm = x, vp = v, vm = v;
+    xp[k] += eps;
+    xm[k] -= eps;
+    vp[k] += eps;
+    vm[k] -= eps;
+    const double dV = (model.position_potential(t, xp) - model.position_potential(t, xm)) / (2 * eps);
+    const double dW = (model.velocity_potential(t, vp) - model.velocity_potential(t, vm)) / (2 * eps);
+    EXPECT_NEAR(f[k], -dV - dW, 1e-6 * (1.0 + std::abs(f[k]))) << "coordinate " << k;
+  }
+}
+
+// definite_jacobians: dF/dx negative semidefinite where the exact one is not
+// (the random scenes compress springs), dF/dv unchanged, and the exact dF/dx
+// itself once no spring is compressed.
+TEST_P(ModelDerivatives, DefiniteJacobianDropsOnlyTheIndefinitePart) {
+  const int dim = GetParam();
+  Scene s = random_scene(dim, 2);
+  for (Spring& spring : s.springs) spring.damping = 0.0;
+  const MassSpringModel model(s);
+  const Vector x = model.initial_positions();
+  const Vector v = model.initial_velocities();
+  SparseMatrix dfdx, dfdv, definite_dfdx, definite_dfdv;
+  model.jacobians(0.0, x, v, &dfdx, &dfdv);
+  model.definite_jacobians(0.0, x, v, &definite_dfdx, &definite_dfdv);
+  const auto lowest = [](const SparseMatrix& m) {
+    const Eigen::MatrixXd stiffness = -Eigen::MatrixXd(m);
+    return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(stiffness).eigenvalues()[0];
+  };
+  const double scale = Eigen::MatrixXd(dfdx).norm();
+  ASSERT_LT(lowest(dfdx), -1e-3 * scale) << "the scene must make -dF/dx indefinite";
+  EXPECT_GT(lowest(definite_dfdx), -1e-12 * scale);
+  EXPECT_EQ(Eigen::MatrixXd(definite_dfdv), Eigen::MatrixXd(dfdv));
+
+  for (Spring& spring : s.springs) {
+    const double l = (s.particles[spring.i].x - s.particles[spring.j].x).norm();
+    spring.rest = std::min(spring.rest, 0.9 * l);  // none compressed
+  }
+  const MassSpringModel stretched(s);
+  stretched.jacobians(0.0, x, v, &dfdx, nullptr);
+  stretched.definite_jacobians(0.0, x, v, &definite_dfdx, nullptr);
+  EXPECT_EQ(Eigen::MatrixXd(definite_dfdx), Eigen::MatrixXd(dfdx));
 }
 
 INSTANTIATE_TEST_SUITE_P(Dimensions, ModelDerivatives, ::testing::Values(2, 3),
