@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "experiments/definition.h"
+#include "csv_fields.h"
 #include "experiments/experiment.h"
 #include "experiments/experiment_runner.h"
 
@@ -37,27 +38,8 @@ using Record = std::map<std::string, std::string>;
 
 // ---------------------------------------------------------------- helpers --
 
-// The project never writes quoted fields for the built-in scenes used here.
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> fields(1);
-  for (char c : line) {
-    if (c == ',') {
-      fields.emplace_back();
-    } else {
-      fields.back() += c;
-    }
-  }
-  return fields;
-}
-
-double number(const std::string& field) {
-  EXPECT_FALSE(field.empty()) << "expected a number, got an empty field";
-  if (field.empty()) return std::nan("");
-  std::size_t end = 0;
-  const double value = std::stod(field, &end);
-  EXPECT_EQ(end, field.size()) << "not a number: '" << field << "'";
-  return value;
-}
+std::vector<std::string> split(const std::string& line) { return csv_fields::split_fields(line); }
+double number(const std::string& field) { return csv_fields::field_number(field); }
 
 bool close(double a, double b, double rel) {
   return std::abs(a - b) <= rel * std::max(std::abs(a), std::abs(b));

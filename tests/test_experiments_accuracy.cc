@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "csv_fields.h"
 #include "experiments/experiment.h"
 #include "integrators/registry.h"
 
@@ -31,25 +32,8 @@ const std::vector<std::string> kWorkPrecisionColumns = {
     "scene", "integrator", "adaptive", "parameter", "value", "error", "wall_seconds",
     "force_evals", "steps", "status"};
 
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> fields(1);
-  for (char c : line) {
-    if (c == ',') {
-      fields.emplace_back();
-    } else {
-      fields.back() += c;
-    }
-  }
-  return fields;
-}
-
-double number(const std::string& field) {
-  if (field.empty()) return std::nan("");
-  std::size_t end = 0;
-  const double value = std::stod(field, &end);
-  EXPECT_EQ(end, field.size()) << "not a number: '" << field << "'";
-  return value;
-}
+std::vector<std::string> split(const std::string& line) { return csv_fields::split_fields(line); }
+double number(const std::string& field) { return csv_fields::field_number(field, /*empty_allowed=*/true); }
 
 // Runs one task and returns its rows of every table as column -> field.
 std::vector<std::vector<Record>> run(const LoadedExperiment& loaded, std::size_t task) {
