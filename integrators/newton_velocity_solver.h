@@ -113,7 +113,6 @@ class ImplicitIntegrator : public Integrator {
   double factor_h_ = 0.0, factor_b_ = 0.0, factor_c_ = 0.0;
   bool factor_definite_ = false;
   bool refresh_next_step_ = false;
-  double last_rate_ = 0.0;  // contraction rate observed at the end of the last solve
 
   SparseMatrix dfdx_, dfdv_, jacobian_;
   SparseDirectSolver solver_;
