@@ -23,20 +23,28 @@ bool ImplicitIntegrator::factorize_newton_matrix(double t, const Vector& x, cons
                                                  double h, double c, double b,
                                                  std::string& error, bool definite) {
   factor_h_ = 0.0;  // refresh() records what the new matrix is for
+  // No force depends on v: dF/dv = 0 is neither assembled nor stored (on
+  // cloth n = 128, 23 MB of values and indices).
+  SparseMatrix* dfdv =
+      system().velocity_dependence() == VelocityDependence::kNone ? nullptr : &dfdv_;
   if (definite) {
-    eval_definite_jacobians(t, x, v, &dfdx_, &dfdv_);
+    eval_definite_jacobians(t, x, v, &dfdx_, dfdv);
   } else {
-    eval_jacobians(t, x, v, &dfdx_, &dfdv_);
+    eval_jacobians(t, x, v, &dfdx_, dfdv);
   }
   // All three share the model's pattern: combine value by value.
   if (jacobian_.nonZeros() != dfdx_.nonZeros()) jacobian_ = dfdx_;
   const Vector& m = system().mass();
   const Eigen::Index nnz = dfdx_.nonZeros();
   const double* px = dfdx_.valuePtr();
-  const double* pv = dfdv_.valuePtr();
   double* pj = jacobian_.valuePtr();
   const double cx = -h * h * b, cv = -h * c;
-  for (Eigen::Index k = 0; k < nnz; ++k) pj[k] = cx * px[k] + cv * pv[k];
+  if (dfdv != nullptr) {
+    const double* pv = dfdv_.valuePtr();
+    for (Eigen::Index k = 0; k < nnz; ++k) pj[k] = cx * px[k] + cv * pv[k];
+  } else {
+    for (Eigen::Index k = 0; k < nnz; ++k) pj[k] = cx * px[k];
+  }
   jacobian_.diagonal() += m;
   ++mutable_stats().factorizations;
   if (!solver_.factorize(jacobian_, system().jacobian_symmetric())) {
@@ -54,6 +62,7 @@ bool ImplicitIntegrator::solve_newton_system(const Vector& rhs, Vector& dv) {
 StepResult ImplicitIntegrator::do_initialize() {
   solver_.reset();
   jacobian_ = SparseMatrix();
+  dfdv_ = SparseMatrix();  // the next system may not need it
   factor_h_ = 0.0;
   refresh_next_step_ = false;
   return StepResult::success();
