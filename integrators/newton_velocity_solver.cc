@@ -266,7 +266,10 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       double alpha = 1.0;
       do {
         alpha *= 0.5;
-        if (alpha < 1.0 / 1024.0) return fail("the line search could not reduce the residual");
+        if (alpha < 1.0 / 1024.0) {
+          return fail(potential ? "the line search could not decrease the incremental potential"
+                                : "the line search could not reduce the residual");
+        }
         v_try_ = v + alpha * dv_;
         residual(h, s, v_try_, r_try_);
       } while (!accept(alpha));
