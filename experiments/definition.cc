@@ -150,7 +150,11 @@ Scene definition_scene(const DefinitionObject& o,
   if (!std::filesystem::is_regular_file(path)) {
     o.fail("scene", "'" + name + "' is neither a built-in scene nor a file next to the definition");
   }
-  return load_scene_file(path.string());
+  try {
+    return load_scene_file(path.string());
+  } catch (const SceneError& e) {
+    o.fail("scene", e.what());  // the definition's file and key, then the scene's
+  }
 }
 
 std::vector<std::string> definition_integrators(const DefinitionObject& o, const char* key,
