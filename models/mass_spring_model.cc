@@ -114,10 +114,7 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
                   free_mass * (scene_.gravity.norm() * diameter + 0.5 * w_max * w_max);
 }
 
-Configuration MassSpringModel::configure(double t, const Vector& x, const Vector& v) const {
-  const Eigen::Index n = dofs();
-  x_all_.head(n) = x;
-  if (reads_velocity_) v_all_.head(n) = v;
+Configuration MassSpringModel::stored_configuration(double t) const {
   Configuration c;
   c.t = t;
   c.x = x_all_.data();
@@ -125,6 +122,13 @@ Configuration MassSpringModel::configure(double t, const Vector& x, const Vector
   c.dim = order_.dim;
   c.free_particles = order_.free_particles;
   return c;
+}
+
+Configuration MassSpringModel::configure(double t, const Vector& x, const Vector& v) const {
+  const Eigen::Index n = dofs();
+  x_all_.head(n) = x;
+  if (reads_velocity_) v_all_.head(n) = v;
+  return stored_configuration(t);
 }
 
 void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
@@ -149,24 +153,21 @@ void MassSpringModel::definite_jacobians(double t, const Vector& x, const Vector
   assemble_jacobians(ForcePart::kAll, /*definite=*/true, t, x, v, dfdx, dfdv);
 }
 
+// The potentials read only the half of the configuration they depend on:
+// each sets that half, the other holds whatever was stored last.
 double MassSpringModel::position_potential(double t, const Vector& x) const {
   if (!derives_from_potentials_) return 0.0;
-  const Configuration c = configure(t, x, v0_);
+  x_all_.head(dofs()) = x;
+  const Configuration c = stored_configuration(t);
   double sum = 0.0;
   for (const auto& term : terms_) sum += term->potential_energy(c);
   return sum;
 }
 
 double MassSpringModel::velocity_potential(double t, const Vector& v) const {
-  if (!derives_from_potentials_) return 0.0;
-  // The terms read c.v only; c.x is whatever configure() last stored.
-  if (reads_velocity_) v_all_.head(dofs()) = v;
-  Configuration c;
-  c.t = t;
-  c.x = x_all_.data();
-  c.v = reads_velocity_ ? v_all_.data() : nullptr;
-  c.dim = order_.dim;
-  c.free_particles = order_.free_particles;
+  if (!derives_from_potentials_ || !reads_velocity_) return 0.0;  // no term has a W
+  v_all_.head(dofs()) = v;
+  const Configuration c = stored_configuration(t);
   double sum = 0.0;
   for (const auto& term : terms_) sum += term->velocity_potential(c);
   return sum;

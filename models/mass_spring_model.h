@@ -72,6 +72,8 @@ class MassSpringModel final : public MechanicalSystem {
 
  private:
   Configuration configure(double t, const Vector& x, const Vector& v) const;
+  // The configuration of what x_all_ and v_all_ hold now.
+  Configuration stored_configuration(double t) const;
   void assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
                           const Vector& v, SparseMatrix* dfdx, SparseMatrix* dfdv) const;
 
