@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "csv_fields.h"
 #include "run_process.h"
 
 #ifndef SPRINGLAB_EXE
@@ -111,39 +112,7 @@ Json parse_object(const std::string& text) {
   return j;
 }
 
-struct Csv {
-  std::string header;
-  std::vector<std::vector<double>> rows;
-};
-
-// Reads a CSV of numbers; every cell must be a whole number token.
-Csv read_csv(const fs::path& path) {
-  Csv csv;
-  const std::string text = read_text(path);
-  EXPECT_FALSE(text.empty()) << path;
-  if (text.empty()) return csv;
-  EXPECT_EQ(text.back(), '\n') << path << ": last line not terminated";
-  std::istringstream lines(text);
-  std::getline(lines, csv.header);
-  std::string line;
-  while (std::getline(lines, line)) {
-    std::vector<double> row;
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = line.find(',', start);
-      const std::string cell = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-      char* end = nullptr;
-      const double value = std::strtod(cell.c_str(), &end);
-      EXPECT_TRUE(!cell.empty() && end == cell.c_str() + cell.size())
-          << path << ": bad number '" << cell << "' in line '" << line << "'";
-      row.push_back(value);
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
-    csv.rows.push_back(std::move(row));
-  }
-  return csv;
-}
+using Csv = csv_fields::NumberCsv;
 
 bool contains(const std::string& text, const std::string& fragment) {
   return text.find(fragment) != std::string::npos;
@@ -278,7 +247,7 @@ TEST_F(CliRun, SpringImplicitEulerJsonAndEnergyCsv) {
   EXPECT_NEAR(j["energy_initial"].get<double>(), e0, 1e-12 * std::abs(e0));
   EXPECT_LT(j["energy_final"].get<double>(), j["energy_initial"].get<double>());  // drag damps
 
-  const Csv csv = read_csv(ws.file("e.csv"));
+  const Csv csv = csv_fields::read_number_csv(ws.file("e.csv"));
   expect_energy_csv(csv);
   ASSERT_EQ(csv.rows.size(), 501u);
   EXPECT_EQ(csv.rows.front()[0], 0.0);
@@ -298,7 +267,7 @@ TEST_F(CliRun, SpringImplicitEulerJsonAndEnergyCsv) {
 TEST_F(CliRun, EveryKthStepAndTheLast) {
   run_ok({"run", "spring", "--integrator", "rk4", "--dt", "0.01", "--t-end", "1", "--every", "7",
           "--energy", "e.csv"});
-  const Csv csv = read_csv(ws.file("e.csv"));
+  const Csv csv = csv_fields::read_number_csv(ws.file("e.csv"));
   expect_energy_csv(csv);
   std::vector<double> expected = {0.0};
   for (int k = 7; k < 100; k += 7) expected.push_back(static_cast<double>(k) * 0.01);
@@ -314,7 +283,7 @@ TEST_F(CliRun, LastStepShortenedToEndAtT) {
                            "--energy", "e.csv", "--json"});
   EXPECT_EQ(j["steps"], 4);
   EXPECT_EQ(j["diverged"], false);
-  const std::vector<double> t = column(read_csv(ws.file("e.csv")), 0);
+  const std::vector<double> t = column(csv_fields::read_number_csv(ws.file("e.csv")), 0);
   ASSERT_EQ(t.size(), 5u);
   EXPECT_EQ(t[0], 0.0);
   EXPECT_DOUBLE_EQ(t[1], 1 * 0.3);
@@ -328,7 +297,7 @@ TEST_F(CliRun, WholeStepCountWhenTOverDtIsInexact) {
   Json j = run_json({"run", "spring", "--integrator", "rk4", "--dt", "0.1", "--t-end", "1",
                            "--energy", "e.csv", "--json"});
   EXPECT_EQ(j["steps"], 10);
-  const std::vector<double> t = column(read_csv(ws.file("e.csv")), 0);
+  const std::vector<double> t = column(csv_fields::read_number_csv(ws.file("e.csv")), 0);
   ASSERT_EQ(t.size(), 11u);
   for (std::size_t k = 0; k < 10; ++k) EXPECT_EQ(t[k], static_cast<double>(k) * 0.1) << k;
   EXPECT_EQ(t[10], 1.0);
@@ -375,7 +344,7 @@ TEST_F(CliRun, TrajectoryOfA2DChain) {
   ASSERT_EQ(s["dimension"], 2);
   run_ok({"run", "chain", "-p", "n=4", "--integrator", "rk4", "--dt", "0.001", "--t-end", "0.1",
           "--every", "10", "--trajectory", "t.csv"});
-  const Csv csv = read_csv(ws.file("t.csv"));
+  const Csv csv = csv_fields::read_number_csv(ws.file("t.csv"));
   expect_trajectory(csv, s, "t,i,x,y,vx,vy", 11);
   EXPECT_EQ(csv.rows.back()[0], 0.1);
   EXPECT_EQ(ws.listing(), std::vector<std::string>{"t.csv"});
@@ -390,7 +359,7 @@ TEST_F(CliRun, TrajectoryOfA3DCloth) {
   EXPECT_EQ(fixed, 2);
   run_ok({"run", "cloth", "-p", "n=3", "--integrator", "implicit-euler", "--dt", "0.01",
           "--t-end", "0.05", "--trajectory", "t.csv"});
-  const Csv csv = read_csv(ws.file("t.csv"));
+  const Csv csv = csv_fields::read_number_csv(ws.file("t.csv"));
   expect_trajectory(csv, s, "t,i,x,y,z,vx,vy,vz", 6);
   EXPECT_EQ(csv.rows.back()[0], 0.05);
 }
@@ -418,7 +387,7 @@ TEST_F(CliRun, SameRunTwiceGivesIdenticalOutput) {
       EXPECT_TRUE(a == b) << kind << ".csv differs between identical runs";
     }
     // The chain released from horizontal swings: a nonlinear run.
-    const Csv e = read_csv(ws.file("e0.csv"));
+    const Csv e = csv_fields::read_number_csv(ws.file("e0.csv"));
     EXPECT_EQ(e.rows.size(), 201u);
     const std::vector<double> kinetic = column(e, 1);
     EXPECT_GT(*std::max_element(kinetic.begin(), kinetic.end()), 0.1);
@@ -443,7 +412,7 @@ TEST_F(CliRun, DivergenceIsAResult) {
   EXPECT_LE(at, 100.0);
   EXPECT_LT(j["steps"].get<long>(), 2000);  // it stopped
 
-  const Csv csv = read_csv(ws.file("e.csv"));
+  const Csv csv = csv_fields::read_number_csv(ws.file("e.csv"));
   expect_energy_csv(csv);
   ASSERT_GE(csv.rows.size(), 2u);
   EXPECT_EQ(csv.rows.front()[0], 0.0);
@@ -472,7 +441,7 @@ TEST_F(CliRun, SolverFailureIsAResult) {
       << j["failure"];
   EXPECT_TRUE(contains(j["failure"].get<std::string>(), "mxstep")) << j["failure"];
   ASSERT_TRUE(j["diverged_at"].is_number());
-  const Csv csv = read_csv(ws.file("e.csv"));
+  const Csv csv = csv_fields::read_number_csv(ws.file("e.csv"));
   expect_energy_csv(csv);
   EXPECT_EQ(csv.rows.back()[0], j["t_final"].get<double>());
 }

@@ -102,7 +102,7 @@ TEST(ExperimentAccuracyConvergence, TablesFollowTheDataContract) {
   EXPECT_EQ(loaded.name, "convergence");
 }
 
-class ExperimentAccuracyOrder : public testing::TestWithParam<std::string> {};
+class ExperimentAccuracyOrder : public ::testing::TestWithParam<std::string> {};
 
 // The oscillator against its exact solution: a fixed-step method of order p
 // gains a factor 2^p per halving; an adaptive one follows its tolerance.
@@ -158,8 +158,8 @@ TEST_P(ExperimentAccuracyOrder, OscillatorAgainstExactSolution) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ExperimentAccuracy, ExperimentAccuracyOrder,
-                         testing::ValuesIn(integrator_names()),
-                         [](const testing::TestParamInfo<std::string>& p) {
+                         ::testing::ValuesIn(integrator_names()),
+                         [](const ::testing::TestParamInfo<std::string>& p) {
                            std::string name = p.param;
                            for (char& c : name) c = c == '-' ? '_' : c;
                            return name;

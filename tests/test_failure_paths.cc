@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "csv_fields.h"
 #include "run_process.h"
 
 namespace springlab {
@@ -23,44 +24,8 @@ namespace fs = std::filesystem;
 using namespace springlab::testing;
 using Json = nlohmann::json;
 
-struct Csv {
-  std::string header;
-  std::vector<std::vector<double>> rows;
-};
-
-// Every line ends in '\n', every field parses whole as a finite number, and
-// every row has as many fields as the header.
-Csv read_valid_csv(const fs::path& path) {
-  Csv csv;
-  const std::string text = read_text(path);
-  EXPECT_FALSE(text.empty()) << path;
-  if (text.empty()) return csv;
-  EXPECT_EQ(text.back(), '\n') << path << ": last line not terminated";
-  std::istringstream lines(text);
-  std::getline(lines, csv.header);
-  const std::size_t columns =
-      static_cast<std::size_t>(std::count(csv.header.begin(), csv.header.end(), ',')) + 1;
-  std::string line;
-  while (std::getline(lines, line)) {
-    std::vector<double> row;
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = line.find(',', start);
-      const std::string cell =
-          line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-      char* end = nullptr;
-      const double value = std::strtod(cell.c_str(), &end);
-      EXPECT_TRUE(!cell.empty() && end == cell.c_str() + cell.size() && std::isfinite(value))
-          << path << ": bad number '" << cell << "' in line '" << line << "'";
-      row.push_back(value);
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
-    EXPECT_EQ(row.size(), columns) << path << ": line '" << line << "'";
-    csv.rows.push_back(std::move(row));
-  }
-  return csv;
-}
+using Csv = csv_fields::NumberCsv;
+using csv_fields::read_number_csv;
 
 class FailurePaths : public ::testing::Test {
  protected:
@@ -101,7 +66,7 @@ class FailurePaths : public ::testing::Test {
       EXPECT_LT(last, j["diverged_at"].get<double>());
     }
 
-    const Csv energy = read_valid_csv(work() / "e.csv");
+    const Csv energy = read_number_csv(work() / "e.csv");
     EXPECT_EQ(energy.header, "t,kinetic,spring,gravity,total");
     ASSERT_FALSE(energy.rows.empty());
     EXPECT_EQ(energy.rows.front()[0], 0.0);
@@ -111,7 +76,7 @@ class FailurePaths : public ::testing::Test {
       EXPECT_LT(energy.rows[k - 1][0], energy.rows[k][0]) << "row " << k;
     }
 
-    const Csv trajectory = read_valid_csv(work() / "t.csv");
+    const Csv trajectory = read_number_csv(work() / "t.csv");
     EXPECT_EQ(trajectory.header, dimension == 2 ? "t,i,x,y,vx,vy" : "t,i,x,y,z,vx,vy,vz");
     ASSERT_EQ(trajectory.rows.size(), energy.rows.size() * particles);
     for (std::size_t k = 0; k < trajectory.rows.size(); ++k) {
