@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "experiments/experiment_runner.h"
+#include "experiments/integrator_table.h"
 #include "experiments/output_files.h"
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
@@ -251,22 +252,19 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   return 0;
 }
 
-int command_list() {
+int command_list(bool json) {
+  if (json) {
+    std::cout << integrator_table_json().dump(2) << '\n';
+    return 0;
+  }
   std::cout << "integrators:\n";
   for (const std::string& name : integrator_names()) {
     const auto integrator = make_integrator(name);
     const IntegratorInfo& i = integrator->info();
     std::cout << "  " << name << "  order " << i.order
               << (i.adaptive ? ", adaptive" : ", fixed step")
-              << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "");
-    if (std::isinf(i.stability_limit)) {
-      std::cout << ", A-stable";
-    } else if (i.stability_limit > 0.0) {
-      std::cout << ", stable for w h <= " << i.stability_limit;
-    } else {
-      std::cout << ", unstable without damping";
-    }
-    std::cout << "\n      " << i.scheme << '\n';
+              << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "")
+              << ", " << stability_text(i) << "\n      " << i.scheme << '\n';
   }
   std::cout << "built-in scenes:\n";
   for (const BuiltinScene& s : builtin_scenes()) {
@@ -363,7 +361,10 @@ int run_cli(int argc, char** argv) {
   scene->add_option("NAME", scene_name, "built-in scene")->required();
   scene->add_option("-p", scene_parameters, "parameter key=value (repeatable)");
 
+  bool list_json = false;
   CLI::App* list = app.add_subcommand("list", "integrators and built-in scenes");
+  list->add_flag("--json", list_json,
+                 "as JSON, with each integrator's family, stability, colour and marker");
 
   std::string experiment_file, shard;
   ExperimentRunOptions experiment_options;
@@ -395,7 +396,7 @@ int run_cli(int argc, char** argv) {
                 << '\n';
       return 0;
     }
-    if (*list) return command_list();
+    if (*list) return command_list(list_json);
     if (*experiment) {
       if (!shard.empty()) parse_shard(shard, experiment_options);
       if (experiment_options.jobs < 0) throw UsageError("--jobs: must be >= 0");

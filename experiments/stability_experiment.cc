@@ -47,9 +47,13 @@ struct MapTask {
 
 std::string k_text(double k) { return format_number(k); }
 
-// The theoretical limit for a method, or nullopt when it has none.
+// The theoretical limit for a method, or nullopt when it has none (A- and
+// L-stable methods) or declares none (unknown, A(alpha)).
 std::optional<double> theory_dt(const IntegratorInfo& info, double w, double t_end, double blowup) {
-  if (w <= 0.0 || std::isinf(info.stability_limit)) return std::nullopt;
+  if (w <= 0.0 || info.stability != StabilityKind::kConditional ||
+      !std::isfinite(info.stability_limit)) {
+    return std::nullopt;
+  }
   if (info.stability_limit > 0.0) return info.stability_limit / w;
   if (!info.stability_function) return std::nullopt;
   // (T / h) ln |R(i w h)|^2 = ln B, increasing in h: bisect on log h.

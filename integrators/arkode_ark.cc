@@ -16,7 +16,11 @@ ArkodeDirk::ArkodeDirk()
                         .order = 4,
                         .adaptive = true,
                         .implicit = true,
-                        .iterates_to_tolerance = true}) {}
+                        .iterates_to_tolerance = true,
+                        // Hairer & Wanner's SDIRK 5-stage order 4 (ARKODE_SDIRK_5_3_4).
+                        .stability = StabilityKind::kL,
+                        .stability_limit = kInfinity,
+                        .stability_note = "at the default order 4"}) {}
 
 ArkodeImex::ArkodeImex()
     : ArkodeArk(true, {.name = "arkode-imex",
@@ -25,7 +29,12 @@ ArkodeImex::ArkodeImex()
                        .order = 4,
                        .adaptive = true,
                        .implicit = true,
-                       .iterates_to_tolerance = true}) {}
+                       .iterates_to_tolerance = true,
+                       // ARK4(3)6L[2]SA: its implicit table is L-stable.
+                       .stability = StabilityKind::kL,
+                       .stability_limit = kInfinity,
+                       .stability_note = "for the implicit forces at the default order 4; "
+                                         "wind is explicit"}) {}
 
 int ArkodeArk::explicit_rhs(double t, N_Vector y, N_Vector ydot, void* self) {
   return static_cast<ArkodeArk*>(self)->evaluate_rhs(ForcePart::kNonstiff, false, t, y, ydot);

@@ -6,6 +6,7 @@ ExplicitEuler::ExplicitEuler()
     : Integrator({.name = "explicit-euler",
                   .scheme = "x' = x + h v,  v' = v + h M^-1 F(t, x, v)",
                   .order = 1,
+                  .stability = StabilityKind::kConditional,  // |1 + z| <= 1
                   .stability_limit = 0.0,
                   .stability_function = [](std::complex<double> z) { return 1.0 + z; }}) {}
 

@@ -14,7 +14,12 @@ IdaIntegrator::IdaIntegrator()
                           .order = 5,
                           .adaptive = true,
                           .implicit = true,
-                          .iterates_to_tolerance = true}) {}
+                          .iterates_to_tolerance = true,
+                          // BDF5's wedge (Hairer & Wanner II, Table V.2.3)
+                          .stability = StabilityKind::kAAlpha,
+                          .stability_alpha = 51.84,
+                          .stability_note = "at the default --max-order 5; orders 3, 4: 86.0, "
+                                            "73.4 deg; orders 1-2 (--max-order 2): L-stable"}) {}
 
 void IdaIntegrator::create() {
   const IntegratorOptions& o = options();

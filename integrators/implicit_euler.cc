@@ -8,6 +8,8 @@ ImplicitEuler::ImplicitEuler()
                           .order = 1,
                           .implicit = true,
                           .iterates_to_tolerance = true,
+                          .stability = StabilityKind::kL,  // R(z) = 1/(1 - z) -> 0
+                          .stability_limit = kInfinity,
                           .stability_function =
                               [](std::complex<double> z) { return 1.0 / (1.0 - z); }}) {}
 

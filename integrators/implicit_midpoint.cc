@@ -9,6 +9,8 @@ ImplicitMidpoint::ImplicitMidpoint()
                           .implicit = true,
                           .iterates_to_tolerance = true,
                           .symplectic = true,
+                          .stability = StabilityKind::kA,  // |R(i y)| = 1: no damping
+                          .stability_limit = kInfinity,
                           .stability_function =
                               [](std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }}) {}
 

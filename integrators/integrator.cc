@@ -1,8 +1,51 @@
 #include "integrators/integrator.h"
 
 #include <cmath>
+#include <cstdio>
 
 namespace springlab {
+
+const char* to_string(StabilityKind kind) {
+  switch (kind) {
+    case StabilityKind::kConditional: return "conditional";
+    case StabilityKind::kAAlpha: return "A(alpha)";
+    case StabilityKind::kA: return "A";
+    case StabilityKind::kL: return "L";
+    case StabilityKind::kUnknown: break;
+  }
+  return "unknown";
+}
+
+std::string stability_text(const IntegratorInfo& info) {
+  char number[32];
+  std::string text;
+  switch (info.stability) {
+    case StabilityKind::kUnknown:
+      text = "stability unknown";
+      break;
+    case StabilityKind::kConditional:
+      text = "conditionally stable";
+      if (info.stability_limit == 0.0) {
+        text += ": no stable step without damping";
+      } else if (std::isfinite(info.stability_limit)) {
+        std::snprintf(number, sizeof number, "%.4g", info.stability_limit);
+        text += std::string(": w h <= ") + number + " undamped";
+      }
+      break;
+    case StabilityKind::kAAlpha:
+      std::snprintf(number, sizeof number, "%.1f", info.stability_alpha);
+      text = std::string("A(") + number + " deg)-stable";
+      break;
+    case StabilityKind::kA:
+      text = "A-stable";
+      break;
+    case StabilityKind::kL:
+      text = "L-stable";
+      break;
+  }
+  if (!info.stability_note.empty()) text += " (" + info.stability_note + ")";
+  return text;
+}
 
 StepResult Integrator::initialize(const MechanicalSystem& system, double t0, const Vector& x0,
                                   const Vector& v0, const IntegratorOptions& options) {

@@ -50,6 +50,24 @@ struct StepResult {
   static StepResult failure(std::string why) { return {false, std::move(why)}; }
 };
 
+// What a method's stability region {z : |R(z)| <= 1} covers, R being one
+// step's map on the test equation y' = lambda y and z = h lambda (lambda an
+// eigenvalue of the linearized first-order system: +-i w for an undamped
+// mode, in the left half-plane with damping). `springlab list` states it and
+// tests/test_stability_property.cc measures it for every registered method.
+enum class StabilityKind {
+  kUnknown,      // not declared: no claim is made
+  kConditional,  // stable only for steps small enough: see stability_limit
+  kAAlpha,       // A(alpha): the wedge |arg(-z)| <= alpha (stability_alpha,
+                 // degrees) - stiff decay, but not every oscillation
+  kA,            // the whole left half-plane: no step is too large
+  kL,            // A-stable and R(z) -> 0 as |z| -> infinity: a large step
+                 // damps a stiff mode almost completely
+};
+const char* to_string(StabilityKind kind);
+// The stability_limit of A- and L-stable methods: every w h is stable.
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();  // "unknown", "conditional", "A(alpha)", "A", "L"
+
 // What a student (and the shared test suites) can read off a method.
 struct IntegratorInfo {
   std::string name;
@@ -59,14 +77,31 @@ struct IntegratorInfo {
   bool implicit = false;
   bool iterates_to_tolerance = false;  // solves its nonlinear system to --newton-tol
   bool symplectic = false;   // for forces that depend on x only
-  // Largest stable omega*h on the undamped linear oscillator; infinity for an
-  // A-stable method, 0 for one unstable at every step (explicit Euler).
-  double stability_limit = std::numeric_limits<double>::infinity();
+  StabilityKind stability = StabilityKind::kUnknown;
+  // Largest stable omega*h on the undamped linear oscillator (eigenvalues
+  // +-i w): finite for a conditionally stable fixed-step method, 0 for one
+  // unstable at every step without damping (explicit Euler); infinity for A-
+  // and L-stable methods; NaN when it is not one number (unknown, A(alpha),
+  // or an adaptive method, whose step control keeps h inside its region).
+  double stability_limit = std::numeric_limits<double>::quiet_NaN();
+  double stability_alpha = std::numeric_limits<double>::quiet_NaN();  // kAAlpha, degrees
+  // What the property holds for when that is not the method as a whole,
+  // e.g. "at the default --max-order 5; orders 1-2 are L-stable".
+  std::string stability_note = {};
   // R(z) of the method on y' = lambda y, when one step is that scalar map
   // (so the oscillator's energy changes by |R(i w h)|^2 each step). Empty for
   // partitioned methods (symplectic Euler, Verlet) and adaptive ones.
   std::function<std::complex<double>(std::complex<double>)> stability_function = {};
 };
+
+// The property in words, e.g. "L-stable", "A(51.8 deg)-stable",
+// "conditionally stable: w h <= 2.828 undamped", with the note appended.
+std::string stability_text(const IntegratorInfo& info);
+
+// Whether every undamped mode is stable at every step (A- and L-stable).
+inline bool stable_on_imaginary_axis(const IntegratorInfo& info) {
+  return info.stability == StabilityKind::kA || info.stability == StabilityKind::kL;
+}
 
 class Integrator {
  public:

@@ -9,6 +9,10 @@ LinearImplicitEuler::LinearImplicitEuler()
                           .scheme = "(M - h D - h^2 K) dv = h (F0 + h K v),  v' = v + dv,  x' = x + h v'",
                           .order = 1,
                           .implicit = true,
+                          .stability = StabilityKind::kL,
+                          .stability_limit = kInfinity,
+                          .stability_note = "for linear forces; one linearized step can fail on "
+                                            "strongly nonlinear ones",
                           .stability_function =
                               [](std::complex<double> z) { return 1.0 / (1.0 - z); }}) {}
 

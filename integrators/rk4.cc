@@ -8,6 +8,7 @@ RungeKutta4::RungeKutta4()
     : Integrator({.name = "rk4",
                   .scheme = "y' = y + h/6 (k1 + 2 k2 + 2 k3 + k4)",
                   .order = 4,
+                  .stability = StabilityKind::kConditional,
                   .stability_limit = 2.0 * std::sqrt(2.0),
                   .stability_function = [](std::complex<double> z) {
                     return 1.0 + z * (1.0 + z / 2.0 * (1.0 + z / 3.0 * (1.0 + z / 4.0)));

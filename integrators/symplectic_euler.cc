@@ -7,6 +7,7 @@ SymplecticEuler::SymplecticEuler()
                   .scheme = "v' = v + h M^-1 F(t, x, v),  x' = x + h v'",
                   .order = 1,
                   .symplectic = true,
+                  .stability = StabilityKind::kConditional,
                   .stability_limit = 2.0}) {}
 
 namespace {

@@ -7,6 +7,7 @@ VelocityVerlet::VelocityVerlet()
                   .scheme = "v+ = v + h/2 a(x), x' = x + h v+, v' = v+ + h/2 a(x', v')",
                   .order = 2,
                   .symplectic = true,
+                  .stability = StabilityKind::kConditional,
                   .stability_limit = 2.0}) {}
 
 StepResult VelocityVerlet::do_initialize() {

@@ -17,12 +17,14 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "csv_fields.h"
 #include "run_process.h"
+#include "integrators/registry.h"
 
 #ifndef SPRINGLAB_EXE
 #error "SPRINGLAB_EXE must name the springlab executable"
@@ -621,6 +623,37 @@ TEST_F(CliList, NamesEveryIntegratorAndScene) {
                            "oscillator", "spring"}) {
     EXPECT_TRUE(contains(o.out, name)) << name << " not in\n" << o.out;
   }
+}
+
+// The table the report draws every integrator from: one entry per
+// registered method, its facts as its IntegratorInfo states them (the text
+// output says the same property), and a colour and marker of its own.
+TEST_F(CliList, JsonGivesEachIntegratorsFactsAndItsOwnStyle) {
+  const Json j = run_json({"list", "--json"});
+  const std::string text = run_ok({"list"}).out;
+  ASSERT_TRUE(j["integrators"].is_array());
+  std::set<std::string> names, colours, markers;
+  for (const Json& e : j["integrators"]) {
+    const std::string name = e["name"];
+    const IntegratorInfo info = make_integrator(name)->info();
+    names.insert(name);
+    EXPECT_EQ(e["order"], info.order) << name;
+    EXPECT_EQ(e["adaptive"], info.adaptive) << name;
+    EXPECT_EQ(e["implicit"], info.implicit) << name;
+    EXPECT_EQ(e["stability"]["kind"], to_string(info.stability)) << name;
+    EXPECT_NE(e["stability"]["kind"], "unknown") << name;
+    EXPECT_TRUE(contains(text, name + "  order " + std::to_string(info.order)));
+    EXPECT_TRUE(contains(text, e["stability"]["text"].get<std::string>())) << name;
+    colours.insert(e["colour"].get<std::string>());
+    markers.insert(e["marker"].get<std::string>());
+  }
+  EXPECT_EQ(std::vector<std::string>(names.begin(), names.end()), integrator_names());
+  EXPECT_EQ(colours.size(), names.size()) << "two integrators share a colour";
+  EXPECT_EQ(markers.size(), names.size()) << "two integrators share a marker";
+  EXPECT_TRUE(contains(text, "rk4  order 4, fixed step, explicit, conditionally stable: "
+                             "w h <= 2.828 undamped"));
+  EXPECT_TRUE(contains(text, "cvode-bdf  order 5, adaptive, implicit, A(51.8 deg)-stable"));
+  EXPECT_TRUE(contains(text, "arkode-erk  order 4, adaptive, explicit, conditionally stable"));
 }
 
 // ----------------------------------------------------------- 10. stability

@@ -1,6 +1,6 @@
 // Shared suites, instantiated once per registered integrator: a new method
 // gets every test that applies to it (read off its IntegratorInfo: order,
-// stability limit, stability function, symplecticity) by one registry line.
+// stability function, symplecticity) by one registry line.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -148,44 +148,8 @@ TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
   }
 }
 
-// The stability limit on the undamped oscillator: stable 1% below, unstable 1% above.
-TEST_P(EveryIntegrator, StabilityLimitHoldsJustBelowAndFailsJustAbove) {
-  const IntegratorInfo i = info();
-  if (i.adaptive || std::isinf(i.stability_limit) || i.stability_limit == 0.0) {
-    GTEST_SKIP() << "no finite stability limit";
-  }
-  const MassSpringModel model(oscillator(100.0, 1.0));
-  const double w = 10.0;
-  for (double factor : {0.99, 1.01}) {
-    const double dt = factor * i.stability_limit / w;
-    RunSettings s = settings(dt, 10000 * dt);
-    const RunResult r = simulate(model, s);
-    EXPECT_EQ(r.diverged(), factor > 1.0) << "w h = " << factor * i.stability_limit;
-  }
-}
-
-// A-stable methods: no step is too large; the energy never grows.
-TEST_P(EveryIntegrator, AStableMethodsStayStableAtWh100) {
-  const IntegratorInfo i = info();
-  if (!std::isinf(i.stability_limit)) GTEST_SKIP() << "not A-stable";
-  const MassSpringModel model(oscillator(100.0, 1.0));
-  const RunResult r = simulate(model, settings(100.0 / 10.0, 1000.0));
-  EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
-  EXPECT_LE(r.energy_final, r.energy_initial * (1.0 + 1e-9));
-}
-
-// Explicit Euler has no stable step: it blows up, and the run says when.
-TEST_P(EveryIntegrator, UnconditionallyUnstableMethodDivergesAsAResult) {
-  const IntegratorInfo i = info();
-  if (i.stability_limit != 0.0) GTEST_SKIP() << "has a stable range";
-  const MassSpringModel model(oscillator(100.0, 1.0));
-  const RunResult r = simulate(model, settings(0.05, 100.0));
-  ASSERT_EQ(r.status, RunStatus::kDiverged);
-  // Energy grows by (1 + w^2 h^2) = 1.25 per step; 1000x the scale takes
-  // ceil(ln 1000 / ln 1.25) = 31 steps.
-  EXPECT_NEAR(*r.diverged_at, 31 * 0.05, 1e-12);
-  EXPECT_TRUE(r.x_final.allFinite());
-}
+// The declared stability property (limits, A- and L-stability) is measured
+// in tests/test_stability_property.cc.
 
 // A hanging mass at its equilibrium stays there, whatever the method.
 TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
