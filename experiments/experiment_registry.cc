@@ -9,6 +9,7 @@ std::unique_ptr<Experiment> make_work_precision_experiment(const DefinitionObjec
 std::unique_ptr<Experiment> make_stability_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_damping_budget_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_cloth_showcase_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_stability_region_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -18,6 +19,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"stability", &make_stability_experiment},
       {"damping-budget", &make_damping_budget_experiment},
       {"cloth-showcase", &make_cloth_showcase_experiment},
+      {"stability-region", &make_stability_region_experiment},
   };
   return kinds;
 }

@@ -1,7 +1,10 @@
 #include "models/modal_analysis.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace springlab {
 
@@ -39,6 +42,34 @@ double max_angular_frequency(const MassSpringModel& model, const Vector& x, cons
     lambda = q.dot(a * q);
   }
   return lambda > 0.0 ? std::sqrt(lambda) : 0.0;
+}
+
+std::vector<std::complex<double>> first_order_eigenvalues(const MassSpringModel& model,
+                                                          const Vector& x, const Vector& v) {
+  const Eigen::Index n = model.dofs();
+  if (2 * n > kMaxFirstOrderUnknowns) {
+    throw std::invalid_argument("the first-order eigenvalues need a dense " +
+                                std::to_string(2 * n) + " x " + std::to_string(2 * n) +
+                                " eigensolver; at most " +
+                                std::to_string(kMaxFirstOrderUnknowns) + " unknowns");
+  }
+  SparseMatrix dfdx, dfdv;
+  model.jacobians(0.0, x, v, &dfdx, &dfdv);
+  const Vector inv_mass = model.mass().cwiseInverse();
+  // J = [[0, I], [M^-1 K, M^-1 D]]
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  J.topRightCorner(n, n).setIdentity();
+  J.bottomLeftCorner(n, n) = inv_mass.asDiagonal() * Eigen::MatrixXd(dfdx);
+  J.bottomRightCorner(n, n) = inv_mass.asDiagonal() * Eigen::MatrixXd(dfdv);
+  const Eigen::EigenSolver<Eigen::MatrixXd> eig(J, /*computeEigenvectors=*/false);
+  std::vector<std::complex<double>> lambda(eig.eigenvalues().begin(), eig.eigenvalues().end());
+  std::sort(lambda.begin(), lambda.end(), [](std::complex<double> a, std::complex<double> b) {
+    const double ma = std::abs(a), mb = std::abs(b);
+    if (ma != mb) return ma < mb;
+    if (a.imag() != b.imag()) return a.imag() < b.imag();
+    return a.real() < b.real();
+  });
+  return lambda;
 }
 
 }  // namespace springlab

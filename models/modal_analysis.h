@@ -3,7 +3,16 @@
 // explicit method's stability limit (2/w_max for symplectic Euler and
 // Verlet, 2 sqrt 2/w_max for RK4): the course's "explicit solvers don't work
 // so well on springs" in one number.
+//
+// With damping the modes are the eigenvalues lambda of the first-order
+// system y = (x, v), y' = J y, J = [[0, I], [M^-1 K, M^-1 D]] (K = dF/dx,
+// D = dF/dv): lambda = +-i w for an undamped mode, Re lambda < 0 for a damped
+// one. A one-step method whose step is R(h J) is stable when every h lambda
+// lies in its stability region |R(z)| <= 1.
 #pragma once
+
+#include <complex>
+#include <vector>
 
 #include "models/mass_spring_model.h"
 
@@ -16,5 +25,12 @@ double max_angular_frequency(const MassSpringModel& model, const Vector& x, cons
 inline double max_angular_frequency(const MassSpringModel& model) {
   return max_angular_frequency(model, model.initial_positions(), model.initial_velocities());
 }
+
+// The eigenvalues of J at (x, v), t = 0, in a fixed order: by |lambda|, then
+// by imaginary part (a conjugate pair: negative first). Dense eigensolver;
+// throws std::invalid_argument above kMaxFirstOrderUnknowns unknowns (2 n).
+inline constexpr int kMaxFirstOrderUnknowns = 4000;
+std::vector<std::complex<double>> first_order_eigenvalues(const MassSpringModel& model,
+                                                          const Vector& x, const Vector& v);
 
 }  // namespace springlab

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -172,7 +173,7 @@ TEST(ExperimentDefinition, TopLevelMustBeAnObjectWithAKind) {
 TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
-            "work-precision, stability, damping-budget, cloth-showcase)");
+            "work-precision, stability, damping-budget, cloth-showcase, stability-region)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -590,6 +591,75 @@ TEST(ExperimentKinds, ClothShowcaseKeepsTheLastGoodState) {
   EXPECT_EQ(number(frames[0].second[n - 1].at("x")), 1.0);
   EXPECT_LT(number(frames[2].second[n * n - 1].at("y")), number(frames[1].second[n * n - 1].at("y")));
   EXPECT_LT(number(frames[1].second[n * n - 1].at("y")), 0.0);
+}
+
+// A damped oscillator, x'' = -(k/m) x - (gamma/m) x' in 2-D with k = 100,
+// m = 1, gamma = 2: every eigenvalue of J is lambda = -1 +- i sqrt(99)
+// (twice, one pair per axis), |lambda|^2 = 100. Explicit Euler's region is
+// |1 + z| <= 1, so its limit is h* = 2 |Re lambda| / |lambda|^2 = 0.02, and
+// at 1.1 h* all four modes are outside it (|R| = 1.0022 per step).
+TEST(ExperimentKinds, StabilityRegionPlacesTheScaledEigenvaluesAndRunsBothSteps) {
+  ScratchDir dir("region");
+  Json scene = {{"name", "damped-oscillator"},
+                {"dimension", 2},
+                {"drag", 2.0},
+                {"particles", {{{"x", {0, 0}}, {"mass", 1}, {"fixed", true}},
+                               {{"x", {0.1, 0.05}}, {"mass", 1}}}},
+                {"springs", {{{"i", 0}, {"j", 1}, {"k", 100}, {"rest", 0}}}}};
+  dir.write("damped-oscillator.json", scene);
+  const std::string file =
+      dir.write("region.json", {{"experiment", "stability-region"},
+                                {"integrators", {"explicit-euler", "rk4", "implicit-euler",
+                                                 "symplectic-euler"}},
+                                {"scene", "damped-oscillator.json"},
+                                {"steps", 4000}});
+  const LoadedExperiment loaded = load_experiment(file);
+  ASSERT_EQ(loaded.experiment->task_count(), 4u);
+  const double root = std::sqrt(99.0);
+
+  const auto euler = run_task(loaded, 0);
+  ASSERT_EQ(euler[0].size(), 2u);
+  for (const Record& r : euler[0]) {
+    const bool above = number(r.at("factor")) > 1.0;
+    EXPECT_EQ(r.at("limit_from"), "R");
+    EXPECT_TRUE(close(number(r.at("limit_dt")), 0.02, 1e-8)) << r.at("limit_dt");
+    EXPECT_EQ(r.at("modes_outside"), above ? "4" : "0");
+    EXPECT_EQ(r.at("diverged"), above ? "1" : "0") << "factor " << r.at("factor");
+  }
+  ASSERT_EQ(euler[1].size(), 8u);  // 4 modes x 2 steps
+  for (const Record& m : euler[1]) {
+    const double h = number(m.at("dt"));
+    EXPECT_NEAR(number(m.at("lambda_re")), -1.0, 1e-9);
+    EXPECT_NEAR(std::abs(number(m.at("lambda_im"))), root, 1e-9);
+    EXPECT_NEAR(number(m.at("z_re")), -h, 1e-9 * h);
+    const std::complex<double> z(number(m.at("z_re")), number(m.at("z_im")));
+    EXPECT_NEAR(number(m.at("abs_R")), std::abs(1.0 + z), 1e-14);
+  }
+  ASSERT_FALSE(euler[2].empty());
+  for (const Record& g : euler[2]) {
+    const std::complex<double> z(number(g.at("z_re")), number(g.at("z_im")));
+    EXPECT_NEAR(number(g.at("abs_R")), std::abs(1.0 + z), 1e-6);
+  }
+
+  // Prediction (a mode outside the region) and measurement (the run) agree.
+  for (std::size_t task : {1u, 2u}) {
+    const auto t = run_task(loaded, task);
+    for (const Record& r : t[0]) {
+      const bool outside = number(r.at("max_abs_R")) > 1.0 + 1e-12;
+      EXPECT_EQ(r.at("diverged"), outside ? "1" : "0") << r.at("integrator") << " " << r.at("factor");
+    }
+  }
+  const auto implicit = run_task(loaded, 2);
+  EXPECT_EQ(implicit[0][0].at("limit_from"), "none");  // shown at 10 / |lambda| = 1 s
+
+  // Symplectic Euler has no scalar R: its limit is measured, no |R| is given.
+  const auto symplectic = run_task(loaded, 3);
+  for (const Record& r : symplectic[0]) {
+    EXPECT_EQ(r.at("limit_from"), "runs");
+    EXPECT_EQ(r.at("max_abs_R"), "");
+    EXPECT_EQ(r.at("diverged"), number(r.at("factor")) > 1.0 ? "1" : "0");
+  }
+  EXPECT_TRUE(symplectic[2].empty());
 }
 
 // ---------------------------------------------------------- ExperimentRunner --
