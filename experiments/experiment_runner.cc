@@ -224,6 +224,16 @@ ExperimentRunSummary run_experiment(const std::string& definition_path,
   settings["experiment"] = loaded.definition.at("experiment");
   settings["title"] = loaded.definition.value("title", loaded.name);
   settings["description"] = loaded.definition.value("description", "");
+  // The tables this run wrote and their columns, so a reader (the report)
+  // takes the schema from here instead of keeping its own copy.
+  nlohmann::ordered_json tables = nlohmann::ordered_json::array();
+  for (const TableSpec& spec : specs) {
+    std::vector<std::string> columns = {"task"};
+    columns.insert(columns.end(), spec.columns.begin(), spec.columns.end());
+    tables.push_back({{"file", table_stem(loaded.name, spec) + ".csv"}, {"suffix", spec.suffix},
+                      {"columns", columns}});
+  }
+  settings["tables"] = tables;
   const nlohmann::json extra = experiment.settings();  // named: items() must not outlive it
   for (const auto& [key, value] : extra.items()) settings[key] = value;
   settings["complete"] = summary.complete();

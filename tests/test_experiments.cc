@@ -865,6 +865,14 @@ TEST(ExperimentRunner, SettingsFileHoldsIntegratorsAndDefinition) {
   EXPECT_EQ(settings.at("definition"), kBudget);
   ASSERT_EQ(settings.at("cases").size(), 1u);
   EXPECT_EQ(settings.at("cases")[0].at("dt"), 0.01);
+  // The tables written, with the header each file starts with.
+  ASSERT_EQ(settings.at("tables").size(), 1u);
+  const Json& table = settings.at("tables")[0];
+  EXPECT_EQ(table.at("file"), "budget.csv");
+  EXPECT_EQ(table.at("suffix"), "");
+  std::string header;
+  for (const Json& c : table.at("columns")) header += (header.empty() ? "" : ",") + c.get<std::string>();
+  EXPECT_EQ(header, lines_of(read_text(dir.path() / "out" / "budget.csv")).at(0));
 
   // A group name resolves to the list of registered methods.
   Json fixed = kBudget;

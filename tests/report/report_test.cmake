@@ -15,6 +15,12 @@ foreach(definition IN LISTS definitions)
     message(FATAL_ERROR "springlab experiment ${definition} failed (${status})")
   endif()
 endforeach()
+execute_process(COMMAND "${CMAKE_COMMAND}" -DSPRINGLAB=${SPRINGLAB} -DFILE=${WORK_DIR}/data/integrators.json
+                        -P "${SOURCE_DIR}/cmake/integrator_table.cmake"
+                RESULT_VARIABLE status)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "springlab list --json failed (${status})")
+endif()
 execute_process(COMMAND "${PYTHON}" "${SOURCE_DIR}/report/make_report.py"
                         --data "${WORK_DIR}/data" --out "${WORK_DIR}/report"
                 RESULT_VARIABLE status)
