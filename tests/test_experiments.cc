@@ -546,25 +546,34 @@ TEST(ExperimentKinds, ClothShowcaseKeepsTheLastGoodState) {
     return frames;
   };
 
+  // Explicit Euler: the frames it reached, its last two good states, then the
+  // first two states past the blow-up bound (a rerun only a non-finite state
+  // stops), marked past_blowup = 1.
   const auto euler = run_task(loaded, 0);
   ASSERT_EQ(euler[1].size(), 1u);
   EXPECT_EQ(euler[1][0].at("status"), "diverged");
   const double diverged_at = number(euler[1][0].at("diverged_at"));
   const auto euler_frames = frames_of(euler[0]);
-  ASSERT_GE(euler_frames.size(), 2u);
+  ASSERT_GE(euler_frames.size(), 4u);
   EXPECT_EQ(euler_frames.front().first, 0.0);
-  const double last = euler_frames.back().first;
-  EXPECT_LT(last, diverged_at);
-  EXPECT_NEAR(last, diverged_at - 0.02, 1e-12) << "every step is checked";
-  if (diverged_at < 0.1) {
-    EXPECT_EQ(euler_frames.size(), 2u) << "t = 0 and the last good state only";
-  }
+  std::vector<double> good, past;
   for (const auto& [t, particles] : euler_frames) {
+    (particles[0].at("past_blowup") == "1" ? past : good).push_back(t);
     for (const Record& r : particles) {
+      EXPECT_EQ(r.at("past_blowup"), particles[0].at("past_blowup"));
       for (const char* axis : {"x", "y", "z"}) {
         EXPECT_TRUE(std::isfinite(number(r.at(axis)))) << "t " << t;
       }
     }
+  }
+  ASSERT_GE(good.size(), 2u);
+  EXPECT_NEAR(good.back(), diverged_at - 0.02, 1e-12) << "every step is checked";
+  EXPECT_NEAR(good[good.size() - 2], diverged_at - 0.04, 1e-12);
+  ASSERT_EQ(past.size(), 2u);
+  EXPECT_EQ(past[0], diverged_at);
+  EXPECT_NEAR(past[1], diverged_at + 0.02, 1e-12);
+  if (diverged_at < 0.1) {
+    EXPECT_EQ(good.size(), 3u) << "t = 0 and the last two good states only";
   }
 
   const auto implicit = run_task(loaded, 1);
@@ -966,7 +975,7 @@ TEST(ExperimentRunner, EveryTableStartsWithTheTaskColumn) {
   for (long t = 3; t < 6; ++t) EXPECT_EQ(std::count(rows.begin(), rows.end(), t), 6) << t;
 
   const std::vector<long> cloth_rows =
-      task_column(read_text(out / "cloth-showcase.csv"), "task,scene,integrator,dt,t,i,x,y,z");
+      task_column(read_text(out / "cloth-showcase.csv"), "task,scene,integrator,dt,t,i,x,y,z,past_blowup");
   EXPECT_TRUE(std::is_sorted(cloth_rows.begin(), cloth_rows.end()));
   EXPECT_EQ(std::count(cloth_rows.begin(), cloth_rows.end(), 1L), 3 * 9);  // 3 frames x 9
   EXPECT_EQ(task_column(read_text(out / "cloth-showcase-runs.csv"),
