@@ -17,8 +17,26 @@
 #endif
 
 #include "models/force_registry.h"
+#include "models/spring_force.h"
 
 namespace springlab {
+
+Eigen::Vector3d hooke_force(const Eigen::Vector3d& x_i, const Eigen::Vector3d& x_j, double k,
+                            double rest, int dim) {
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  double l2 = 0.0;
+  for (int r = 0; r < dim; ++r) {
+    d[r] = x_i[r] - x_j[r];
+    l2 += d[r] * d[r];
+  }
+  if (l2 == 0.0) return Eigen::Vector3d::Zero();
+  const double l = std::sqrt(l2);
+  const double k_stretch_over_l = k * (1.0 - rest / l);  // k (l - L) / l
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();
+  for (int r = 0; r < dim; ++r) f[r] = -(k_stretch_over_l * d[r]);
+  return f;
+}
+
 namespace {
 
 struct SpringData {
@@ -47,7 +65,8 @@ std::vector<SpringData> sorted_for_locality(std::vector<SpringData> springs) {
 }
 
 // scale[j] = k[j] (1 - rest[j] / sqrt(l2[j])) for j < m: the square roots and
-// divisions that bound the cost of a force evaluation. Every variant below
+// divisions that bound the cost of a force evaluation (hooke_force, above,
+// is the same formula for one spring, written plainly). Every variant below
 // rounds each lane exactly as this scalar formula does (IEEE sqrt, div, sub,
 // mul; no fused multiply-add), so forces are the same bit for bit whichever
 // variant the CPU runs.
