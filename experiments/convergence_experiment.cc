@@ -11,139 +11,16 @@
 // methods; for adaptive ones it is 1: a tolerance-proportional error control
 // makes the error proportional to rtol whatever the method's order.
 //
-// This file also defines the accuracy-sweep helpers that work-precision uses
-// (declared again in work_precision_experiment.cc; they belong in
-// experiment_support.h).
+// The sweeps, the reference and the error are accuracy_sweep.h's, shared
+// with work-precision.
 #include <cmath>
-#include <limits>
 #include <memory>
-#include <stdexcept>
 
+#include "experiments/accuracy_sweep.h"
 #include "experiments/experiment.h"
 #include "experiments/experiment_support.h"
-#include "experiments/output_files.h"
-#include "integrators/registry.h"
 
 namespace springlab {
-
-// ---------------------------------------------------------------- shared with work-precision
-
-// Reads a reference: "exact" (the oscillator's exact solution; refused with a
-// message naming the element when the scene is not that oscillator) or
-// {"integrator": NAME, "dt": H} (a fixed-step run, H below finest_dt, the
-// smallest step of the sweep; 0 = no fixed-step method in the sweep).
-// Returns it normalized: "exact" or {"integrator", "dt"}.
-nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, const Scene& scene,
-                                  double finest_dt) {
-  if (!o.has(key)) o.fail(key, "missing (\"exact\" or {\"integrator\": \"rk4\", \"dt\": 1e-5})");
-  const nlohmann::json& raw = o.raw(key);
-  if (raw.is_string()) {
-    if (raw.get<std::string>() != "exact") {
-      o.fail(key, "expected \"exact\" or {\"integrator\": NAME, \"dt\": H}");
-    }
-    bool exact = exact_oscillator_positions(scene, 0.0).has_value();
-    if (exact) {
-      // With rest > 0 the formula holds only while the spring keeps a positive length.
-      const Spring& spring = scene.springs[0];
-      const double l0 = (scene.particles[0].x - scene.particles[1].x).norm();
-      exact = spring.rest == 0.0 || std::abs(l0 - spring.rest) < spring.rest;
-    }
-    if (!exact) {
-      o.fail(key, "\"exact\" needs the oscillator (one free particle on one undamped spring, "
-                  "released at rest, no other force, never passing the anchor); scene '" +
-                      scene.name + "' is not one: use {\"integrator\": \"rk4\", \"dt\": 1e-5}");
-    }
-    return "exact";
-  }
-  if (!raw.is_object()) o.fail(key, "expected \"exact\" or {\"integrator\": NAME, \"dt\": H}");
-  const DefinitionObject r = o.object(key);
-  r.allow_only({"integrator", "dt"});
-  const std::string name = r.string("integrator");
-  if (!is_integrator(name)) r.fail("integrator", "unknown integrator '" + name + "'");
-  if (make_integrator(name)->info().adaptive) {
-    r.fail("integrator", "'" + name + "' is adaptive; the reference must be a fixed-step method");
-  }
-  const double dt = r.positive("dt");
-  if (finest_dt > 0.0 && !(dt < finest_dt)) {
-    r.fail("dt", "must be below the smallest step of the sweep (" + format_number(finest_dt) +
-                     "), got " + format_number(dt));
-  }
-  return {{"integrator", name}, {"dt", dt}};
-}
-
-// The reference positions of the free unknowns at t_end. Throws
-// std::runtime_error, its message starting with `where` (the definition's
-// element), when the reference run does not complete.
-Vector accuracy_reference_positions(const nlohmann::json& reference, const MassSpringModel& model,
-                                    const Scene& scene, double t_end,
-                                    const IntegratorOptions& options, const std::string& where) {
-  if (reference.is_string()) {
-    const std::optional<Vector> x = exact_oscillator_positions(scene, t_end);
-    if (!x) throw std::runtime_error(where + ": scene '" + scene.name + "' has no exact solution");
-    return *x;
-  }
-  RunSettings s;
-  s.integrator = reference.at("integrator").get<std::string>();
-  s.dt = reference.at("dt").get<double>();
-  s.t_end = t_end;
-  s.options = options;
-  const RunResult r = simulate(model, s);
-  if (r.status != RunStatus::kCompleted) {
-    throw std::runtime_error(where + ": the reference run (" + s.integrator + ", dt " +
-                             format_number(s.dt) + ") on scene '" + scene.name + "' " +
-                             to_string(r.status) + " at t = " +
-                             format_number(r.diverged_at.value_or(r.t_final)) +
-                             (r.failure.empty() ? "" : ": " + r.failure));
-  }
-  return r.x_final;
-}
-
-// The sweep of one method: for a fixed-step one, base_dt (by its order) and
-// `halvings` - 1 halvings of it; for an adaptive one, the `tolerances` (rtol).
-// Validates halvings, tolerances and base_dt when present.
-std::vector<double> accuracy_sweep_values(const DefinitionObject& d, const IntegratorInfo& info) {
-  const int halvings = d.count("halvings", 5, 2, 40);
-  std::vector<double> tolerances = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
-  if (d.has("tolerances")) tolerances = d.positives("tolerances");
-  if (d.has("base_dt")) {
-    if (d.object("base_dt").json().empty()) {
-      d.fail("base_dt",
-             "expected steps by method order, e.g. {\"1\": 2e-3, \"2\": 1e-2, \"4\": 4e-2}");
-    }
-    base_dt_for_order(d, "base_dt", std::numeric_limits<int>::max());  // validates every entry
-  }
-  for (std::size_t k = 0; k < tolerances.size(); ++k) {
-    if (tolerances[k] >= 1.0) {
-      d.fail("tolerances[" + std::to_string(k) + "]", "must be below 1 (a relative tolerance)");
-    }
-  }
-  if (info.adaptive) return tolerances;
-  double dt = base_dt_for_order(d, "base_dt", info.order);
-  std::vector<double> steps;
-  for (int k = 0; k < halvings; ++k, dt /= 2) steps.push_back(dt);
-  return steps;
-}
-
-// One point of a sweep: a fixed-step run at dt = value, or an adaptive run at
-// rtol = value, atol = value * atol_factor (output only at t_end).
-RunResult accuracy_run(const MassSpringModel& model, const std::string& integrator, bool adaptive,
-                       double value, double t_end, const IntegratorOptions& options,
-                       double atol_factor) {
-  RunSettings s;
-  s.integrator = integrator;
-  s.t_end = t_end;
-  s.options = options;
-  if (adaptive) {
-    s.dt = t_end;
-    s.options.rtol = value;
-    s.options.atol = value * atol_factor;
-  } else {
-    s.dt = value;
-  }
-  return simulate(model, s);
-}
-
-// ---------------------------------------------------------------- convergence
 
 namespace {
 
@@ -162,16 +39,10 @@ class ConvergenceExperiment final : public Experiment {
     d.allow_only({"experiment", "name", "title", "description", "integrators", "rtol", "atol",
                   "newton_tol", "cases", "base_dt", "halvings", "tolerances", "atol_factor"});
     options_ = definition_options(d);
-    atol_factor_ = d.positive("atol_factor", 1e-2);
-    double finest_dt = 0.0;
-    for (const std::string& name : definition_integrators(d, "integrators", "all")) {
-      SweepMethod m{name, make_integrator(name)->info(), {}};
-      m.values = accuracy_sweep_values(d, m.info);
-      if (!m.info.adaptive) {
-        finest_dt = finest_dt > 0.0 ? std::min(finest_dt, m.values.back()) : m.values.back();
-      }
-      methods_.push_back(std::move(m));
-    }
+    AccuracySweep sweep = read_accuracy_sweep(d);
+    methods_ = std::move(sweep.methods);
+    atol_factor_ = sweep.atol_factor;
+    const double finest_dt = sweep.finest_dt;
     SceneTotals totals;
     for (const DefinitionObject& c : d.objects("cases")) {
       c.allow_only({"scene", "parameters", "t_end", "reference"});

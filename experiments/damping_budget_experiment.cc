@@ -52,50 +52,26 @@ class BudgetRows final : public Observer {
   bool last_written_ = true;
 };
 
-class DampingBudgetExperiment final : public Experiment {
+class DampingBudgetExperiment final : public TimedCasesExperiment {
  public:
-  explicit DampingBudgetExperiment(const DefinitionObject& d) {
-    d.allow_only({"experiment", "name", "title", "description", "integrators", "rtol", "atol",
-                  "newton_tol", "cases"});
-    options_ = definition_options(d);
-    integrators_ = definition_integrators(d, "integrators", "all");
-    cases_ = read_timed_cases(d);
-    check_timed_case_rows(d, cases_, integrators_.size());
-  }
+  explicit DampingBudgetExperiment(const DefinitionObject& d) : TimedCasesExperiment(d) {}
 
   std::vector<TableSpec> tables() const override {
     return {{"", {"scene", "integrator", "dt", "t", "mechanical", "work_nonconservative", "budget",
                   "numerical"}}};
   }
 
-  std::size_t task_count() const override { return cases_.size() * integrators_.size(); }
-
   TaskOutput run_task(std::size_t index) const override {
-    const TimedCase& c = cases_[index / integrators_.size()];
-    const std::string& name = integrators_[index % integrators_.size()];
-    const MassSpringModel model(c.scene);
-    RunSettings s;
-    s.integrator = name;
-    s.dt = c.dt;
-    s.t_end = c.t_end;
-    s.options = options_;  // every step observed: the work needs each one
+    Task t = task(index);
+    const MassSpringModel model(t.c.scene);
+    t.run.every = 1;  // every step observed: the work needs each one
     TaskOutput out;
     out.rows.resize(1);
-    BudgetRows rows(model, Row().add(c.scene.name).add(name).add(c.dt).str(), c.every,
-                    out.rows[0]);
-    simulate(model, s, {&rows});
+    BudgetRows rows(model, t.prefix, t.c.every, out.rows[0]);
+    simulate(model, t.run, {&rows});
     rows.finish();
     return out;
   }
-
-  nlohmann::json settings() const override {
-    return {{"integrators", integrators_}, {"cases", timed_cases_json(cases_)}};
-  }
-
- private:
-  IntegratorOptions options_;
-  std::vector<std::string> integrators_;
-  std::vector<TimedCase> cases_;
 };
 
 }  // namespace

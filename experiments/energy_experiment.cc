@@ -25,16 +25,9 @@ class EnergyRows final : public Observer {
   std::vector<std::string>& rows_;
 };
 
-class EnergyExperiment final : public Experiment {
+class EnergyExperiment final : public TimedCasesExperiment {
  public:
-  explicit EnergyExperiment(const DefinitionObject& d) {
-    d.allow_only({"experiment", "name", "title", "description", "integrators", "rtol", "atol",
-                  "newton_tol", "cases"});
-    options_ = definition_options(d);
-    integrators_ = definition_integrators(d, "integrators", "all");
-    cases_ = read_timed_cases(d);
-    check_timed_case_rows(d, cases_, integrators_.size());
-  }
+  explicit EnergyExperiment(const DefinitionObject& d) : TimedCasesExperiment(d) {}
 
   std::vector<TableSpec> tables() const override {
     return {{"", {"scene", "integrator", "dt", "t", "kinetic", "spring", "gravity", "total"}},
@@ -42,39 +35,20 @@ class EnergyExperiment final : public Experiment {
                       "wall_seconds", "energy_initial", "energy_final", "energy_scale"}}};
   }
 
-  std::size_t task_count() const override { return cases_.size() * integrators_.size(); }
-
   TaskOutput run_task(std::size_t index) const override {
-    const TimedCase& c = cases_[index / integrators_.size()];
-    const std::string& name = integrators_[index % integrators_.size()];
-    const MassSpringModel model(c.scene);
-    RunSettings s;
-    s.integrator = name;
-    s.dt = c.dt;
-    s.t_end = c.t_end;
-    s.every = c.every;
-    s.options = options_;
+    const Task t = task(index);
+    const MassSpringModel model(t.c.scene);
     TaskOutput out;
     out.rows.resize(2);
-    const std::string prefix = Row().add(c.scene.name).add(name).add(c.dt).str();
-    EnergyRows rows(model, prefix, out.rows[0]);
-    const RunResult r = simulate(model, s, {&rows});
+    EnergyRows rows(model, t.prefix, out.rows[0]);
+    const RunResult r = simulate(model, t.run, {&rows});
     Row run;
-    run.raw(prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps)
+    run.raw(t.prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps)
         .add(r.stats.force_evals).add(r.wall_seconds).add(r.energy_initial).add(r.energy_final)
         .add(model.energy_scale());
     out.rows[1].push_back(run.str());
     return out;
   }
-
-  nlohmann::json settings() const override {
-    return {{"integrators", integrators_}, {"cases", timed_cases_json(cases_)}};
-  }
-
- private:
-  IntegratorOptions options_;
-  std::vector<std::string> integrators_;
-  std::vector<TimedCase> cases_;
 };
 
 }  // namespace

@@ -82,37 +82,32 @@ nlohmann::json timed_cases_json(const std::vector<TimedCase>& cases) {
   return out;
 }
 
-nlohmann::json sweeps_json(const std::vector<SweepMethod>& methods) {
-  nlohmann::json names = nlohmann::json::array();
-  nlohmann::json sweeps = nlohmann::json::object();
-  for (const SweepMethod& m : methods) {
-    names.push_back(m.name);
-    sweeps[m.name] = {{"adaptive", m.info.adaptive},
-                      {"parameter", m.info.adaptive ? "rtol" : "dt"},
-                      {"values", m.values}};
-  }
-  return {{"integrators", names}, {"sweeps", sweeps}};
+TimedCasesExperiment::TimedCasesExperiment(const DefinitionObject& d) {
+  d.allow_only({"experiment", "name", "title", "description", "integrators", "rtol", "atol",
+                "newton_tol", "cases"});
+  options_ = definition_options(d);
+  integrators_ = definition_integrators(d, "integrators", "all");
+  cases_ = read_timed_cases(d);
+  check_timed_case_rows(d, cases_, integrators_.size());
+}
+
+TimedCasesExperiment::Task TimedCasesExperiment::task(std::size_t index) const {
+  const TimedCase& c = cases_[index / integrators_.size()];
+  const std::string& name = integrators_[index % integrators_.size()];
+  RunSettings s;
+  s.integrator = name;
+  s.dt = c.dt;
+  s.t_end = c.t_end;
+  s.every = c.every;
+  s.options = options_;
+  return {c, s, Row().add(c.scene.name).add(name).add(c.dt).str()};
+}
+
+nlohmann::json TimedCasesExperiment::settings() const {
+  return {{"integrators", integrators_}, {"cases", timed_cases_json(cases_)}};
 }
 
 nlohmann::json scene_as_json(const Scene& scene) { return nlohmann::json::parse(scene_to_json(scene)); }
-
-std::optional<Vector> exact_oscillator_positions(const Scene& s, double t) {
-  if (s.particles.size() != 2 || s.springs.size() != 1 || !s.gravity.isZero() || s.drag != 0.0 ||
-      (s.wind && s.wind->coefficient != 0.0) || s.springs[0].damping != 0.0) {
-    return std::nullopt;
-  }
-  const int fixed = s.particles[0].fixed ? 0 : 1;
-  const Particle& anchor = s.particles[static_cast<std::size_t>(fixed)];
-  const Particle& mass = s.particles[static_cast<std::size_t>(1 - fixed)];
-  if (!anchor.fixed || mass.fixed || !mass.v.isZero()) return std::nullopt;
-  const Eigen::Vector3d d = mass.x - anchor.x;
-  const double l = d.norm();
-  const double rest = s.springs[0].rest;
-  const double w = std::sqrt(s.springs[0].k / mass.mass);
-  // Along the spring axis u: l(t) = rest + (l0 - rest) cos(w t) (linear while l > 0).
-  const Eigen::Vector3d x = anchor.x + d / l * (rest + (l - rest) * std::cos(w * t));
-  return Vector(x.head(s.dimension));
-}
 
 void check_time_grid(const DefinitionObject& o, const char* key, double dt, double t_end) {
   try {
@@ -120,54 +115,6 @@ void check_time_grid(const DefinitionObject& o, const char* key, double dt, doub
   } catch (const std::invalid_argument& e) {
     o.fail(key, e.what());
   }
-}
-
-double position_error(const Vector& x, const Vector& x_ref) {
-  return (x - x_ref).lpNorm<Eigen::Infinity>();
-}
-
-std::optional<double> log_log_slope(const std::vector<double>& x, const std::vector<double>& y,
-                                    double floor) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  int n = 0;
-  for (std::size_t k = 0; k < x.size() && k < y.size(); ++k) {
-    if (!(std::isfinite(y[k]) && y[k] > floor && x[k] > 0)) continue;
-    const double lx = std::log(x[k]), ly = std::log(y[k]);
-    sx += lx;
-    sy += ly;
-    sxx += lx * lx;
-    sxy += lx * ly;
-    ++n;
-  }
-  if (n < 2) return std::nullopt;
-  const double denominator = n * sxx - sx * sx;
-  if (denominator == 0.0) return std::nullopt;
-  return (n * sxy - sx * sy) / denominator;
-}
-
-double base_dt_for_order(const DefinitionObject& o, const char* key, int order) {
-  const DefinitionObject table = o.object(key);
-  double best = 0.0;
-  int best_order = 0;
-  for (const auto& [name, value] : table.json().items()) {
-    int k = 0;
-    std::size_t end = 0;
-    try {
-      k = std::stoi(name, &end);
-    } catch (const std::exception&) {
-      end = 0;
-    }
-    if (end == 0 || end != name.size() || k < 1 || name[0] == '+') {
-      table.fail(name, "keys are method orders (1, 2, 4, ...)");
-    }
-    const double dt = table.positive(name.c_str());
-    if (k <= order && k > best_order) {
-      best_order = k;
-      best = dt;
-    }
-  }
-  if (best_order == 0) o.fail(key, "has no entry for order " + std::to_string(order) + " or below");
-  return best;
 }
 
 }  // namespace springlab

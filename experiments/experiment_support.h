@@ -1,5 +1,6 @@
 // Pieces several experiment kinds share: the options a definition sets for
-// every run, errors against a reference, least-squares slopes.
+// every run, resource caps, the timed cases of energy and damping-budget
+// (accuracy sweeps: accuracy_sweep.h).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include <vector>
 
 #include "experiments/definition.h"
+#include "experiments/experiment.h"
 #include "experiments/simulation.h"
 #include "integrators/integrator.h"
 #include "models/mass_spring_model.h"
@@ -24,6 +26,30 @@ struct TimedCase {
 };
 std::vector<TimedCase> read_timed_cases(const DefinitionObject& d);
 nlohmann::json timed_cases_json(const std::vector<TimedCase>& cases);
+
+// The energy and damping-budget experiments: every integrator runs every
+// case, one task per (case, integrator). This reads their common definition
+// (options, integrators, cases; rows capped), counts their tasks and writes
+// their settings; a kind adds its tables and what it records of a run.
+class TimedCasesExperiment : public Experiment {
+ public:
+  std::size_t task_count() const override { return cases_.size() * integrators_.size(); }
+  nlohmann::json settings() const override;
+
+ protected:
+  explicit TimedCasesExperiment(const DefinitionObject& d);
+  struct Task {
+    const TimedCase& c;
+    RunSettings run;     // the integrator at the case's dt, t_end, every, options
+    std::string prefix;  // "scene,integrator,dt": the first fields of its rows
+  };
+  Task task(std::size_t index) const;
+
+ private:
+  IntegratorOptions options_;
+  std::vector<std::string> integrators_;
+  std::vector<TimedCase> cases_;
+};
 
 // Resource caps of an experiment definition (README, "Reliability"), checked
 // while the definition is read, before any task runs: the tasks it makes, the
@@ -50,51 +76,13 @@ class SceneTotals {
 void check_timed_case_rows(const DefinitionObject& d, const std::vector<TimedCase>& cases,
                            std::size_t integrators);
 
-// One integrator's accuracy sweep: dt values (fixed-step) or rtol values
-// (adaptive), largest first. Shared by convergence and work-precision.
-struct SweepMethod {
-  std::string name;
-  IntegratorInfo info;
-  std::vector<double> values;
-};
-// {"integrators": [...], "sweeps": {name: {adaptive, parameter, values}}}
-nlohmann::json sweeps_json(const std::vector<SweepMethod>& methods);
-
 // rtol/atol (adaptive methods), newton_tol (implicit ones) from a definition.
 IntegratorOptions definition_options(const DefinitionObject& o);
 
 // The scene as a JSON object, for the settings file the report shows.
 nlohmann::json scene_as_json(const Scene& scene);
 
-// The exact solution of a scene that is the oscillator (one free particle on
-// one undamped spring from a fixed one, released at rest, no other force):
-// positions of the free unknowns at t. nullopt when the scene is not one.
-std::optional<Vector> exact_oscillator_positions(const Scene& scene, double t);
-
-// max over particles and axes of |x - x_ref|, the error measure the report names.
-double position_error(const Vector& x, const Vector& x_ref);
-
-// Least-squares slope of log(y) against log(x) over points with finite y > floor.
-std::optional<double> log_log_slope(const std::vector<double>& x, const std::vector<double>& y,
-                                    double floor = 0.0);
-
 // Refuses a (dt, t_end) pair with no valid time grid, naming `key` of `o`.
 void check_time_grid(const DefinitionObject& o, const char* key, double dt, double t_end);
-
-// Fixed-step methods' dt by order: "base_dt": {"1": .., "2": .., "4": ..},
-// picking the entry for the largest order key <= the method's order.
-double base_dt_for_order(const DefinitionObject& o, const char* key, int order);
-
-// Accuracy sweeps shared by the convergence and work-precision experiments,
-// defined in convergence_experiment.cc (see there).
-nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, const Scene& scene,
-                                  double finest_dt);
-Vector accuracy_reference_positions(const nlohmann::json& reference, const MassSpringModel& model,
-                                    const Scene& scene, double t_end,
-                                    const IntegratorOptions& options, const std::string& where);
-std::vector<double> accuracy_sweep_values(const DefinitionObject& d, const IntegratorInfo& info);
-RunResult accuracy_run(const MassSpringModel& model, const std::string& integrator, bool adaptive,
-                       double value, double t_end, const IntegratorOptions& options,
-                       double atol_factor);
 
 }  // namespace springlab

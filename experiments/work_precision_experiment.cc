@@ -8,9 +8,9 @@
 #include <memory>
 #include <stdexcept>
 
+#include "experiments/accuracy_sweep.h"
 #include "experiments/experiment.h"
 #include "experiments/experiment_support.h"
-#include "integrators/registry.h"
 
 namespace springlab {
 
@@ -23,17 +23,11 @@ class WorkPrecisionExperiment final : public Experiment {
                   "newton_tol", "scene", "parameters", "t_end", "reference", "base_dt",
                   "halvings", "tolerances", "atol_factor", "repeats"});
     options_ = definition_options(d);
-    atol_factor_ = d.positive("atol_factor", 1e-2);
     repeats_ = d.count("repeats", 3, 1, 1000);
-    double finest_dt = 0.0;
-    for (const std::string& name : definition_integrators(d, "integrators", "all")) {
-      SweepMethod m{name, make_integrator(name)->info(), {}};
-      m.values = accuracy_sweep_values(d, m.info);
-      if (!m.info.adaptive) {
-        finest_dt = finest_dt > 0.0 ? std::min(finest_dt, m.values.back()) : m.values.back();
-      }
-      methods_.push_back(std::move(m));
-    }
+    AccuracySweep sweep = read_accuracy_sweep(d);
+    methods_ = std::move(sweep.methods);
+    atol_factor_ = sweep.atol_factor;
+    const double finest_dt = sweep.finest_dt;
     scene_ = definition_scene(d);
     t_end_ = d.positive("t_end");
     reference_ = accuracy_reference(d, "reference", scene_, finest_dt);
