@@ -27,6 +27,8 @@
 
 #include "experiments/definition.h"
 #include "csv_fields.h"
+#include "experiment_tasks.h"
+#include "run_process.h"
 #include "experiments/experiment.h"
 #include "experiments/experiment_runner.h"
 
@@ -35,7 +37,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
-using Record = std::map<std::string, std::string>;
+using testing::definition_error;
+using testing::Record;
 
 // ---------------------------------------------------------------- helpers --
 
@@ -46,42 +49,10 @@ bool close(double a, double b, double rel) {
   return std::abs(a - b) <= rel * std::max(std::abs(a), std::abs(b));
 }
 
-// One task's rows of every table, as column -> field (rows carry no task column).
+LoadedExperiment parse(const Json& definition) { return testing::parse_definition(definition); }
 std::vector<std::vector<Record>> run_task(const LoadedExperiment& loaded, std::size_t task) {
-  const std::vector<TableSpec> specs = loaded.experiment->tables();
-  const TaskOutput out = loaded.experiment->run_task(task);
-  EXPECT_EQ(out.rows.size(), specs.size());
-  std::vector<std::vector<Record>> tables(specs.size());
-  for (std::size_t t = 0; t < specs.size() && t < out.rows.size(); ++t) {
-    for (const std::string& line : out.rows[t]) {
-      const std::vector<std::string> fields = split(line);
-      EXPECT_EQ(fields.size(), specs[t].columns.size()) << "table " << t << ": " << line;
-      Record r;
-      for (std::size_t c = 0; c < fields.size() && c < specs[t].columns.size(); ++c) {
-        r[specs[t].columns[c]] = fields[c];
-      }
-      tables[t].push_back(r);
-    }
-  }
-  return tables;
+  return testing::task_rows(loaded, task);
 }
-
-LoadedExperiment parse(const Json& definition) {
-  return parse_experiment(definition.dump(), "def.json");
-}
-
-// The message of the DefinitionError parse_experiment throws ("" if none).
-std::string definition_error(const std::string& text) {
-  try {
-    parse_experiment(text, "def.json");
-  } catch (const DefinitionError& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    return std::string("not a DefinitionError: ") + e.what();
-  }
-  return "";
-}
-std::string definition_error(const Json& definition) { return definition_error(definition.dump()); }
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -105,33 +76,16 @@ std::vector<std::string> directory_entries(const fs::path& dir) {
   return names;
 }
 
-// A fresh directory under the system temporary directory, removed afterwards.
-class ScratchDir {
+// A fresh temporary directory (removed afterwards) to write definitions into.
+class ScratchDir : public testing::TempDir {
  public:
-  explicit ScratchDir(const std::string& tag) {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("springlab-test-experiments-" + std::to_string(::getpid()) + "-" + info->name() +
-             "-" + tag);
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const fs::path& path() const { return path_; }
+  explicit ScratchDir(const std::string& tag) : TempDir("test-experiments-" + tag) {}
   // Writes a definition file into the directory; returns its path.
   std::string write(const std::string& file, const Json& definition) const {
-    const fs::path p = path_ / file;
+    const fs::path p = path() / file;
     std::ofstream(p) << definition.dump(2) << "\n";
     return p.string();
   }
-
- private:
-  fs::path path_;
 };
 
 ExperimentRunOptions quiet(const fs::path& out, int jobs = 1) {
@@ -717,6 +671,19 @@ const std::string kMapHeader = "task,scene,integrator,k,dt,w_max,energy_ratio,di
 const std::string kLimitHeader =
     "task,scene,integrator,k,w_max,t_end,max_stable_dt,bracket_lo,bracket_hi,theory_dt,ratio";
 
+// Shard i of n (run_experiment --shard i/n) and the merge of n shards.
+ExperimentRunOptions shard(const fs::path& out, int i, int n, int jobs = 1) {
+  ExperimentRunOptions o = quiet(out, jobs);
+  o.shard_index = i;
+  o.shard_count = n;
+  return o;
+}
+ExperimentRunOptions merge_of(const fs::path& out, int n) {
+  ExperimentRunOptions o = quiet(out);
+  o.merge = n;
+  return o;
+}
+
 TEST(ExperimentRunner, ShardsMergeToTheUnshardedTables) {
   ScratchDir dir("shards");
   const std::string definition = dir.write("budget.json", kBudget);
@@ -725,19 +692,15 @@ TEST(ExperimentRunner, ShardsMergeToTheUnshardedTables) {
 
   const std::vector<std::size_t> expected_tasks = {2, 2, 1};  // 0 3 | 1 4 | 2
   for (int i = 1; i <= 3; ++i) {
-    ExperimentRunOptions o = quiet(sharded);
-    o.shard_index = i;
-    o.shard_count = 3;
-    EXPECT_EQ(run_experiment(definition, o).tasks_done, expected_tasks[static_cast<std::size_t>(i - 1)]);
+    EXPECT_EQ(run_experiment(definition, shard(sharded, i, 3)).tasks_done,
+              expected_tasks[static_cast<std::size_t>(i - 1)]);
     const fs::path shard = sharded / ("budget.shard-" + std::to_string(i) + "-of-3.csv");
     ASSERT_TRUE(fs::is_regular_file(shard)) << shard;
     for (long task : task_column(read_text(shard), kBudgetHeader)) EXPECT_EQ(task % 3, i - 1);
   }
   EXPECT_FALSE(fs::exists(sharded / "budget.csv"));
 
-  ExperimentRunOptions merge = quiet(sharded);
-  merge.merge = 3;
-  EXPECT_EQ(run_experiment(definition, merge).tasks_done, 3u);
+  EXPECT_EQ(run_experiment(definition, merge_of(sharded, 3)).tasks_done, 3u);
   const std::string merged = read_text(sharded / "budget.csv");
   EXPECT_EQ(merged, read_text(whole / "budget.csv"));
   const std::vector<long> tasks = task_column(merged, kBudgetHeader);
@@ -753,15 +716,8 @@ TEST(ExperimentRunner, ShardsMergeTwoTables) {
   const std::string definition = dir.write("stab.json", kStability);
   const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
   EXPECT_EQ(run_experiment(definition, quiet(whole, 3)).tasks_done, 4u + 8u);
-  for (int i = 1; i <= 3; ++i) {
-    ExperimentRunOptions o = quiet(sharded, 2);
-    o.shard_index = i;
-    o.shard_count = 3;
-    run_experiment(definition, o);
-  }
-  ExperimentRunOptions merge = quiet(sharded);
-  merge.merge = 3;
-  run_experiment(definition, merge);
+  for (int i = 1; i <= 3; ++i) run_experiment(definition, shard(sharded, i, 3, 2));
+  run_experiment(definition, merge_of(sharded, 3));
   for (const char* table : {"stab.csv", "stab-map.csv"}) {
     EXPECT_EQ(read_text(sharded / table), read_text(whole / table)) << table;
   }
@@ -775,14 +731,8 @@ TEST(ExperimentRunner, MergeRefusesAMissingShard) {
   ScratchDir dir("missing");
   const std::string definition = dir.write("budget.json", kBudget);
   const fs::path out = dir.path() / "out";
-  for (int i : {1, 3}) {
-    ExperimentRunOptions o = quiet(out);
-    o.shard_index = i;
-    o.shard_count = 3;
-    run_experiment(definition, o);
-  }
-  ExperimentRunOptions merge = quiet(out);
-  merge.merge = 3;
+  for (int i : {1, 3}) run_experiment(definition, shard(out, i, 3));
+  const ExperimentRunOptions merge = merge_of(out, 3);
   const std::string missing = (out / "budget.shard-2-of-3.csv").string();
   try {
     run_experiment(definition, merge);
@@ -802,15 +752,10 @@ TEST(ExperimentRunner, MoreShardsThanTasks) {
   const fs::path whole = dir.path() / "whole", sharded = dir.path() / "sharded";
   run_experiment(definition, quiet(whole, 4));
   for (int i = 1; i <= 7; ++i) {
-    ExperimentRunOptions o = quiet(sharded, 3);
-    o.shard_index = i;
-    o.shard_count = 7;
-    EXPECT_EQ(run_experiment(definition, o).tasks_done, i <= 5 ? 1u : 0u);
+    EXPECT_EQ(run_experiment(definition, shard(sharded, i, 7, 3)).tasks_done, i <= 5 ? 1u : 0u);
   }
   EXPECT_EQ(read_text(sharded / "budget.shard-7-of-7.csv"), kBudgetHeader + "\n");
-  ExperimentRunOptions merge = quiet(sharded);
-  merge.merge = 7;
-  EXPECT_EQ(run_experiment(definition, merge).tasks_done, 7u);
+  EXPECT_EQ(run_experiment(definition, merge_of(sharded, 7)).tasks_done, 7u);
   EXPECT_EQ(read_text(sharded / "budget.csv"), read_text(whole / "budget.csv"));
 }
 
@@ -818,14 +763,8 @@ TEST(ExperimentRunner, MergeRefusesForeignShards) {
   ScratchDir dir("foreign");
   const std::string definition = dir.write("budget.json", kBudget);
   const fs::path out = dir.path() / "out";
-  for (int i : {1, 2}) {
-    ExperimentRunOptions o = quiet(out);
-    o.shard_index = i;
-    o.shard_count = 2;
-    run_experiment(definition, o);
-  }
-  ExperimentRunOptions merge = quiet(out);
-  merge.merge = 2;
+  for (int i : {1, 2}) run_experiment(definition, shard(out, i, 2));
+  const ExperimentRunOptions merge = merge_of(out, 2);
   const fs::path second = out / "budget.shard-2-of-2.csv";
   const std::string original = read_text(second);
   auto merge_error = [&]() -> std::string {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "csv_fields.h"
+#include "experiment_tasks.h"
 #include "experiments/experiment.h"
 #include "integrators/registry.h"
 
@@ -21,7 +22,8 @@ namespace springlab {
 namespace {
 
 using Json = nlohmann::json;
-using Record = std::map<std::string, std::string>;
+using testing::definition_error;
+using testing::Record;
 
 const std::vector<std::string> kConvergenceColumns = {
     "scene", "integrator", "adaptive", "parameter", "value", "error", "steps", "force_evals",
@@ -32,41 +34,7 @@ const std::vector<std::string> kWorkPrecisionColumns = {
     "scene", "integrator", "adaptive", "parameter", "value", "error", "wall_seconds",
     "force_evals", "steps", "status"};
 
-std::vector<std::string> split(const std::string& line) { return csv_fields::split_fields(line); }
 double number(const std::string& field) { return csv_fields::field_number(field, /*empty_allowed=*/true); }
-
-// Runs one task and returns its rows of every table as column -> field.
-std::vector<std::vector<Record>> run(const LoadedExperiment& loaded, std::size_t task) {
-  const std::vector<TableSpec> specs = loaded.experiment->tables();
-  const TaskOutput out = loaded.experiment->run_task(task);
-  EXPECT_EQ(out.rows.size(), specs.size());
-  std::vector<std::vector<Record>> tables(specs.size());
-  for (std::size_t t = 0; t < specs.size() && t < out.rows.size(); ++t) {
-    for (const std::string& line : out.rows[t]) {
-      const std::vector<std::string> fields = split(line);
-      EXPECT_EQ(fields.size(), specs[t].columns.size()) << line;
-      Record r;
-      for (std::size_t c = 0; c < fields.size() && c < specs[t].columns.size(); ++c) {
-        r[specs[t].columns[c]] = fields[c];
-      }
-      tables[t].push_back(r);
-    }
-  }
-  return tables;
-}
-
-LoadedExperiment parse(const Json& definition) {
-  return parse_experiment(definition.dump(), "test.json");
-}
-
-std::string definition_error(const Json& definition) {
-  try {
-    parse(definition);
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(accepted)";
-}
 
 const Json kBaseDt = {{"1", 1e-3}, {"2", 1e-2}, {"4", 1e-2}};
 
@@ -92,7 +60,7 @@ Json chain_case(double t_end = 0.25, double reference_dt = 2.5e-5) {
 // ------------------------------------------------------------ convergence
 
 TEST(ExperimentAccuracyConvergence, TablesFollowTheDataContract) {
-  const LoadedExperiment loaded = parse(oscillator_convergence("verlet"));
+  const LoadedExperiment loaded = testing::parse_definition(oscillator_convergence("verlet"));
   const std::vector<TableSpec> tables = loaded.experiment->tables();
   ASSERT_EQ(tables.size(), 2u);
   EXPECT_EQ(tables[0].suffix, "");
@@ -109,9 +77,9 @@ class ExperimentAccuracyOrder : public ::testing::TestWithParam<std::string> {};
 TEST_P(ExperimentAccuracyOrder, OscillatorAgainstExactSolution) {
   const std::string name = GetParam();
   const IntegratorInfo info = make_integrator(name)->info();
-  const LoadedExperiment loaded = parse(oscillator_convergence(name));
+  const LoadedExperiment loaded = testing::parse_definition(oscillator_convergence(name));
   ASSERT_EQ(loaded.experiment->task_count(), 1u);
-  const auto tables = run(loaded, 0);
+  const auto tables = testing::task_rows(loaded, 0);
   const std::vector<Record>& points = tables[0];
   ASSERT_EQ(tables[1].size(), 1u);
   const Record& orders = tables[1][0];
@@ -170,11 +138,11 @@ TEST(ExperimentAccuracyConvergence, ChainAgainstReferenceRun) {
   Json d = oscillator_convergence("verlet");
   d["integrators"] = {"symplectic-euler", "verlet", "rk4"};
   d["cases"] = {chain_case()};
-  const LoadedExperiment loaded = parse(d);
+  const LoadedExperiment loaded = testing::parse_definition(d);
   ASSERT_EQ(loaded.experiment->task_count(), 3u);
   const int expected[] = {1, 2, 4};
   for (std::size_t task = 0; task < 3; ++task) {
-    const auto tables = run(loaded, task);
+    const auto tables = testing::task_rows(loaded, task);
     ASSERT_EQ(tables[0].size(), 4u);
     for (const Record& p : tables[0]) EXPECT_EQ(p.at("status"), "completed");
     const Record& orders = tables[1].at(0);
@@ -189,8 +157,8 @@ TEST(ExperimentAccuracyConvergence, DivergedPointsHaveNoErrorAndNoFit) {
   d["base_dt"] = {{"1", 0.05}};
   d["halvings"] = 2;
   d["cases"] = {chain_case(1.0, 1e-4)};
-  const LoadedExperiment loaded = parse(d);
-  const auto tables = run(loaded, 0);
+  const LoadedExperiment loaded = testing::parse_definition(d);
+  const auto tables = testing::task_rows(loaded, 0);
   ASSERT_EQ(tables[0].size(), 2u);
   for (const Record& p : tables[0]) {
     EXPECT_EQ(p.at("status"), "diverged");
@@ -210,12 +178,12 @@ TEST(ExperimentAccuracyConvergence, FailedReferenceRunIsAnError) {
   Json c = chain_case(1.0);
   c["reference"] = {{"integrator", "explicit-euler"}, {"dt", 0.02}};
   d["cases"] = {c};
-  const LoadedExperiment loaded = parse(d);
+  const LoadedExperiment loaded = testing::parse_definition(d);
   try {
     loaded.experiment->run_task(0);
     ADD_FAILURE() << "no error";
   } catch (const std::runtime_error& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("test.json: cases[0].reference: the reference run "
+    EXPECT_EQ(std::string(e.what()).rfind("def.json: cases[0].reference: the reference run "
                                           "(explicit-euler, dt 0.02) on scene 'chain' diverged "
                                           "at t = ",
                                           0),
@@ -227,7 +195,7 @@ TEST(ExperimentAccuracyConvergence, FailedReferenceRunIsAnError) {
 TEST(ExperimentAccuracyConvergence, SettingsNameTheSweeps) {
   Json d = oscillator_convergence("rk4");
   d["integrators"] = {"rk4", "cvode-bdf"};
-  const LoadedExperiment loaded = parse(d);
+  const LoadedExperiment loaded = testing::parse_definition(d);
   const Json s = loaded.experiment->settings();
   EXPECT_EQ(s.at("integrators"), Json({"rk4", "cvode-bdf"}));
   EXPECT_EQ(s.at("cases").at(0).at("reference"), "exact");
@@ -241,95 +209,95 @@ TEST(ExperimentAccuracyConvergence, DefinitionErrorsNameTheElement) {
   Json d = oscillator_convergence("rk4");
   d["halving"] = 5;
   EXPECT_EQ(definition_error(d),
-            "test.json: unknown key 'halving' (allowed: experiment, name, title, description, "
+            "def.json: unknown key 'halving' (allowed: experiment, name, title, description, "
             "integrators, rtol, atol, newton_tol, cases, base_dt, halvings, tolerances, "
             "atol_factor)");
 
   d = oscillator_convergence("rk4");
   d["cases"][0]["dt"] = 0.01;
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0]: unknown key 'dt' (allowed: scene, parameters, t_end, reference)");
+            "def.json: cases[0]: unknown key 'dt' (allowed: scene, parameters, t_end, reference)");
 
   d = oscillator_convergence("rk4");
   d["cases"].push_back(chain_case());
   d["cases"][1]["reference"] = "exact";
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[1].reference: \"exact\" needs the oscillator (one free particle on "
+            "def.json: cases[1].reference: \"exact\" needs the oscillator (one free particle on "
             "one undamped spring, released at rest, no other force, never passing the anchor); "
             "scene 'chain' is not one: use {\"integrator\": \"rk4\", \"dt\": 1e-5}");
 
   d = oscillator_convergence("rk4");
   d["cases"][0]["parameters"] = {{"rest", 0.1}, {"amplitude", 0.2}};
-  EXPECT_EQ(definition_error(d).rfind("test.json: cases[0].reference: \"exact\" needs", 0), 0u);
+  EXPECT_EQ(definition_error(d).rfind("def.json: cases[0].reference: \"exact\" needs", 0), 0u);
 
   d = oscillator_convergence("rk4");
   d["cases"][0]["reference"] = "analytic";
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0].reference: expected \"exact\" or {\"integrator\": NAME, "
+            "def.json: cases[0].reference: expected \"exact\" or {\"integrator\": NAME, "
             "\"dt\": H}");
 
   d = oscillator_convergence("rk4");
   d["cases"][0].erase("reference");
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0].reference: missing (\"exact\" or {\"integrator\": \"rk4\", "
+            "def.json: cases[0].reference: missing (\"exact\" or {\"integrator\": \"rk4\", "
             "\"dt\": 1e-5})");
 
   d = oscillator_convergence("rk4");
   d["cases"] = {chain_case()};
   d["cases"][0]["reference"]["dt"] = 1e-2;
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0].reference.dt: must be below the smallest step of the sweep "
+            "def.json: cases[0].reference.dt: must be below the smallest step of the sweep "
             "(0.00125), got 0.01");
 
   d["cases"][0]["reference"] = {{"integrator", "cvode-bdf"}, {"dt", 1e-5}};
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0].reference.integrator: 'cvode-bdf' is adaptive; the reference "
+            "def.json: cases[0].reference.integrator: 'cvode-bdf' is adaptive; the reference "
             "must be a fixed-step method");
 
   d["cases"][0]["reference"] = {{"integrator", "rk5"}, {"dt", 1e-5}};
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0].reference.integrator: unknown integrator 'rk5'");
+            "def.json: cases[0].reference.integrator: unknown integrator 'rk5'");
 
   d["cases"][0]["reference"] = {{"integrator", "rk4"}, {"dt", 1e-5}, {"rtol", 1e-9}};
   EXPECT_EQ(definition_error(d),
-            "test.json: cases[0].reference: unknown key 'rtol' (allowed: integrator, dt)");
+            "def.json: cases[0].reference: unknown key 'rtol' (allowed: integrator, dt)");
 }
 
 TEST(ExperimentAccuracyConvergence, BadSweepsAreRefused) {
   Json d = oscillator_convergence("explicit-euler");
   d["base_dt"] = {{"2", 1e-2}, {"4", 4e-2}};
-  EXPECT_EQ(definition_error(d), "test.json: base_dt: has no entry for order 1 or below");
+  EXPECT_EQ(definition_error(d), "def.json: base_dt: has no entry for order 1 or below");
 
   d["base_dt"] = {{"one", 1e-3}};
-  EXPECT_EQ(definition_error(d), "test.json: base_dt.one: keys are method orders (1, 2, 4, ...)");
+  EXPECT_EQ(definition_error(d), "def.json: base_dt.one: keys are method orders (1, 2, 4, ...)");
 
   d["base_dt"] = {{"1", -1e-3}};
-  EXPECT_EQ(definition_error(d), "test.json: base_dt.1: must be > 0 (got -0.001)");
+  EXPECT_EQ(definition_error(d), "def.json: base_dt.1: must be > 0 (got -0.001)");
 
   d["base_dt"] = Json::object();
   EXPECT_EQ(definition_error(d),
-            "test.json: base_dt: expected steps by method order, e.g. {\"1\": 2e-3, \"2\": 1e-2, "
+            "def.json: base_dt: expected steps by method order, e.g. {\"1\": 2e-3, \"2\": 1e-2, "
             "\"4\": 4e-2}");
 
   d.erase("base_dt");
-  EXPECT_EQ(definition_error(d), "test.json: base_dt: missing");
+  EXPECT_EQ(definition_error(d), "def.json: base_dt: missing");
 
   // Validated even when no method uses it.
   d = oscillator_convergence("cvode-bdf");
   d["base_dt"] = {{"1", 0}};
-  EXPECT_EQ(definition_error(d), "test.json: base_dt.1: must be > 0 (got 0)");
+  EXPECT_EQ(definition_error(d), "def.json: base_dt.1: must be > 0 (got 0)");
 
   d = oscillator_convergence("rk4");
   d["halvings"] = 1;
-  EXPECT_EQ(definition_error(d), "test.json: halvings: must be a whole number in [2, 40] (got 1)");
+  EXPECT_EQ(definition_error(d), "def.json: halvings: must be a whole number in [2, 40] (got 1)");
 
   d = oscillator_convergence("cvode-bdf");
   d["tolerances"] = {1e-4, 2};
   EXPECT_EQ(definition_error(d),
-            "test.json: tolerances[1]: must be below 1 (a relative tolerance)");
+            "def.json: tolerances[1]: must be below 1 (a relative tolerance)");
 
   d["tolerances"] = {1e-4, -1e-6};
-  EXPECT_EQ(definition_error(d), "test.json: tolerances[1]: must be a finite number > 0");
+  EXPECT_EQ(definition_error(d), "def.json: tolerances[1]: must be a finite number > 0");
 }
 
 // ------------------------------------------------------------ work-precision
@@ -349,7 +317,7 @@ Json chain_work_precision() {
 }
 
 TEST(ExperimentAccuracyWorkPrecision, CostGrowsAndErrorShrinks) {
-  const LoadedExperiment loaded = parse(chain_work_precision());
+  const LoadedExperiment loaded = testing::parse_definition(chain_work_precision());
   const std::vector<TableSpec> tables = loaded.experiment->tables();
   ASSERT_EQ(tables.size(), 1u);
   EXPECT_EQ(tables[0].suffix, "");
@@ -357,7 +325,7 @@ TEST(ExperimentAccuracyWorkPrecision, CostGrowsAndErrorShrinks) {
   ASSERT_EQ(loaded.experiment->task_count(), 4u);
   const char* names[] = {"symplectic-euler", "implicit-euler", "rk4", "cvode-bdf"};
   for (std::size_t task = 0; task < 4; ++task) {
-    const std::vector<Record> rows = run(loaded, task).at(0);
+    const std::vector<Record> rows = testing::task_rows(loaded, task).at(0);
     const bool adaptive = task == 3;
     ASSERT_EQ(rows.size(), adaptive ? 2u : 3u) << names[task];
     for (std::size_t k = 0; k < rows.size(); ++k) {
@@ -401,9 +369,9 @@ TEST(ExperimentAccuracyWorkPrecision, ExplicitEulerDivergesWhereImplicitEulerRun
   d["t_end"] = 1;
   d["reference"]["dt"] = 1e-4;
   d["repeats"] = 1;
-  const LoadedExperiment loaded = parse(d);
-  const std::vector<Record> explicit_rows = run(loaded, 0).at(0);
-  const std::vector<Record> implicit_rows = run(loaded, 1).at(0);
+  const LoadedExperiment loaded = testing::parse_definition(d);
+  const std::vector<Record> explicit_rows = testing::task_rows(loaded, 0).at(0);
+  const std::vector<Record> implicit_rows = testing::task_rows(loaded, 1).at(0);
   ASSERT_EQ(explicit_rows.size(), 2u);
   ASSERT_EQ(implicit_rows.size(), 2u);
   for (std::size_t k = 0; k < 2; ++k) {
@@ -418,24 +386,24 @@ TEST(ExperimentAccuracyWorkPrecision, DefinitionErrorsNameTheElement) {
   Json d = chain_work_precision();
   d["cases"] = Json::array();
   EXPECT_EQ(definition_error(d),
-            "test.json: unknown key 'cases' (allowed: experiment, name, title, description, "
+            "def.json: unknown key 'cases' (allowed: experiment, name, title, description, "
             "integrators, rtol, atol, newton_tol, scene, parameters, t_end, reference, base_dt, "
             "halvings, tolerances, atol_factor, repeats)");
 
   d = chain_work_precision();
   d["reference"] = "exact";
   EXPECT_EQ(definition_error(d),
-            "test.json: reference: \"exact\" needs the oscillator (one free particle on one "
+            "def.json: reference: \"exact\" needs the oscillator (one free particle on one "
             "undamped spring, released at rest, no other force, never passing the anchor); scene "
             "'chain' is not one: use {\"integrator\": \"rk4\", \"dt\": 1e-5}");
 
   d = chain_work_precision();
   d["repeats"] = 0;
-  EXPECT_EQ(definition_error(d), "test.json: repeats: must be a whole number in [1, 1000] (got 0)");
+  EXPECT_EQ(definition_error(d), "def.json: repeats: must be a whole number in [1, 1000] (got 0)");
 
   d = chain_work_precision();
   d.erase("t_end");
-  EXPECT_EQ(definition_error(d), "test.json: t_end: missing");
+  EXPECT_EQ(definition_error(d), "def.json: t_end: missing");
 }
 
 TEST(ExperimentAccuracyWorkPrecision, OscillatorMayUseTheExactSolution) {
@@ -445,8 +413,8 @@ TEST(ExperimentAccuracyWorkPrecision, OscillatorMayUseTheExactSolution) {
   d["reference"] = "exact";
   d["integrators"] = {"verlet"};
   d["repeats"] = 1;
-  const LoadedExperiment loaded = parse(d);
-  const std::vector<Record> rows = run(loaded, 0).at(0);
+  const LoadedExperiment loaded = testing::parse_definition(d);
+  const std::vector<Record> rows = testing::task_rows(loaded, 0).at(0);
   ASSERT_EQ(rows.size(), 3u);
   // Verlet, order 2: each halving of dt divides the error by about 4.
   for (std::size_t k = 1; k < rows.size(); ++k) {

@@ -12,6 +12,7 @@
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
 #include "models/mass_spring_model.h"
+#include "registry_suite.h"
 #include "scenes_for_tests.h"
 
 namespace springlab {
@@ -21,26 +22,7 @@ using testing::damped_windy_chain;
 using testing::oscillator;
 using testing::swinging_spring;
 
-class EveryIntegrator : public ::testing::TestWithParam<std::string> {
- protected:
-  IntegratorInfo info() const { return make_integrator(GetParam())->info(); }
-  RunSettings settings(double dt, double t_end) const {
-    RunSettings s;
-    s.integrator = GetParam();
-    s.dt = dt;
-    s.t_end = t_end;
-    s.options.newton_tol = 1e-13;
-    return s;
-  }
-};
-
-std::string test_name(const ::testing::TestParamInfo<std::string>& p) {
-  std::string name = p.param;
-  for (char& c : name) {
-    if (c == '-') c = '_';
-  }
-  return name;
-}
+class EveryIntegrator : public testing::RegistryTest {};
 
 double mechanical_energy(const MassSpringModel& m, const Vector& x, const Vector& v) {
   return m.energies(x, v).total();
@@ -289,7 +271,7 @@ TEST_P(EveryIntegrator, SameInputsGiveBitIdenticalResults) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegrator, ::testing::ValuesIn(integrator_names()),
-                         test_name);
+                         testing::registry_test_name);
 
 }  // namespace
 }  // namespace springlab

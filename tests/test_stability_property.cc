@@ -25,6 +25,7 @@
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
 #include "models/mass_spring_model.h"
+#include "registry_suite.h"
 #include "scenes_for_tests.h"
 
 namespace springlab {
@@ -32,26 +33,7 @@ namespace {
 
 using testing::oscillator;
 
-class DeclaredStability : public ::testing::TestWithParam<std::string> {
- protected:
-  IntegratorInfo info() const { return make_integrator(GetParam())->info(); }
-  RunSettings settings(double dt, double t_end) const {
-    RunSettings s;
-    s.integrator = GetParam();
-    s.dt = dt;
-    s.t_end = t_end;
-    s.options.newton_tol = 1e-13;
-    return s;
-  }
-};
-
-std::string test_name(const ::testing::TestParamInfo<std::string>& p) {
-  std::string name = p.param;
-  for (char& c : name) {
-    if (c == '-') c = '_';
-  }
-  return name;
-}
+class DeclaredStability : public testing::RegistryTest {};
 
 bool stiff_decay_stable(const IntegratorInfo& i) {
   return i.stability == StabilityKind::kAAlpha || stable_on_imaginary_axis(i);
@@ -214,7 +196,7 @@ TEST_P(DeclaredStability, AdaptiveStepsThroughAStiffDecay) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, DeclaredStability, ::testing::ValuesIn(integrator_names()),
-                         test_name);
+                         testing::registry_test_name);
 
 }  // namespace
 }  // namespace springlab
