@@ -125,7 +125,7 @@ class StabilityRegionExperiment final : public Experiment {
     const Limit limit = find_limit(model, info);
     TaskOutput out;
     out.rows.resize(3);
-    double z_extent_re_lo = -3.5, z_extent_re_hi = 1.0, z_extent_im = 3.5;
+    double re_lo = 0.0, re_hi = 0.0, im_hi = 0.0;  // every z shown, and 0
     for (const double factor : factors_) {
       const double h = factor * limit.dt;
       RunSettings run = settings(name, h, steps_ * limit.dt);
@@ -135,9 +135,9 @@ class StabilityRegionExperiment final : public Experiment {
       double max_r = 0.0;
       for (std::size_t i = 0; i < lambda_.size(); ++i) {
         const Complex z = h * lambda_[i];
-        z_extent_re_lo = std::min(z_extent_re_lo, 1.15 * z.real());
-        z_extent_re_hi = std::max(z_extent_re_hi, 1.15 * z.real());
-        z_extent_im = std::max(z_extent_im, 1.15 * std::abs(z.imag()));
+        re_lo = std::min(re_lo, z.real());
+        re_hi = std::max(re_hi, z.real());
+        im_hi = std::max(im_hi, std::abs(z.imag()));
         Row row;
         row.raw(prefix).add(static_cast<long>(i)).add(lambda_[i].real()).add(lambda_[i].imag())
             .add(z.real()).add(z.imag());
@@ -161,28 +161,7 @@ class StabilityRegionExperiment final : public Experiment {
       row.add(r.diverged() ? 1 : 0).add(r.diverged_at);
       out.rows[0].push_back(row.str());
     }
-    if (info.stability_function) {
-      // |R| on a grid covering the region near the origin and every z shown,
-      // at multiples of a round spacing 1/q (so coordinates print short), |R|
-      // rounded to 1e-6: enough to draw the boundary |R| = 1.
-      const double span = std::max(z_extent_re_hi - z_extent_re_lo, 2.0 * z_extent_im);
-      double q = 20.0;
-      for (const double coarser : {10.0, 5.0, 4.0, 2.0, 1.0}) {
-        if (span * q <= grid_ - 1) break;
-        q = coarser;
-      }
-      const long re_lo = std::lround(std::floor(z_extent_re_lo * q));
-      const long re_hi = std::lround(std::ceil(z_extent_re_hi * q));
-      const long im_hi = std::lround(std::ceil(z_extent_im * q));
-      const std::string prefix = Row().add(scene_.name).add(name).str();
-      for (long a = -im_hi; a <= im_hi; ++a) {
-        for (long b = re_lo; b <= re_hi; ++b) {
-          const Complex z(static_cast<double>(b) / q, static_cast<double>(a) / q);
-          const double r = std::round(std::abs(info.stability_function(z)) * 1e6) / 1e6;
-          out.rows[2].push_back(Row().raw(prefix).add(z.real()).add(z.imag()).add(r).str());
-        }
-      }
-    }
+    if (info.stability_function) write_region(info, region_window(re_lo, re_hi, im_hi), out.rows[2]);
     return out;
   }
 
@@ -204,6 +183,59 @@ class StabilityRegionExperiment final : public Experiment {
     s.blowup = blowup_;
     s.options = options_;
     return s;
+  }
+
+  struct Window {
+    double re_lo, re_hi, im_hi;  // Im from -im_hi to im_hi
+  };
+
+  // Where |R| is drawn: the z shown (and 0), padded by 15% of the larger
+  // side, neither side under half the other; joined with the region's core
+  // [-3, 1] x [-3, 3] unless the z are all much closer to 0 than that (then
+  // the window zooms in on them: near 0 the boundary passes close by).
+  static Window region_window(double re_lo, double re_hi, double im_hi) {
+    double side = std::max(re_hi - re_lo, 2.0 * im_hi);
+    if (side == 0.0) side = 1.0;
+    const double mid = 0.5 * (re_lo + re_hi);
+    const double half_re = std::max(0.5 * (re_hi - re_lo), 0.25 * side) + 0.15 * side;
+    Window w{mid - half_re, mid + half_re, std::max(im_hi, 0.25 * side) + 0.15 * side};
+    if (side >= 0.2 * 6.0) {
+      w.re_lo = std::min(w.re_lo, -3.0);
+      w.re_hi = std::max(w.re_hi, 1.0);
+      w.im_hi = std::max(w.im_hi, 3.0);
+    }
+    return w;
+  }
+
+  // |R(z)| on the window at a round spacing s (1, 2, 2.5 or 5 times a power
+  // of 10) with at most grid_ points a side, coordinates k s computed as k / q
+  // (q = 1/s) so they print short; |R| rounded to 1e-6, enough to draw the
+  // boundary |R| = 1.
+  void write_region(const IntegratorInfo& info, const Window& w,
+                    std::vector<std::string>& rows) const {
+    const double span = std::max(w.re_hi - w.re_lo, 2.0 * w.im_hi);
+    double spacing = 0.0;
+    for (double decade = 1e-6; spacing == 0.0; decade *= 10.0) {
+      for (const double m : {1.0, 2.0, 2.5, 5.0}) {
+        if (span / (m * decade) <= grid_ - 1) {
+          spacing = m * decade;
+          break;
+        }
+      }
+    }
+    const double q = spacing < 1.0 ? std::round(1.0 / spacing) : 0.0;
+    auto at = [&](long k) { return q > 0.0 ? static_cast<double>(k) / q : k * spacing; };
+    const long b_lo = std::lround(std::floor(w.re_lo / spacing));
+    const long b_hi = std::lround(std::ceil(w.re_hi / spacing));
+    const long a_hi = std::lround(std::ceil(w.im_hi / spacing));
+    const std::string prefix = Row().add(scene_.name).add(info.name).str();
+    for (long a = -a_hi; a <= a_hi; ++a) {
+      for (long b = b_lo; b <= b_hi; ++b) {
+        const Complex z(at(b), at(a));
+        const double r = std::round(std::abs(info.stability_function(z)) * 1e6) / 1e6;
+        rows.push_back(Row().raw(prefix).add(z.real()).add(z.imag()).add(r).str());
+      }
+    }
   }
 
   Limit find_limit(const MassSpringModel& model, const IntegratorInfo& info) const {
