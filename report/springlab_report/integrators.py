@@ -1,0 +1,99 @@
+"""What the report knows about integrators: only what `springlab list --json`
+wrote into integrators.json (name, family, order, adaptive, stability,
+colour, marker). Every figure draws a method with its own colour and marker
+from there, so it looks the same in every figure of every report.
+
+Without that file (data from an older springlab) the facts the tables carry
+are used (the `adaptive` column) and colours come from a fixed palette by a
+hash of the name: still the same in every report, but not the program's.
+"""
+
+import zlib
+
+from .data import DataError, read_json
+
+FAMILIES = ("explicit", "symplectic", "implicit", "adaptive")
+FAMILY_TITLES = {"explicit": "explicit", "symplectic": "symplectic", "implicit": "implicit",
+                 "adaptive": "adaptive (SUNDIALS)", "unknown": "unknown family"}
+_FALLBACK_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
+                     "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#000000", "#393b79"]
+_FALLBACK_MARKERS = ["o", "s", "^", "D", "v", "P", "X", "<", ">", "h", "p", "*"]
+
+
+class Integrators:
+    def __init__(self, entries, source):
+        self.entries = entries    # name -> dict
+        self.source = source      # the file read, or None
+        self.order_index = {n: k for k, n in enumerate(sorted(entries))}
+
+    @classmethod
+    def load(cls, path):
+        if not path.is_file():
+            return cls({}, None)
+        doc = read_json(path)
+        items = doc.get("integrators") if isinstance(doc, dict) else None
+        if not isinstance(items, list):
+            raise DataError(path, None, "expected {\"integrators\": [...]} (springlab list --json)")
+        entries = {}
+        for j, e in enumerate(items):
+            if not isinstance(e, dict) or not isinstance(e.get("name"), str):
+                raise DataError(path, None, "integrators[%d]: expected an object with a name" % j)
+            entries[e["name"]] = e
+        return cls(entries, path)
+
+    def learn(self, name, adaptive=None):
+        """A method seen in the data but not in integrators.json."""
+        if name not in self.entries:
+            self.entries[name] = {"name": name, "missing": True}
+            if adaptive is not None:
+                self.entries[name]["adaptive"] = bool(adaptive)
+
+    def missing(self):
+        return sorted(n for n, e in self.entries.items() if e.get("missing"))
+
+    def get(self, name, key, default=None):
+        return self.entries.get(name, {}).get(key, default)
+
+    def colour(self, name):
+        c = self.get(name, "colour")
+        if isinstance(c, str):
+            return c
+        return _FALLBACK_COLOURS[zlib.crc32(name.encode()) % len(_FALLBACK_COLOURS)]
+
+    def marker(self, name):
+        m = self.get(name, "marker")
+        if isinstance(m, str):
+            return m
+        return _FALLBACK_MARKERS[zlib.crc32(name.encode()) // 7 % len(_FALLBACK_MARKERS)]
+
+    def adaptive(self, name):
+        return bool(self.get(name, "adaptive", False))
+
+    def family(self, name):
+        f = self.get(name, "family")
+        if isinstance(f, str):
+            return f
+        return "adaptive" if self.adaptive(name) else "unknown"
+
+    def order(self, name):
+        return self.get(name, "order")
+
+    def stability(self, name):
+        s = self.get(name, "stability")
+        return s if isinstance(s, dict) else {}
+
+    def linestyle(self, name):
+        return "--" if self.adaptive(name) else "-"
+
+    def style(self, name, **extra):
+        """matplotlib keywords: colour, marker, line style."""
+        kw = dict(color=self.colour(name), marker=self.marker(name), ls=self.linestyle(name))
+        kw.update(extra)
+        return kw
+
+    def sort(self, names):
+        """By family (explicit, symplectic, implicit, adaptive), then by name."""
+        def key(n):
+            f = self.family(n)
+            return (FAMILIES.index(f) if f in FAMILIES else len(FAMILIES), n)
+        return sorted(set(names), key=key)

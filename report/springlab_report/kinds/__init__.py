@@ -1,0 +1,17 @@
+"""The registry of experiment kinds: one module per kind, each with KIND (the
+name in the settings file's "experiment"), TITLE, ABOUT (what theory says to
+look for) and render(experiment, context) -> HTML. The page shows the kinds
+in this order; adding a kind is one module and one line here."""
+
+from . import (cloth_showcase, convergence, damping_budget, energy, stability, stability_region,
+               work_precision)
+
+KINDS = {m.KIND: m for m in (
+    energy,
+    stability,
+    stability_region,
+    convergence,
+    work_precision,
+    damping_budget,
+    cloth_showcase,
+)}

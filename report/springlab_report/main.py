@@ -1,0 +1,119 @@
+"""Reading the data directory and writing the page (make_report.py's work)."""
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+
+from . import bench as bench_section
+from .data import DataError
+from .data import load_experiments
+from .figures import RC, Figures, esc
+from .integrators import Integrators
+from .kinds import KINDS
+from .page import Context, attempt, integrators_html, page, section
+
+PROG = "make_report.py"
+INTEGRATORS_FILE = "integrators.json"
+
+
+def collect_names(experiments, integrators):
+    """Every integrator the data names; methods integrators.json does not
+    list are learned from the tables (their `adaptive` column where there is one)."""
+    names = set()
+    for e in experiments:
+        for t in e.tables.values():
+            if not t.has("integrator"):
+                continue
+            col = t.text("integrator")
+            adaptive = t.num("adaptive") if t.has("adaptive") else None
+            for r, n in enumerate(col):
+                names.add(n)
+                integrators.learn(n, None if adaptive is None else adaptive[r])
+    return names
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog=PROG, description="Render the springlab course experiments "
+                                 "as one self-contained HTML page.")
+    ap.add_argument("--data", required=True, help="directory with the experiment CSV/JSON files "
+                    "and integrators.json")
+    ap.add_argument("--out", required=True, help="output directory (index.html and PNGs)")
+    ap.add_argument("--bench", help="Google Benchmark JSON file from springlab_bench (default: "
+                    "%s in the data directory, when it is there)" % bench_section.BENCH_FILE)
+    args = ap.parse_args(argv)
+
+    data_dir = Path(args.data)
+    if not data_dir.is_dir():
+        sys.stderr.write("%s: error: %s: not a directory\n" % (PROG, data_dir))
+        return 1
+    plt.rcParams.update(RC)
+    try:
+        integrators = Integrators.load(data_dir / INTEGRATORS_FILE)
+        experiments, notes = load_experiments(data_dir, KINDS)
+        bench_path = Path(args.bench) if args.bench else data_dir / bench_section.BENCH_FILE
+        bench = bench_section.read_bench(bench_path) if args.bench or bench_path.is_file() \
+            else None
+    except DataError as exc:
+        sys.stderr.write("%s: error: %s\n" % (PROG, exc))
+        return 1
+    outdir = Path(args.out)
+    try:
+        outdir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        sys.stderr.write("%s: error: %s: cannot create (%s)\n" % (PROG, outdir, exc.strerror))
+        return 1
+
+    order = list(KINDS)
+    experiments.sort(key=lambda e: (order.index(e.kind), e.name))
+    names = collect_names(experiments, integrators)
+    if bench is not None:
+        for b in bench["entries"]:
+            names.add(b["integrator"])
+            integrators.learn(b["integrator"], b["kind"] == "adaptive")
+    if integrators.source is None:
+        notes.append("%s is missing from the data directory (`springlab list --json > %s/%s` "
+                     "writes it): colours come from a fixed palette and the families and "
+                     "stability of the methods are unknown." % (INTEGRATORS_FILE, data_dir,
+                                                                INTEGRATORS_FILE))
+    elif integrators.missing():
+        notes.append("%s does not list %s (data from another springlab?): drawn in palette "
+                     "colours." % (INTEGRATORS_FILE, ", ".join(integrators.missing())))
+    found = set(e.kind for e in experiments)
+    for kind, module in KINDS.items():
+        if kind not in found:
+            notes.append("%s (%s): no settings file of this kind in the data directory: skipped."
+                         % (module.TITLE, kind))
+
+    figs = Figures(outdir)
+    ctx = Context(integrators, figs)
+    errors = []
+    toc = [("integrators", "The integrators")]
+    body = [attempt(errors, "integrator table", integrators_html, integrators, names)]
+    for e in experiments:
+        toc.append((e.name, e.title()))
+        body.append(section(e, KINDS[e.kind], ctx, errors))
+    if bench is not None:
+        toc.append(("bench", "Step cost (benchmarks)"))
+        body.append('<section id="bench"><h2>Step cost <small>(%s)</small></h2>\n%s</section>\n'
+                    % (esc(Path(bench["path"]).name),
+                       attempt(errors, "benchmarks", bench_section.render, bench, ctx)))
+    else:
+        notes.append("Step cost: no benchmark file (%s in the data directory, or --bench "
+                     "FILE.json): skipped. `cmake --build --preset bench` makes one."
+                     % bench_section.BENCH_FILE)
+    intro = ("<p>Experiment results from <code>%s/</code>, drawn by <code>report/"
+             "make_report.py</code>. Each section says what theory predicts, shows the figure, "
+             "lists what the data shows (every such sentence is computed from the data), and the "
+             "scene and settings that produced it.</p>\n" % esc(data_dir.resolve().name))
+    html = page("springlab — integrators on mass-spring systems", intro, notes, toc, body, errors)
+    tmp = outdir / "index.html.tmp"
+    tmp.write_text(html, encoding="utf-8")
+    os.replace(tmp, outdir / "index.html")
+    for e in errors:
+        sys.stderr.write("%s: error: %s\n" % (PROG, e))
+    print("%s: wrote %s (%d figures)%s" % (PROG, outdir / "index.html", len(figs.saved),
+                                           "; %d part(s) failed" % len(errors) if errors else ""))
+    return 1 if errors else 0
