@@ -40,6 +40,7 @@ constexpr const char* kFromR = "R";        // max_i |R(h lambda_i)| <= 1
 constexpr const char* kFromRuns = "runs";  // bisection on runs (partitioned methods)
 constexpr const char* kNoLimit = "none";   // stable up to max_scaled_step / max |lambda|
 constexpr const char* kNoStableStep = "no stable step";  // shown at 0.1 / max |lambda|
+constexpr double kMaxAbsR = 1e6;  // the grid's |R| is capped here (poles)
 
 struct Limit {
   double dt = 0.0;
@@ -210,7 +211,8 @@ class StabilityRegionExperiment final : public Experiment {
   // |R(z)| on the window at a round spacing s (1, 2, 2.5 or 5 times a power
   // of 10) with at most grid_ points a side, coordinates k s computed as k / q
   // (q = 1/s) so they print short; |R| rounded to 1e-6, enough to draw the
-  // boundary |R| = 1.
+  // boundary |R| = 1, and capped at kMaxAbsR (R has a pole where 1 - z/2 or
+  // 1 - z vanishes: implicit methods).
   void write_region(const IntegratorInfo& info, const Window& w,
                     std::vector<std::string>& rows) const {
     const double span = std::max(w.re_hi - w.re_lo, 2.0 * w.im_hi);
@@ -232,7 +234,8 @@ class StabilityRegionExperiment final : public Experiment {
     for (long a = -a_hi; a <= a_hi; ++a) {
       for (long b = b_lo; b <= b_hi; ++b) {
         const Complex z(at(b), at(a));
-        const double r = std::round(std::abs(info.stability_function(z)) * 1e6) / 1e6;
+        const double r =
+            std::round(std::min(std::abs(info.stability_function(z)), kMaxAbsR) * 1e6) / 1e6;
         rows.push_back(Row().raw(prefix).add(z.real()).add(z.imag()).add(r).str());
       }
     }

@@ -117,7 +117,8 @@ def _panel(ax, integ, name, grid, window, modes, runs, r, factor):
     if grid is not None:
         xs, ys, z = grid
         ax.contourf(xs, ys, z, levels=[0.0, 1.0], colors=[colour], alpha=0.16)
-        ax.contour(xs, ys, z, levels=[1.0], colors=[colour], linewidths=1.6)
+        if np.nanmin(z) < 1.0 < np.nanmax(z):  # the boundary crosses the window
+            ax.contour(xs, ys, z, levels=[1.0], colors=[colour], linewidths=1.6)
     else:
         limit = integ.stability(name).get("limit_wh")
         if isinstance(limit, (int, float)) and limit > 0:

@@ -1,0 +1,217 @@
+"""Unit tests of the report package (report/springlab_report): what it says
+about the data follows the data. Run by ctest (report_package):
+
+    python3 -m unittest discover -s tests/report -p "test_*.py"
+
+with report/ on PYTHONPATH. Each test builds a small data directory by hand,
+with known answers, and reads back the figures' labels or the page's
+sentences."""
+
+import json
+import math
+import re
+import shutil
+import sys
+import tempfile
+import unittest
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "report"))
+
+from springlab_report import main as report_main  # noqa: E402
+from springlab_report.data import DataError, read_table  # noqa: E402
+from springlab_report.integrators import Integrators  # noqa: E402
+from springlab_report.kinds import KINDS  # noqa: E402
+from springlab_report.kinds.convergence import _coinciding  # noqa: E402
+from springlab_report.kinds.energy import classify  # noqa: E402
+
+INTEGRATORS = {"integrators": [
+    {"name": "symplectic-euler", "family": "symplectic", "order": 1, "adaptive": False,
+     "stability": {"kind": "conditional", "text": "conditionally stable: w h <= 2 undamped",
+                   "limit_wh": 2.0}, "colour": "#2ca02c", "marker": "^"},
+    {"name": "implicit-euler", "family": "implicit", "order": 1, "adaptive": False,
+     "stability": {"kind": "L", "text": "L-stable"}, "colour": "#9467bd", "marker": "P"},
+    {"name": "explicit-euler", "family": "explicit", "order": 1, "adaptive": False,
+     "stability": {"kind": "conditional", "text": "conditionally stable", "limit_wh": 0.0},
+     "colour": "#d62728", "marker": "o"},
+]}
+
+
+class Scratch:
+    def __init__(self):
+        self.dir = Path(tempfile.mkdtemp(prefix="springlab-report-test-"))
+
+    def write(self, name, text):
+        (self.dir / name).write_text(text, encoding="utf-8")
+
+    def json(self, name, obj):
+        self.write(name, json.dumps(obj))
+
+    def close(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def energy_data(scratch, series, statuses=None):
+    """An energy experiment: one oscillator case, E(t) for each method,
+    E(0) = 1, E_s = 1."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "scene", "integrator", "dt", "t", "kinetic", "spring", "gravity", "total"]
+    runs_cols = ["task", "scene", "integrator", "dt", "status", "diverged_at", "steps",
+                 "force_evals", "wall_seconds", "energy_initial", "energy_final", "energy_scale"]
+    scratch.json("energy.json", {"name": "energy", "experiment": "energy", "title": "Energy",
+                                 "tables": [{"file": "energy.csv", "suffix": "", "columns": cols},
+                                            {"file": "energy-runs.csv", "suffix": "runs",
+                                             "columns": runs_cols}]})
+    rows, runs = [",".join(cols)], [",".join(runs_cols)]
+    for task, (name, (t, e)) in enumerate(series.items()):
+        for tk, ek in zip(t, e):
+            rows.append("%d,oscillator,%s,0.1,%r,%r,0,0,%r" % (task, name, tk, ek, ek))
+        status = (statuses or {}).get(name, "completed")
+        runs.append("%d,oscillator,%s,0.1,%s,%s,%d,%d,0.001,1,%r,1" % (
+            task, name, status, repr(t[-1] + 0.1) if status != "completed" else "", len(t),
+            len(t), e[-1]))
+    scratch.write("energy.csv", "\n".join(rows) + "\n")
+    scratch.write("energy-runs.csv", "\n".join(runs) + "\n")
+
+
+def render(scratch):
+    out = scratch.dir / "out"
+    status = report_main.main(["--data", str(scratch.dir), "--out", str(out)])
+    page = (out / "index.html").read_text(encoding="utf-8")
+    return status, page
+
+
+class Classification(unittest.TestCase):
+    t = np.linspace(0.0, 10.0, 401)
+
+    def test_bounded_oscillation_without_drift(self):
+        self.assertEqual(classify(self.t, 0.1 * np.sin(5 * self.t))[0], "oscillates")
+        # One-signed, as Verlet's energy on an oscillator: still back to E(0) each period.
+        e = -0.03 * (1 - np.cos(5 * self.t))
+        self.assertEqual(classify(self.t, e), ("oscillates", float(np.max(np.abs(e)))))
+
+    def test_drift_and_decay(self):
+        self.assertEqual(classify(self.t, -0.01 * self.t)[0], "loses")
+        self.assertEqual(classify(self.t, 0.02 * self.t + 0.001 * np.sin(9 * self.t))[0], "gains")
+        # Decays early and stays down (implicit Euler on an oscillator): not an oscillation.
+        kind, value = classify(self.t, np.exp(-self.t) - 1.0)
+        self.assertEqual(kind, "loses")
+        self.assertAlmostEqual(value, math.exp(-10.0) - 1.0)
+
+    def test_flat(self):
+        self.assertEqual(classify(self.t, 1e-9 * np.sin(self.t))[0], "flat")
+
+
+class EnergySentences(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_the_page_says_what_the_data_shows(self):
+        t = [0.1 * k for k in range(101)]
+        energy_data(self.s, {
+            "symplectic-euler": (t, [1 + 0.2 * math.sin(3 * x) for x in t]),
+            "implicit-euler": (t, [math.exp(-0.5 * x) for x in t]),
+            "explicit-euler": (t[:30], [1.3 ** k for k in range(30)]),
+        }, statuses={"explicit-euler": "diverged"})
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        self.assertIn("oscillate without drift: symplectic-euler (±20% E_s)", page)
+        self.assertIn("lose energy: implicit-euler (−99% E_s by t = 10 s)", page)
+        self.assertIn("diverged: explicit-euler (t = 3 s)", page)
+        # Change the data, and the sentence changes with it.
+        energy_data(self.s, {"symplectic-euler": (t, [1 + 0.05 * x for x in t])})
+        _, page = render(self.s)
+        self.assertIn("gain energy: symplectic-euler (+50% E_s by t = 10 s)", page)
+        self.assertNotIn("oscillate without drift", page)
+
+    def test_coinciding_runs_are_said_to_coincide(self):
+        t = [0.1 * k for k in range(50)]
+        e = [math.exp(-x) for x in t]
+        energy_data(self.s, {"implicit-euler": (t, e), "symplectic-euler": (t, list(e))})
+        _, page = render(self.s)
+        self.assertIn("implicit-euler and symplectic-euler have the same energy at every output",
+                      page)
+
+    def test_same_data_same_bytes(self):
+        t = [0.1 * k for k in range(60)]
+        energy_data(self.s, {"symplectic-euler": (t, [1 + 0.1 * math.sin(x) for x in t])})
+        render(self.s)
+        first = {p.name: p.read_bytes() for p in (self.s.dir / "out").iterdir()}
+        shutil.rmtree(self.s.dir / "out")
+        render(self.s)
+        second = {p.name: p.read_bytes() for p in (self.s.dir / "out").iterdir()}
+        self.assertEqual(first, second)
+
+
+class Reading(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_header_must_match_the_settings_file(self):
+        self.s.write("a.csv", "task,scene,x\n0,s,1\n")
+        with self.assertRaisesRegex(DataError, r"a\.csv:1: header is task,scene,x, but the "
+                                               r"settings file says task,scene,y"):
+            read_table(self.s.dir / "a.csv", ["task", "scene", "y"])
+
+    def test_a_bad_number_names_file_line_and_column(self):
+        self.s.write("a.csv", "task,x\n0,1\n1,one\n")
+        t = read_table(self.s.dir / "a.csv", ["task", "x"])
+        self.assertEqual(t.text("x"), ["1", "one"])  # text is fine
+        with self.assertRaisesRegex(DataError, r"a\.csv:3: column 'x': 'one' is not a number"):
+            t.num("x")
+
+    def test_missing_column_is_named(self):
+        self.s.write("a.csv", "task,x\n0,1\n")
+        with self.assertRaisesRegex(DataError, r"missing column 'status'"):
+            read_table(self.s.dir / "a.csv").require("status")
+
+
+class Styles(unittest.TestCase):
+    def test_colours_and_markers_come_from_the_integrator_table(self):
+        s = Scratch()
+        try:
+            s.json("integrators.json", INTEGRATORS)
+            integ = Integrators.load(s.dir / "integrators.json")
+            self.assertEqual(integ.colour("implicit-euler"), "#9467bd")
+            self.assertEqual(integ.marker("symplectic-euler"), "^")
+            self.assertEqual(integ.family("explicit-euler"), "explicit")
+            # A method the table does not list: the same fallback every time.
+            self.assertEqual(integ.colour("new-method"), integ.colour("new-method"))
+            self.assertEqual(integ.sort(["implicit-euler", "explicit-euler",
+                                         "symplectic-euler"]),
+                             ["explicit-euler", "symplectic-euler", "implicit-euler"])
+        finally:
+            s.close()
+
+
+class Convergence(unittest.TestCase):
+    def test_coinciding_lines_are_grouped(self):
+        x = np.array([1e-3, 2e-3, 4e-3])
+        drawn = {"a": (x, 2 * x), "b": (x, 2.05 * x), "c": (x, 4 * x)}
+        self.assertEqual(_coinciding(drawn), [["a", "b"]])
+
+
+class Registry(unittest.TestCase):
+    def test_every_kind_module_has_what_the_page_needs(self):
+        self.assertIn("stability-region", KINDS)
+        for kind, module in KINDS.items():
+            self.assertEqual(module.KIND, kind)
+            self.assertTrue(module.TITLE and module.ABOUT)
+            self.assertTrue(callable(module.render))
+        # Every kind the program has is one this report draws.
+        kinds = set(re.findall(r'\{"([a-z-]+)", &make_', (Path(__file__).resolve().parents[2]
+                                                          / "experiments"
+                                                          / "experiment_registry.cc").read_text()))
+        self.assertEqual(kinds, set(KINDS))
+
+
+if __name__ == "__main__":
+    unittest.main()
