@@ -51,7 +51,7 @@ def render(exp, ctx):
     if exp.table() is not None:
         out.append("<h3>Largest stable step</h3>\n")
         out.append(stability_figure(exp, ctx.integrators, ctx.figs))
-        out.append(facts_html(limit_facts(exp)))
+        out.append(facts_html(limit_facts(exp, ctx.integrators)))
         out.append(stability_table(exp, ctx.integrators))
     if exp.table("map") is not None:
         out.append("<h3>Stability map</h3>\n")
@@ -59,7 +59,7 @@ def render(exp, ctx):
     return "".join(out)
 
 
-def limit_facts(exp):
+def limit_facts(exp, integrators):
     """Per method and scene: the range of measured / theory over the stiffnesses."""
     st = limits_table(exp)
     nolimit = no_limit_rows(st, stability_dt_max(exp))
@@ -68,9 +68,13 @@ def limit_facts(exp):
         ratio = st["max_stable_dt"][idx] / st["theory_dt"][idx]
         ok = np.isfinite(ratio)
         if ok.any():
-            out.append("%s on %s: measured / theory between %s and %s over %d stiffnesses." % (
-                name, scene, fmt(float(np.min(ratio[ok])), 4), fmt(float(np.max(ratio[ok])), 4),
-                int(ok.sum())))
+            lo, hi = fmt(float(np.min(ratio[ok])), 4), fmt(float(np.max(ratio[ok])), 4)
+            text = "%s on %s: measured / theory %s over %d stiffnesses" % (
+                name, scene, lo if lo == hi else "between %s and %s" % (lo, hi), int(ok.sum()))
+            if integrators.stability(name).get("limit_wh") == 0:
+                text += " (its theory, the time to grow by the blow-up factor, is exact for " \
+                        "one mode, an estimate for several)"
+            out.append(text + ".")
         elif nolimit[idx].all():
             out.append("%s on %s: no run diverged up to the largest step searched, at any "
                        "stiffness." % (name, scene))
@@ -189,10 +193,11 @@ def stability_table(exp, integrators):
                        msd, fmt(row["theory_dt"], 4) if finite(row["theory_dt"]) else "– (none)",
                        fmt(ratio, 4) if finite(row["theory_dt"]) else "–"))
     out.append("</table>\n")
-    head = ("<p>Measured against theoretical stability limit. Highlighted: a theoretical limit "
-            "exists and the ratio measured / theory lies outside [0.97, 1.03] (%d row%s).</p>\n"
-            % (nbad, "" if nbad == 1 else "s"))
-    return head + "".join(out)
+    head = ("<details><summary>Every limit (%d rows)</summary><p>Measured against theoretical "
+            "stability limit. Highlighted: a theoretical limit exists and the ratio measured / "
+            "theory lies outside [0.97, 1.03] (%d row%s).</p>\n" % (len(st), nbad,
+                                                                   "" if nbad == 1 else "s"))
+    return head + "".join(out) + "</details>\n"
 
 
 DIVERGED_COLOR, DIVERGED_HATCH, NONPOS_COLOR = "#2b2b2b", "#9a9a9a", "#c8c8c8"
