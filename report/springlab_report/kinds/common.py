@@ -1,7 +1,8 @@
 """Pieces several kinds share: grouping a per-case table into panels, the
 panel titles, and the collapsible table of runs."""
 
-from ..figures import esc, fmt, swatch
+from ..figures import esc, fmt, new_figure, swatch
+from ..integrators import FAMILIES, FAMILY_TITLES
 
 
 def case_panels(table):
@@ -48,3 +49,53 @@ def runs_table(runs, integrators, heading, cols):
         out.append("</tr>\n")
     out.append("</table></details>\n")
     return "".join(out)
+
+
+class FamilyGrid:
+    """The energy and damping-budget figures: one row of panels per case, one
+    column per family of methods, each panel a set of time series on its own
+    linear scale with the methods' colours and markers."""
+
+    def __init__(self, integrators, panels, ylabel):
+        present = set(integrators.family(n) for s in panels.values() for n in s)
+        self.families = [f for f in FAMILIES if f in present] + sorted(present - set(FAMILIES))
+        self.integrators = integrators
+        self.ylabel = ylabel
+        self.rows = len(panels)
+        self.fig = new_figure(3.9 * len(self.families) + 0.3, 3.1 * self.rows + 0.3)
+        self.axes = self.fig.subplots(self.rows, len(self.families), squeeze=False)
+
+    def members(self, series, family):
+        return [n for n in self.integrators.sort(series) if self.integrators.family(n) == family]
+
+    def line(self, ax, name, k, t, y, label, stopped):
+        """The k-th line of a panel: lines drawn first are wider and markers
+        are staggered, so lines that coincide (implicit and linear-implicit
+        Euler on a linear force) still show every one of them."""
+        integ = self.integrators
+        ax.plot(t, y, color=integ.colour(name), ls=integ.linestyle(name),
+                lw=max(1.0, 3.2 - 1.1 * k), marker=integ.marker(name), ms=6, mfc="none", mew=1.3,
+                markevery=(k * max(1, len(t) // 40), max(1, len(t) // 8)), label=label,
+                zorder=2 + k)
+        if stopped:
+            ax.plot([t[-1]], [y[-1]], marker="x", ms=12, mew=2.5, ls="none",
+                    color=integ.colour(name), zorder=10)
+
+    def finish(self, row, col, title, t_max, drawn):
+        ax = self.axes[row, col]
+        family = self.families[col]
+        ax.axhline(0.0, color="0.5", lw=0.7, zorder=1)
+        ax.set_xlim(0, t_max)
+        ax.grid(True, alpha=0.3)
+        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3), useMathText=True)
+        ax.set_title("%s — %s" % (title, FAMILY_TITLES.get(family, family)), loc="left",
+                     fontsize=10, fontweight="bold")
+        if row == self.rows - 1:
+            ax.set_xlabel("t [s]")
+        if col == 0:
+            ax.set_ylabel(self.ylabel)
+        if drawn:
+            ax.legend(loc="best", fontsize=7, frameon=True, framealpha=0.85, handlelength=2.8)
+        else:
+            ax.text(0.5, 0.5, "no %s method in this run" % family, transform=ax.transAxes,
+                    ha="center", va="center", color="0.5")

@@ -7,9 +7,8 @@ fraction of the physical dissipation |W_nc(T)| on a linear axis."""
 import numpy as np
 
 from ..data import Columns
-from ..figures import esc, facts_html, figure_html, fmt, fraction, new_figure
-from ..integrators import FAMILIES, FAMILY_TITLES
-from .common import case_panels, panel_title
+from ..figures import esc, facts_html, figure_html, fmt, fraction
+from .common import FamilyGrid, case_panels, panel_title
 from .energy import classify
 
 KIND = "damping-budget"
@@ -29,11 +28,7 @@ def render(exp, ctx):
     db = Columns(exp.table(), numbers=("t", "mechanical", "work_nonconservative", "numerical"),
                  texts=("task", "scene", "integrator", "dt"))
     panels = case_panels(db.table)
-    families = [f for f in FAMILIES if any(integ.family(n) == f for s in panels.values()
-                                           for n in s)]
-    families += sorted(set(integ.family(n) for s in panels.values() for n in s) - set(families))
-    fig = new_figure(3.9 * len(families) + 0.3, 3.1 * len(panels) + 0.3)
-    axes = fig.subplots(len(panels), len(families), squeeze=False)
+    grid = FamilyGrid(integ, panels, "(E − W_nc − E(0)) / |W_nc(T)|")
     facts = []
     for row, ((scene, dt, case), series) in enumerate(panels.items()):
         t_max = max(float(db["t"][idx][-1]) for idx in series.values())
@@ -42,9 +37,8 @@ def render(exp, ctx):
         facts.append("%s: the physical dissipation |W_nc(T)| is %s J (from %s, the run with the "
                      "smallest numerical change)." % (title, fmt(scale, 4), best))
         groups = {}
-        for col, family in enumerate(families):
-            ax = axes[row, col]
-            names = [n for n in integ.sort(series) if integ.family(n) == family]
+        for col, family in enumerate(grid.families):
+            names = grid.members(series, family)
             for k, name in enumerate(names):
                 idx = series[name]
                 t = db["t"][idx]
@@ -58,27 +52,10 @@ def render(exp, ctx):
                     behaviour, value = classify(t, y)
                     text = describe(behaviour, value)
                     groups.setdefault(behaviour, []).append((name, value))
-                ax.plot(t, y, color=integ.colour(name), ls=integ.linestyle(name),
-                        lw=max(1.0, 3.2 - 1.1 * k), marker=integ.marker(name), ms=6, mfc="none",
-                        mew=1.3, markevery=(k * max(1, len(t) // 40), max(1, len(t) // 8)),
-                        label="%s: %s" % (name, text), zorder=2 + k)
-                if stopped:
-                    ax.plot([t[-1]], [y[-1]], marker="x", ms=12, mew=2.5, ls="none",
-                            color=integ.colour(name), zorder=10)
-            ax.axhline(0.0, color="0.5", lw=0.7, zorder=1)
-            ax.set_xlim(0, t_max)
-            ax.grid(True, alpha=0.3)
-            ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3), useMathText=True)
-            ax.set_title("%s — %s" % (title, FAMILY_TITLES.get(family, family)), loc="left",
-                         fontsize=10, fontweight="bold")
-            if row == len(panels) - 1:
-                ax.set_xlabel("t [s]")
-            if col == 0:
-                ax.set_ylabel("(E − W_nc − E(0)) / |W_nc(T)|")
-            if names:
-                ax.legend(loc="best", fontsize=7, framealpha=0.85, handlelength=2.8)
+                grid.line(grid.axes[row, col], name, k, t, y, "%s: %s" % (name, text), stopped)
+            grid.finish(row, col, title, t_max, names)
         facts.append(case_sentence(title, groups))
-    saved = ctx.figs.save(fig, exp.name + ".png")
+    saved = ctx.figs.save(grid.fig, exp.name + ".png")
     caption = ("The integrator's own energy change E − W_nc − E(0) (positive: it added energy), "
                "as a fraction of the physical dissipation |W_nc(T)| of the case, one row per "
                "case, one panel per family, each on its own linear scale. Each label says what "

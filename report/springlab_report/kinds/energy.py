@@ -6,9 +6,8 @@ label and the sentences under the figure are computed from the data."""
 
 import numpy as np
 
-from ..figures import esc, facts_html, figure_html, fmt, fraction, new_figure, note_html
-from ..integrators import FAMILIES, FAMILY_TITLES
-from .common import case_panels, panel_title, runs_table
+from ..figures import esc, facts_html, figure_html, fmt, fraction, note_html
+from .common import FamilyGrid, case_panels, panel_title, runs_table
 
 KIND = "energy"
 TITLE = "Energy over time"
@@ -91,18 +90,13 @@ def render(exp, ctx):
                 "e0": runs.num("energy_initial")[r], "es": runs.num("energy_scale")[r]}
     integ = ctx.integrators
     panels = case_panels(e)
-    families = [f for f in FAMILIES if any(integ.family(n) == f for s in panels.values()
-                                           for n in s)]
-    families += sorted(set(integ.family(n) for s in panels.values() for n in s) - set(families))
-    fig = new_figure(3.9 * len(families) + 0.3, 3.1 * len(panels) + 0.3)
-    axes = fig.subplots(len(panels), len(families), squeeze=False)
+    grid = FamilyGrid(integ, panels, "(E(t) − E(0)) / E_s")
     facts = []
     for row, ((scene, dt, case), series) in enumerate(panels.items()):
         t_max = max(float(e.num("t")[idx][-1]) for idx in series.values())
         groups = {}
-        for col, family in enumerate(families):
-            ax = axes[row, col]
-            names = [n for n in integ.sort(series) if integ.family(n) == family]
+        for col, family in enumerate(grid.families):
+            names = grid.members(series, family)
             for k, name in enumerate(names):
                 idx = series[name]
                 t = e.num("t")[idx]
@@ -123,36 +117,12 @@ def render(exp, ctx):
                     behaviour, value = classify(t, y)
                     text = describe(behaviour, value, float(t[-1]))
                     groups.setdefault(behaviour, []).append((name, value, float(t[-1])))
-                # Lines drawn first are wider, markers staggered: lines that
-                # coincide (implicit and linear-implicit Euler on a linear
-                # force) still show both.
-                ax.plot(t, y, color=integ.colour(name), ls=integ.linestyle(name),
-                        lw=max(1.0, 3.2 - 1.1 * k), marker=integ.marker(name), ms=6, mfc="none",
-                        mew=1.3, markevery=(k * max(1, len(t) // 40), max(1, len(t) // 8)),
-                        label="%s: %s" % (name, text), zorder=2 + k)
-                if status != "completed":
-                    ax.plot([t[-1]], [y[-1]], marker="x", ms=12, mew=2.5, ls="none",
-                            color=integ.colour(name), zorder=10)
-            ax.axhline(0.0, color="0.5", lw=0.7, zorder=1)
-            ax.set_xlim(0, t_max)
-            ax.grid(True, alpha=0.3)
-            ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3), useMathText=True)
-            ax.set_title("%s — %s" % (panel_title(scene, dt, case, panels),
-                                       FAMILY_TITLES.get(family, family)),
-                         loc="left", fontsize=10, fontweight="bold")
-            if row == len(panels) - 1:
-                ax.set_xlabel("t [s]")
-            if col == 0:
-                ax.set_ylabel("(E(t) − E(0)) / E_s")
-            if names:
-                ax.legend(loc="best", fontsize=7, frameon=True, framealpha=0.85,
-                          handlelength=2.8)
-            else:
-                ax.text(0.5, 0.5, "no %s method in this run" % family, transform=ax.transAxes,
-                        ha="center", va="center", color="0.5")
+                grid.line(grid.axes[row, col], name, k, t, y, "%s: %s" % (name, text),
+                          status != "completed")
+            grid.finish(row, col, panel_title(scene, dt, case, panels), t_max, names)
         facts.append(case_sentence(panel_title(scene, dt, case, panels), groups))
         facts.extend(coincidences(scene, series, e, total))
-    saved = ctx.figs.save(fig, exp.name + ".png")
+    saved = ctx.figs.save(grid.fig, exp.name + ".png")
     caption = ("Change of the mechanical energy E = %s, divided by the scene's energy scale E_s "
                "(energy-runs.csv: energy_scale, so that scenes whose E(0) is 0 compare too), "
                "one row per case, one panel per family, each on its own linear scale. Each label "
