@@ -49,8 +49,6 @@ nlohmann::ordered_json number_or_null(double value) {
 
 }  // namespace
 
-bool has_own_style(const std::string& name) { return style_table().count(name) > 0; }
-
 IntegratorStyle integrator_style(const std::string& name) {
   const auto& table = style_table();
   const auto it = table.find(name);

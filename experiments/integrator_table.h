@@ -23,7 +23,6 @@ struct IntegratorStyle {
 // colour and marker picked from a reserve by a hash of its name (the same in
 // every run and report, but possibly shared: give a new method its entry).
 IntegratorStyle integrator_style(const std::string& name);
-bool has_own_style(const std::string& name);
 
 // "explicit", "symplectic", "implicit" (fixed step) or "adaptive".
 std::string integrator_family(const IntegratorInfo& info);

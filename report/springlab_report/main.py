@@ -8,8 +8,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 from . import bench as bench_section
-from .data import DataError
-from .data import load_experiments
+from .data import DataError, load_experiments
 from .figures import RC, Figures, esc
 from .integrators import Integrators
 from .kinds import KINDS
@@ -68,7 +67,11 @@ def main(argv=None):
 
     order = list(KINDS)
     experiments.sort(key=lambda e: (order.index(e.kind), e.name))
-    names = collect_names(experiments, integrators)
+    try:
+        names = collect_names(experiments, integrators)
+    except DataError as exc:
+        sys.stderr.write("%s: error: %s\n" % (PROG, exc))
+        return 1
     if bench is not None:
         for b in bench["entries"]:
             names.add(b["integrator"])
