@@ -107,7 +107,7 @@ def render(exp, ctx):
             title = "t = %s s" % fmt(t, 4)
             if is_past:
                 grow = _size(_limits(pts)) / _size(lims)
-                title += "\npast the blow-up bound\n(own scale, %s× larger)" % fmt(grow, 2)
+                title += "\npast the blow-up bound\n(own scale, %s× larger)" % _times(grow)
             elif own:
                 title += "\n(own scale)"
             ax.set_title(title, fontsize=9, color="#b00000" if is_past else "black", pad=-4)
@@ -178,6 +178,10 @@ def _style(ax, lim, order):
     ax.set_axis_off()
 
 
+def _times(x):
+    return "%.0f" % x if x >= 100 else fmt(x, 2)
+
+
 def _grid_pairs(n):
     pairs = []
     for r in range(n):
@@ -200,8 +204,8 @@ def _fact(name, run, frames, vertical):
                                                       fmt(steps))
         if past and good:
             grow = _size(_limits(past[-1][3])) / _size(_limits(good[0][3]))
-            text += "; one step past the bound the cloth spans %s times its initial size" % fmt(
-                grow, 2)
+            text += ("; one step past the bound the cloth spans %s times its initial size"
+                     % _times(grow))
         return text + "."
     last = max((f for f in frames if not f[1]), key=lambda f: f[0])
     low = float(np.min(last[3][:, vertical]))
