@@ -10,7 +10,7 @@ from .figures import esc, fmt, note_html, swatch
 from .integrators import FAMILY_TITLES
 
 CSS = """
-body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 0 auto;
+body { box-sizing: border-box; font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; margin: 0 auto;
        max-width: 1400px; padding: 0 1.5em 3em; color: #222; line-height: 1.45; }
 h1 { margin-top: 0.8em; } h2 { border-bottom: 2px solid #ddd; padding-bottom: 0.2em; margin-top: 2em; }
 figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; border: 1px solid #eee; }
@@ -29,7 +29,7 @@ table.kv th { font-weight: normal; color: #555; }
 .report-error { background: #ffd9d9; border-left: 4px solid #c00000; padding: 0.4em 0.8em;
                 white-space: pre-wrap; font-family: monospace; }
 pre { background: #f7f7f7; padding: 0.6em; overflow-x: auto; font-size: 0.82em; max-height: 40em; }
-details { margin: 0.4em 0; } summary { cursor: pointer; }
+details { margin: 0.4em 0; overflow-x: auto; } summary { cursor: pointer; }
 #report-status { color: #888; font-size: 0.8em; margin-top: 3em; }
 """
 
