@@ -5,7 +5,7 @@
         [--chromium /usr/bin/chromium] [--screenshot OUT.png] [--timeout SECONDS]
 
 Loads the page with `chromium --headless --dump-dom` and reads the marker that
-report/make_report.py's inline script writes on window load: the body's
+the report page's inline script (report/springlab_report/page.py) writes on window load: the body's
 data-images-total / data-images-broken and the element id="report-status".
 Fails (exit 1, naming the problem) when an image did not load, when the page
 has no images, when the page shows an error (an element with class
