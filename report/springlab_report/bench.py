@@ -19,7 +19,7 @@ import numpy as np
 
 from .data import DataError, finite, read_json
 
-from .figures import (esc, facts_html, figure_html, fmt, legend_outside, log_log, new_figure,
+from .figures import (count, esc, facts_html, figure_html, fmt, legend_outside, log_log, new_figure,
                       note_html, swatch)
 
 BENCH_FILE = "benchmarks.json"
@@ -506,4 +506,4 @@ def _cost_facts(scene, mine):
     return ["%s, %d free particles: cheapest per simulated second %s (%s CPU s per s, at %s), "
             "dearest %s (%s CPU s per s, at %s): %s times as much." % (
                 scene, int(size), lo_name, fmt(lo), lo_e["label"] or "its step", hi_name, fmt(hi),
-                hi_e["label"] or "its step", fmt(hi / lo, 2))]
+                hi_e["label"] or "its step", count(hi / lo) if hi / lo >= 100 else fmt(hi / lo, 2))]

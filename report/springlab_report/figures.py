@@ -48,6 +48,17 @@ def fmt(x, digits=3):
     return "%.*g" % (digits, x)
 
 
+def count(x):
+    """A count or a large number, whole: "4860", not "4.86e+03"."""
+    return "%d" % round(x) if abs(x) >= 100 else fmt(x, 3)
+
+
+def names_list(names):
+    """"a", "a and b", "a, b and c"."""
+    names = list(names)
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
 def fraction(x):
     """A fraction of a scale, unsigned: "100%", "6.9%", "0.62%" from 1e-3 up,
     else plain: "4e-15"."""

@@ -10,7 +10,7 @@ import numpy as np
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from ..data import Columns
-from ..figures import esc, facts_html, figure_html, fmt, note_html
+from ..figures import count, esc, facts_html, figure_html, fmt, note_html
 from ..page import find_scenes
 from .common import runs_table
 
@@ -201,7 +201,7 @@ def _fact(name, run, frames, vertical):
         past = [f for f in frames if f[1]]
         good = [f for f in frames if not f[1]]
         text = "%s %s at t = %s s after %s steps" % (name, status, fmt(run.get("diverged_at"), 4),
-                                                      fmt(steps))
+                                                      count(steps))
         if past and good:
             grow = _size(_limits(past[-1][3])) / _size(_limits(good[0][3]))
             text += ("; one step past the bound the cloth spans %s times its initial size"
@@ -210,4 +210,4 @@ def _fact(name, run, frames, vertical):
     last = max((f for f in frames if not f[1]), key=lambda f: f[0])
     low = float(np.min(last[3][:, vertical]))
     return "%s completed (%s steps); at t = %s s its lowest particle is at %s = %s m." % (
-        name, fmt(steps), fmt(last[0], 4), "xyz"[vertical], fmt(low, 3))
+        name, count(steps), fmt(last[0], 4), "xyz"[vertical], fmt(low, 3))

@@ -9,8 +9,8 @@ import math
 import numpy as np
 
 from ..data import Columns, finite
-from ..figures import (esc, facts_html, figure_html, finite_positive, fmt, log_log, new_figure,
-                       slope_triangle, swatch)
+from ..figures import (count, esc, facts_html, figure_html, finite_positive, fmt, log_log,
+                       names_list, new_figure, slope_triangle, swatch)
 
 KIND = "convergence"
 TITLE = "Convergence order"
@@ -41,7 +41,7 @@ def _cheapest(scene, drawn):
             work.append((float(np.min(x[ok])), name))
     work.sort()
     return ["On %s, the least work for an error of at most %s m: %s." % (
-        scene, fmt(target), ", ".join("%s %s force evaluations" % (n, fmt(w, 3))
+        scene, fmt(target), ", ".join("%s %s force evaluations" % (n, count(w))
                                       for w, n in work))]
 
 
@@ -103,7 +103,7 @@ def render(exp, ctx):
             for g in groups:
                 facts.append("On %s, %s have errors within %d%% of each other at every %s, so "
                              "their lines coincide (drawn with concentric markers)." % (
-                                 scene, " and ".join(g), round(100 * SAME),
+                                 scene, names_list(g), round(100 * SAME),
                                  "tolerance" if adaptive else "step"))
             if adaptive:
                 ax.set_xlabel("work: force evaluations")

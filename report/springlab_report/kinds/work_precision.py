@@ -6,8 +6,8 @@ least work."""
 import numpy as np
 
 from ..data import Columns
-from ..figures import (esc, facts_html, figure_html, finite_positive, fmt, legend_outside, log_log,
-                       new_figure)
+from ..figures import (count, esc, facts_html, figure_html, finite_positive, fmt, legend_outside,
+                       log_log, new_figure)
 
 KIND = "work-precision"
 TITLE = "Work against precision"
@@ -80,7 +80,8 @@ def least_work(scene, drawn, what):
         if len(costs) < 2:
             continue
         costs.sort()
-        shown = ", ".join("%s %s" % (n, fmt(c, 3)) for c, n in costs[:3])
+        shown = ", ".join("%s %s" % (n, fmt(c, 3) if what == "wall time" else count(c))
+                          for c, n in costs[:3])
         missing = len(drawn) - len(costs)
         out.append("%s, error at most %s m, least %s: %s%s%s." % (
             scene, fmt(target), what, shown, " (%d more reached it)" % (len(costs) - 3)
