@@ -1,25 +1,35 @@
 #include "experiments/cli.h"
 
+#include <sched.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <csignal>
 #include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
-#include <filesystem>
+#include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "experiments/experiment_runner.h"
 #include "experiments/integrator_table.h"
 #include "experiments/output_files.h"
+#include "experiments/signals.h"
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
 #include "models/mass_spring_model.h"
+#include "models/modal_analysis.h"
 
 namespace springlab {
 namespace {
@@ -32,15 +42,40 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Rows one output file may hold (README, "Reliability"): about 1 GB of CSV.
+constexpr double kMaxOutputRows = 10'000'000;
+
+// Everything springlab prints on stdout goes through here, so that a write
+// error (a full disk, a closed pipe) is an error with exit status 1, not a
+// truncated file and exit 0.
+void write_stdout(const std::string& text) {
+  const char* data = text.data();
+  std::size_t size = text.size();
+  while (size > 0) {
+    const ssize_t n = ::write(1, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw std::runtime_error(std::string("stdout: write failed (") + std::strerror(errno) + ")");
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+}
+
 std::vector<std::pair<std::string, std::string>> split_parameters(
     const std::vector<std::string>& parameters) {
   std::vector<std::pair<std::string, std::string>> pairs;
   for (const std::string& p : parameters) {
     const auto eq = p.find('=');
     if (eq == std::string::npos || eq == 0) {
-      throw UsageError("-p " + p + ": expected key=value");
+      throw UsageError("-p " + printable(p) + ": expected key=value");
     }
-    pairs.emplace_back(p.substr(0, eq), p.substr(eq + 1));
+    const std::string key = p.substr(0, eq), value = p.substr(eq + 1);
+    for (const auto& [other_key, other_value] : pairs) {
+      if (other_key == key) {
+        throw UsageError("-p " + printable(key) + ": given twice (" + printable(other_value) +
+                         " and " + printable(value) + ")");
+      }
+    }
+    pairs.emplace_back(key, value);
   }
   return pairs;
 }
@@ -51,11 +86,15 @@ std::string builtin_list() {
   return names;
 }
 
+std::string number_text(double value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
+
 void require_positive(const std::string& option, double value) {
   if (!(value > 0.0) || !std::isfinite(value)) {
-    std::ostringstream m;
-    m << option << ": must be a positive number (got " << value << ")";
-    throw UsageError(m.str());
+    throw UsageError(option + ": must be a positive number (got " + number_text(value) + ")");
   }
 }
 
@@ -63,7 +102,8 @@ void require_integrator(const std::string& name) {
   if (!is_integrator(name)) {
     std::string valid;
     for (const std::string& n : integrator_names()) valid += (valid.empty() ? "" : ", ") + n;
-    throw UsageError("--integrator: unknown integrator '" + name + "' (integrators: " + valid + ")");
+    throw UsageError("--integrator: unknown integrator '" + printable(name) + "' (integrators: " +
+                     valid + ")");
   }
 }
 
@@ -88,18 +128,28 @@ Json stats_json(const IntegratorStats& s) {
               {"nonlinear_failures", s.nonlinear_failures}};
 }
 
+// The integrator options of `run` and `stability`, with the names a method
+// lists in Integrator::options_read().
+const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
+                                      "max-newton", "max-steps",    "max-order",
+                                      "linear-solver", "dq-jacobian", "stald"};
+
 // Options shared by `run` and `stability`.
 struct CommonOptions {
   std::string scene;
   std::vector<std::string> parameters;
   RunSettings run;
   bool json = false;
+  CLI::App* command = nullptr;
 
   void add_to(CLI::App& cmd) {
-    cmd.add_option("SCENE", scene, "scene file or built-in scene name")->required();
+    command = &cmd;
+    cmd.add_option("SCENE", scene, "scene file, - for stdin, or a built-in scene's name")->required();
     cmd.add_option("--integrator", run.integrator, "integrator name (springlab list)")->required();
-    cmd.add_option("--t-end", run.t_end, "simulated time [s]")->required();
-    cmd.add_option("-p", parameters, "built-in scene parameter key=value (repeatable)");
+    cmd.add_option("--t-end", run.t_end, "simulated time [s]")->required()->default_str("");
+    cmd.add_option("-p", parameters, "built-in scene parameter key=value (repeatable)")
+        ->allow_extra_args(false)
+        ->default_str("");
     cmd.add_option("--rtol", run.options.rtol, "adaptive methods: relative tolerance");
     cmd.add_option("--atol", run.options.atol, "adaptive methods: absolute tolerance");
     cmd.add_option("--newton-tol", run.options.newton_tol,
@@ -107,9 +157,12 @@ struct CommonOptions {
     cmd.add_option("--max-newton", run.options.max_newton,
                    "implicit methods: Newton iterations per step before the run fails");
     cmd.add_option("--max-steps", run.options.max_steps,
-                   "adaptive methods: internal steps per output interval before failing");
+                   "adaptive methods: internal steps per output interval before failing "
+                   "(default: 5e6 / unknowns, between 500 and 100000)")
+        ->default_str("scaled");
     cmd.add_option("--max-order", run.options.max_order,
-                   "adaptive methods: highest order (ARKODE: the method's order); 0 = default");
+                   "adaptive methods: highest order (ARKODE: the method's order)")
+        ->default_str("the method's");
     cmd.add_option("--linear-solver", run.options.linear_solver,
                    "implicit adaptive methods: dense, klu, gmres or auto (dense up to 100 "
                    "unknowns, klu above)");
@@ -130,15 +183,85 @@ struct CommonOptions {
     require_positive("--newton-tol", run.options.newton_tol);
     require_positive("--blowup", run.blowup);
     if (run.options.max_newton < 1) throw UsageError("--max-newton: must be >= 1");
-    if (run.options.max_steps < 1) throw UsageError("--max-steps: must be >= 1");
-    if (run.options.max_order < 0) throw UsageError("--max-order: must be >= 0");
+    if (run.options.max_steps < 0 || (given("max-steps") && run.options.max_steps < 1)) {
+      throw UsageError("--max-steps: must be >= 1");
+    }
+    if (run.options.max_order < 0) throw UsageError("--max-order: must be >= 1");
     static const char* solvers[] = {"auto", "dense", "klu", "gmres"};
     if (std::find(std::begin(solvers), std::end(solvers), run.options.linear_solver) ==
         std::end(solvers)) {
-      throw UsageError("--linear-solver: unknown '" + run.options.linear_solver +
+      throw UsageError("--linear-solver: unknown '" + printable(run.options.linear_solver) +
                        "' (auto, dense, klu, gmres)");
     }
   }
+
+  bool given(const std::string& option) const { return command->count("--" + option) > 0; }
+
+  // Option values the method cannot take are refused (exit 1, before any
+  // file is touched); options it does not read are named on stderr.
+  void check_against_method(const MassSpringModel& model) const {
+    const auto integrator = make_integrator(run.integrator);
+    if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
+      throw UsageError(why);
+    }
+    const std::vector<std::string> read = integrator->options_read();
+    std::string ignored;
+    for (const char* option : kMethodOptions) {
+      if (given(option) && std::find(read.begin(), read.end(), option) == read.end()) {
+        ignored += std::string(ignored.empty() ? "" : ", ") + "--" + option;
+      }
+    }
+    if (!ignored.empty()) {
+      std::cerr << "springlab: note: " << run.integrator << " does not use " << ignored
+                << " (ignored)" << std::endl;
+    }
+  }
+};
+
+// A scene whose energy does not fit in a double has nothing to simulate.
+void check_initial_energy(const MassSpringModel& model, const std::string& scene_arg) {
+  const double e0 = model.energies(model.initial_positions(), model.initial_velocities()).total();
+  if (!std::isfinite(e0) || !std::isfinite(model.energy_scale())) {
+    throw SceneError(printable(scene_arg) +
+                     ": the initial energy is not finite (positions, velocities or stiffnesses "
+                     "too large for double precision)");
+  }
+}
+
+// Output times of a run: t = 0, every K-th step and the last.
+double output_times(const TimeGrid& grid, int every) {
+  const double steps = static_cast<double>(grid.steps);
+  return 1.0 + std::floor(steps / every) + (grid.steps % every != 0 ? 1.0 : 0.0);
+}
+
+// One line on stderr, overwritten in place, while a long run goes on (a
+// terminal only; nothing in the first second).
+class ProgressLine final : public Observer {
+ public:
+  ProgressLine(std::string label, double t_end)
+      : label_(std::move(label)), t_end_(t_end), start_(Clock::now()), last_(start_) {}
+  ~ProgressLine() override {
+    if (shown_) std::fprintf(stderr, "\r\033[K");
+  }
+  void observe(double t, const Vector&, const Vector&) override {
+    const auto now = Clock::now();
+    if (now - start_ < std::chrono::seconds(1) || now - last_ < std::chrono::milliseconds(200)) {
+      return;
+    }
+    last_ = now;
+    shown_ = true;
+    std::fprintf(stderr, "\r[%s] t = %.6g of %.6g s (%d%%), %.0f s", label_.c_str(), t, t_end_,
+                 static_cast<int>(100.0 * t / t_end_),
+                 std::chrono::duration<double>(now - start_).count());
+    std::fflush(stderr);
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  std::string label_;
+  double t_end_;
+  Clock::time_point start_, last_;
+  bool shown_ = false;
 };
 
 int command_run(CommonOptions& common, const std::string& energy_path,
@@ -147,33 +270,64 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
   if (!energy_path.empty() && !trajectory_path.empty() && same_file(energy_path, trajectory_path)) {
-    throw UsageError("--energy " + energy_path + " and --trajectory " + trajectory_path +
-                     " name the same file");
+    throw UsageError("--energy " + printable(energy_path) + " and --trajectory " +
+                     printable(trajectory_path) + " name the same file");
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
-  make_time_grid(common.run.dt, common.run.t_end);  // refuse a bad grid before any output exists
+  TimeGrid grid;
+  try {
+    grid = make_time_grid(common.run.dt, common.run.t_end);  // refused before any output exists
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--dt, --t-end: ") + e.what());
+  }
   const MassSpringModel model(scene);
+  check_initial_energy(model, common.scene);
+  common.check_against_method(model);
+  const double times = output_times(grid, common.run.every);
+  auto check_rows = [&](const char* option, double rows, const std::string& what) {
+    if (rows > kMaxOutputRows) {
+      std::ostringstream m;
+      m << option << ": would hold " << static_cast<long long>(rows) << " rows (" << what
+        << "), over the cap of " << static_cast<long long>(kMaxOutputRows)
+        << " per file: write every K-th step with --every";
+      throw UsageError(m.str());
+    }
+  };
+  if (!energy_path.empty()) {
+    check_rows("--energy", times, std::to_string(static_cast<long long>(times)) + " output times");
+  }
+  if (!trajectory_path.empty()) {
+    const double particles = static_cast<double>(model.particle_count());
+    check_rows("--trajectory", times * particles,
+               std::to_string(model.particle_count()) + " particles x " +
+                   std::to_string(static_cast<long long>(times)) + " output times");
+  }
 
-  // Files are opened (as temporaries) before any step runs.
-  std::unique_ptr<AtomicFile> energy_file, trajectory_file;
-  std::unique_ptr<Observer> energy_csv, trajectory_csv;
+  // Files are opened (regular files as temporaries) before any step runs.
+  std::unique_ptr<OutputFile> energy_file, trajectory_file;
+  std::unique_ptr<Observer> energy_csv, trajectory_csv, progress;
   std::vector<Observer*> observers;
   if (!energy_path.empty()) {
-    energy_file = std::make_unique<AtomicFile>(energy_path);
+    energy_file = std::make_unique<OutputFile>(energy_path);
     energy_csv = std::make_unique<EnergyCsv>(model, *energy_file);
     observers.push_back(energy_csv.get());
   }
   if (!trajectory_path.empty()) {
-    trajectory_file = std::make_unique<AtomicFile>(trajectory_path);
+    trajectory_file = std::make_unique<OutputFile>(trajectory_path);
     trajectory_csv = std::make_unique<TrajectoryCsv>(model, *trajectory_file);
     observers.push_back(trajectory_csv.get());
   }
+  if (::isatty(2)) {
+    progress = std::make_unique<ProgressLine>(common.run.integrator, common.run.t_end);
+    observers.push_back(progress.get());
+  }
 
   const RunResult r = simulate(model, common.run, observers);
-  for (AtomicFile* f : {energy_file.get(), trajectory_file.get()}) {
+  progress.reset();  // clears its line
+  for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
     if (f != nullptr) f->finish();
   }
-  for (AtomicFile* f : {energy_file.get(), trajectory_file.get()}) {
+  for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
     if (f != nullptr) f->publish();
   }
 
@@ -181,47 +335,48 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   // rows up to its last good state (t_final), and the summary says so.
   const bool any_output = energy_file != nullptr || trajectory_file != nullptr;
   const bool outputs_complete = r.status == RunStatus::kCompleted;
+  std::ostringstream out;
   if (common.json) {
-    Json out;
-    out["scene"] = scene.name;
-    out["integrator"] = r.integrator;
-    out["dt"] = r.dt;
-    out["t_end"] = r.t_end;
-    out["status"] = to_string(r.status);
+    Json j;
+    j["scene"] = scene.name;
+    j["integrator"] = r.integrator;
+    j["dt"] = r.dt;
+    j["t_end"] = r.t_end;
+    j["status"] = to_string(r.status);
     const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
-    for (const auto& [key, value] : stats.items()) out[key] = value;
-    out["wall_seconds"] = r.wall_seconds;
-    out["diverged"] = r.diverged();
-    out["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
-    out["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
-    out["t_final"] = r.t_final;
-    out["outputs_complete"] = outputs_complete;
-    out["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
-    out["energy_initial"] = r.energy_initial;
-    out["energy_final"] = r.energy_final;
-    out["energy_scale"] = model.energy_scale();
-    out["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
-                              {"v", rows(model.scene_velocities(r.v_final))}};
-    std::cout << out.dump() << '\n';
+    for (const auto& [key, value] : stats.items()) j[key] = value;
+    j["wall_seconds"] = r.wall_seconds;
+    j["diverged"] = r.diverged();
+    j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
+    j["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
+    j["t_final"] = r.t_final;
+    j["outputs_complete"] = outputs_complete;
+    j["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
+    j["energy_initial"] = r.energy_initial;
+    j["energy_final"] = r.energy_final;
+    j["energy_scale"] = model.energy_scale();
+    j["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
+                            {"v", rows(model.scene_velocities(r.v_final))}};
+    out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
   } else {
-    std::cout << "scene " << scene.name << ", " << model.free_particle_count()
-              << " free particles, " << scene.springs.size() << " springs\n"
-              << "integrator " << r.integrator << ", dt " << r.dt << ", t_end " << r.t_end << '\n'
-              << "status " << to_string(r.status);
-    if (r.diverged_at) std::cout << " at t = " << *r.diverged_at;
-    if (!r.failure.empty()) std::cout << ": " << r.failure;
-    std::cout << '\n';
+    out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles, "
+        << scene.springs.size() << " springs\n"
+        << "integrator " << r.integrator << ", dt " << r.dt << ", t_end " << r.t_end << '\n'
+        << "status " << to_string(r.status);
+    if (r.diverged_at) out << " at t = " << *r.diverged_at;
+    if (!r.failure.empty()) out << ": " << r.failure;
+    out << '\n';
     const IntegratorStats& s = r.stats;
-    std::cout << "steps " << s.steps << ", rejected " << s.rejected_steps << ", force evals "
-              << s.force_evals << ", jacobian evals " << s.jacobian_evals << ", linear solves "
-              << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
-              << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
-              << "), wall " << r.wall_seconds << " s\n";
+    out << "steps " << s.steps << ", rejected " << s.rejected_steps << ", force evals "
+        << s.force_evals << ", jacobian evals " << s.jacobian_evals << ", linear solves "
+        << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
+        << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
+        << "), wall " << r.wall_seconds << " s\n";
     if (any_output && !outputs_complete) {
-      std::cout << "output files incomplete: rows up to t = " << r.t_final
-                << ", the last good state\n";
+      out << "output files incomplete: rows up to t = " << r.t_final << ", the last good state\n";
     }
   }
+  write_stdout(out.str());
   return 0;
 }
 
@@ -231,76 +386,88 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   require_positive("--dt-max", s.dt_max);
   if (!(s.dt_max > s.dt_min)) throw UsageError("--dt-max: must be greater than --dt-min");
   require_positive("--rel-tol", s.rel_tol);
+  // An impossible range is refused now, not after the first runs.
+  for (const auto& [option, dt] : {std::pair{"--dt-min", s.dt_min}, std::pair{"--dt-max", s.dt_max}}) {
+    try {
+      make_time_grid(dt, common.run.t_end);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string(option) + " " + number_text(dt) + " with --t-end " +
+                       number_text(common.run.t_end) + ": " + e.what());
+    }
+  }
   const Scene scene = resolve_scene(common.scene, common.parameters);
   const MassSpringModel model(scene);
+  check_initial_energy(model, common.scene);
+  common.check_against_method(model);
   s.run = common.run;
   const StabilityResult r = find_max_stable_dt(model, s);
+  const double w = max_angular_frequency(model);
+  const TheoryLimit theory =
+      theoretical_max_dt(make_integrator(r.integrator)->info(), w, s.run.t_end, s.run.blowup);
+  std::ostringstream out;
   if (common.json) {
-    Json out;
-    out["scene"] = scene.name;
-    out["integrator"] = r.integrator;
-    out["t_end"] = s.run.t_end;
-    out["max_stable_dt"] = r.max_stable_dt;
-    out["bracket"] = Json::array({r.lo, r.hi});
-    out["runs"] = r.runs;
-    std::cout << out.dump() << '\n';
+    static const char* outcomes[] = {"bracketed", "stable up to dt_max", "unstable at dt_min"};
+    Json j;
+    j["scene"] = scene.name;
+    j["integrator"] = r.integrator;
+    j["t_end"] = s.run.t_end;
+    j["max_stable_dt"] = r.max_stable_dt;
+    j["bracket"] = Json::array({r.lo, r.hi});
+    j["outcome"] = outcomes[static_cast<int>(r.outcome)];
+    j["runs"] = r.runs;
+    j["w_max"] = w;
+    j["theory_dt"] = theory.dt ? Json(*theory.dt) : Json(nullptr);
+    j["theory"] = theory.rule;
+    out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
   } else {
-    std::cout << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end
-              << ": largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", "
-              << r.hi << "], " << r.runs << " runs)\n";
+    out << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end << ": ";
+    switch (r.outcome) {
+      case StabilityOutcome::kBracketed:
+        out << "largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi
+            << "], " << r.runs << " runs)\n";
+        break;
+      case StabilityOutcome::kStableUpToDtMax:
+        out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << " run)\n";
+        break;
+      case StabilityOutcome::kUnstableAtDtMin:
+        out << "diverged even at --dt-min " << s.dt_min << " (" << r.runs << " runs)\n";
+        break;
+    }
+    out << "w_max " << w << " rad/s; theory: ";
+    if (theory.dt) {
+      out << "dt* = " << *theory.dt << " (" << theory.rule << ")\n";
+    } else {
+      out << theory.rule << '\n';
+    }
   }
+  write_stdout(out.str());
   return 0;
 }
 
 int command_list(bool json) {
   if (json) {
-    std::cout << integrator_table_json().dump(2) << '\n';
+    write_stdout(integrator_table_json().dump(2) + "\n");
     return 0;
   }
-  std::cout << "integrators:\n";
+  std::ostringstream out;
+  out << "integrators:\n";
   for (const std::string& name : integrator_names()) {
     const auto integrator = make_integrator(name);
     const IntegratorInfo& i = integrator->info();
-    std::cout << "  " << name << "  order " << i.order
-              << (i.adaptive ? ", adaptive" : ", fixed step")
-              << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "")
-              << ", " << stability_text(i) << "\n      " << i.scheme << '\n';
+    out << "  " << name << "  order " << i.order << (i.adaptive ? ", adaptive" : ", fixed step")
+        << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "")
+        << ", " << stability_text(i) << "\n      " << i.scheme << '\n';
   }
-  std::cout << "built-in scenes:\n";
+  out << "built-in scenes:\n";
   for (const BuiltinScene& s : builtin_scenes()) {
-    std::cout << "  " << s.name << "  " << s.description << '\n';
+    out << "  " << s.name << "  " << s.description << '\n';
     for (const SceneParameter& p : s.parameters) {
-      std::cout << "      -p " << p.name << '=' << p.default_value << "  " << p.meaning << '\n';
+      out << "      -p " << p.name << '=' << p.default_value << "  " << p.meaning << '\n';
     }
   }
+  write_stdout(out.str());
   return 0;
 }
-
-std::atomic<bool> interrupted{false};
-
-extern "C" void on_interrupt(int) { interrupted.store(true); }
-
-// Installs on_interrupt for SIGINT and SIGTERM while alive.
-class InterruptGuard {
- public:
-  InterruptGuard() {
-    interrupted.store(false);
-    struct sigaction action {};
-    action.sa_handler = on_interrupt;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
-  }
-  ~InterruptGuard() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  InterruptGuard(const InterruptGuard&) = delete;
-  InterruptGuard& operator=(const InterruptGuard&) = delete;
-
- private:
-  struct sigaction old_int_ {}, old_term_ {};
-};
 
 void parse_shard(const std::string& text, ExperimentRunOptions& o) {
   const auto slash = text.find('/');
@@ -311,38 +478,124 @@ void parse_shard(const std::string& text, ExperimentRunOptions& o) {
     o.shard_count = std::stoi(text.substr(slash + 1), &end_n);
     if (end_i != slash || end_n != text.size() - slash - 1) throw std::invalid_argument(text);
   } catch (const std::exception&) {
-    throw UsageError("--shard " + text + ": expected i/N, e.g. 2/8");
+    throw UsageError("--shard " + printable(text) + ": expected i/N, e.g. 2/8");
   }
   if (o.shard_count < 1 || o.shard_index < 1 || o.shard_index > o.shard_count) {
-    throw UsageError("--shard " + text + ": need 1 <= i <= N");
+    throw UsageError("--shard " + printable(text) + ": need 1 <= i <= N");
   }
+}
+
+// The CPUs this process may run on (a job scheduler's allocation, a
+// container's limit), at least 1.
+int usable_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (::sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// An option on the command line that the chosen command does not have
+// (CLI11 would first complain about a missing required option instead).
+std::string unknown_option(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* command = &app;
+  for (int k = 1; k < argc; ++k) {
+    const std::string arg = argv[k];
+    if (command == &app && !arg.empty() && arg[0] != '-') {
+      for (const CLI::App* sub : app.get_subcommands({})) {
+        if (sub->get_name() == arg) command = sub;
+      }
+      continue;
+    }
+    if (arg.size() < 2 || arg[0] != '-' || arg == "--" || std::isdigit(static_cast<unsigned char>(arg[1])) ||
+        arg[1] == '.') {
+      continue;  // a value, a negative number, or "-" (stdin)
+    }
+    const std::string name = arg.substr(0, arg.find('='));
+    if (command->get_option_no_throw(name) == nullptr && app.get_option_no_throw(name) == nullptr) {
+      return name;
+    }
+  }
+  return "";
+}
+
+// CLI11's parse errors as one line, in springlab's words.
+std::string parse_error_line(const CLI::ParseError& e, const CLI::App& app, int argc, char** argv) {
+  std::string what = e.what();
+  std::replace(what.begin(), what.end(), '\n', ' ');
+  const std::vector<const CLI::App*> chosen = app.get_subcommands({});
+  std::string help = "springlab --help";
+  for (const CLI::App* sub : chosen) {
+    if (sub->parsed()) help = "springlab " + sub->get_name() + " --help";
+  }
+  if (const std::string name = unknown_option(app, argc, argv); !name.empty()) {
+    return "unknown option " + printable(name) + " (" + help + " lists the options)";
+  }
+  // "--dt: At Most 1 required but received 2"
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr &&
+      what.find("At Most 1 required") != std::string::npos) {
+    return what.substr(0, what.find(':')) + ": given more than once";
+  }
+  // "Could not convert: --dt = abc"
+  if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr &&
+      what.rfind("Could not convert: ", 0) == 0) {
+    const std::string rest = what.substr(19);
+    const auto eq = rest.find(" = ");
+    if (eq != std::string::npos) {
+      return rest.substr(0, eq) + ": '" + printable(rest.substr(eq + 3)) + "' is not a number";
+    }
+  }
+  if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
+    const auto colon = what.find(": ");
+    return "unexpected argument" +
+           (colon == std::string::npos ? std::string() : " " + printable(what.substr(colon + 2))) +
+           " (" + help + " lists the arguments)";
+  }
+  if (what == "A subcommand is required" && argc > 1 && argv[1][0] != '-') {
+    return "unknown command '" + printable(argv[1]) +
+           "' (commands: run, stability, scene, list, experiment; springlab --help)";
+  }
+  if (what == "A subcommand is required") {
+    return "a command is required: run, stability, scene, list or experiment (springlab --help)";
+  }
+  return printable(what) + " (" + help + ")";
 }
 
 }  // namespace
 
 Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>& parameters) {
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(scene_arg, ec)) {
+  const bool from_stdin = scene_arg == "-";
+  struct stat st {};
+  const bool exists = !from_stdin && ::stat(scene_arg.c_str(), &st) == 0;
+  const int error = exists ? 0 : errno;
+  if (from_stdin || exists) {
+    const std::string label = from_stdin ? "stdin" : printable(scene_arg);
+    if (exists && S_ISDIR(st.st_mode)) throw SceneError(label + ": is a directory, not a scene file");
     if (!parameters.empty()) {
-      throw SceneError(scene_arg + ": -p applies to built-in scenes only, edit the file instead");
+      throw SceneError(label + ": -p applies to built-in scenes only, edit the file instead");
     }
-    return load_scene_file(scene_arg);
+    // A pipe or a FIFO (`<(springlab scene cloth)`) is read like a file.
+    return load_scene_file(from_stdin ? "/dev/stdin" : scene_arg, label);
   }
   if (is_builtin_scene(scene_arg)) return make_builtin_scene(scene_arg, split_parameters(parameters));
-  throw SceneError(scene_arg + ": no such scene file or built-in scene (built-in scenes: " +
-                   builtin_list() + ")");
+  const std::string why = from_stdin || error == ENOENT ? "no such scene file or built-in scene"
+                                                        : std::string("cannot open (") + std::strerror(error) + ")";
+  throw SceneError(printable(scene_arg) + ": " + why + " (built-in scenes: " + builtin_list() + ")");
 }
 
 int run_cli(int argc, char** argv) {
+  install_signal_handlers();
   CLI::App app{"springlab: time integrators on mass-spring systems"};
   app.require_subcommand(1);
+  app.option_defaults()->always_capture_default();
 
   CommonOptions run_options;
   std::string energy_path, trajectory_path;
   CLI::App* run = app.add_subcommand("run", "simulate a scene with one integrator");
   run_options.add_to(*run);
   run->add_option("--dt", run_options.run.dt,
-                  "step [s] (adaptive methods: output interval)")->required();
+                  "step [s] (adaptive methods: output interval)")
+      ->required()
+      ->default_str("");
   run->add_option("--energy", energy_path, "CSV t,kinetic,spring,gravity,total");
   run->add_option("--trajectory", trajectory_path, "CSV t,i,x,y[,z],vx,vy[,vz]");
   run->add_option("--every", run_options.run.every, "write every K-th output time (and the last)");
@@ -359,7 +612,9 @@ int run_cli(int argc, char** argv) {
   std::vector<std::string> scene_parameters;
   CLI::App* scene = app.add_subcommand("scene", "print a built-in scene as a scene file");
   scene->add_option("NAME", scene_name, "built-in scene")->required();
-  scene->add_option("-p", scene_parameters, "parameter key=value (repeatable)");
+  scene->add_option("-p", scene_parameters, "parameter key=value (repeatable)")
+      ->allow_extra_args(false)
+      ->default_str("");
 
   bool list_json = false;
   CLI::App* list = app.add_subcommand("list", "integrators and built-in scenes");
@@ -367,21 +622,32 @@ int run_cli(int argc, char** argv) {
                  "as JSON, with each integrator's family, stability, colour and marker");
 
   std::string experiment_file, shard;
+  bool no_progress = false;
   ExperimentRunOptions experiment_options;
   CLI::App* experiment = app.add_subcommand("experiment", "run one experiment definition");
   experiment->add_option("FILE", experiment_file, "experiment definition (experiments/*.json)")
       ->required();
   experiment->add_option("--out", experiment_options.out_dir, "output directory")->required();
-  experiment->add_option("--jobs", experiment_options.jobs, "tasks run at once (default: all cores)");
+  experiment->add_option("--jobs", experiment_options.jobs, "tasks run at once, at most the CPUs")
+      ->default_str("all CPUs");
   experiment->add_option("--shard", shard, "run only shard i of N (i/N), for job arrays");
   experiment->add_option("--merge", experiment_options.merge,
-                         "merge N shards into the full tables instead of running");
-  experiment->add_flag("!--no-progress", experiment_options.progress, "no progress line on stderr");
+                         "merge N shards into the full tables instead of running")
+      ->default_str("");
+  experiment->add_flag("--no-progress", no_progress, "no progress line on stderr")->default_str("");
+  for (CLI::App* cmd : {run, stability}) {
+    for (const char* flag : {"--dq-jacobian", "--stald", "--json"}) cmd->get_option(flag)->default_str("");
+  }
 
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "springlab: error: " << parse_error_line(e, app, argc, argv) << '\n';
+    return 1;
   }
 
   try {
@@ -389,33 +655,49 @@ int run_cli(int argc, char** argv) {
     if (*stability) return command_stability(stability_options, stability_settings);
     if (*scene) {
       if (!is_builtin_scene(scene_name)) {
-        throw SceneError("unknown built-in scene '" + scene_name + "' (built-in scenes: " +
-                         builtin_list() + ")");
+        throw SceneError("unknown built-in scene '" + printable(scene_name) +
+                         "' (built-in scenes: " + builtin_list() + ")");
       }
-      std::cout << scene_to_json(make_builtin_scene(scene_name, split_parameters(scene_parameters)))
-                << '\n';
+      write_stdout(
+          scene_to_json(make_builtin_scene(scene_name, split_parameters(scene_parameters))));
       return 0;
     }
     if (*list) return command_list(list_json);
     if (*experiment) {
+      const bool merging = experiment->count("--merge") > 0;
+      if (merging && experiment_options.merge < 1) throw UsageError("--merge: must be >= 1");
+      if (merging && !shard.empty()) {
+        throw UsageError("--merge and --shard: merge the shards in a run of its own, without --shard");
+      }
       if (!shard.empty()) parse_shard(shard, experiment_options);
       if (experiment_options.jobs < 0) throw UsageError("--jobs: must be >= 0");
-      if (experiment_options.merge < 0) throw UsageError("--merge: must be >= 1");
-      // Ctrl-C (or a job scheduler's SIGTERM) stops the sweep between tasks:
-      // the finished ones are written, whole, and marked incomplete.
-      InterruptGuard guard;
-      experiment_options.cancel = &interrupted;
+      experiment_options.progress = !no_progress;
+      // More threads than CPUs gain nothing on these compute-bound tasks and
+      // hold one more model each: --jobs is capped at the usable CPUs.
+      const int cpus = usable_cpus();
+      if (experiment_options.jobs > cpus) {
+        std::cerr << "springlab: note: --jobs " << experiment_options.jobs << " capped at " << cpus
+                  << ", the CPUs this process may use" << std::endl;
+      }
+      experiment_options.jobs =
+          experiment_options.jobs == 0 ? cpus : std::min(experiment_options.jobs, cpus);
+      // Ctrl-C (or a job scheduler's SIGTERM) stops the sweep: the finished
+      // tasks are written, whole, and marked incomplete.
+      StopOnSignals stop;
+      experiment_options.cancel = &stop.flag();
       const ExperimentRunSummary summary = run_experiment(experiment_file, experiment_options);
       if (!summary.complete()) {
         std::cerr << "springlab: interrupted: " << summary.tasks_done << " of "
                   << summary.tasks_total << " tasks written, marked incomplete in "
-                  << experiment_options.out_dir << "\n";
+                  << printable(experiment_options.out_dir) << "\n";
         return 130;
       }
       return 0;
     }
   } catch (const std::exception& e) {
-    std::cerr << "springlab: error: " << e.what() << '\n';
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    std::cerr << "springlab: error: " << what << '\n';
     return 1;
   }
   return 1;

@@ -1,5 +1,6 @@
 #include "experiments/definition.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -33,7 +34,7 @@ void DefinitionObject::allow_only(std::initializer_list<const char*> keys) const
       std::string list;
       for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
       throw DefinitionError(file_ + ": " + (path_.empty() ? "" : path_ + ": ") + "unknown key '" +
-                            key + "' (allowed: " + list + ")");
+                            printable(key) + "' (allowed: " + list + ")");
     }
   }
 }
@@ -136,6 +137,13 @@ Scene definition_scene(const DefinitionObject& o,
                        const std::vector<std::pair<std::string, std::string>>& overrides) {
   const std::string name = o.string("scene");
   auto parameters = definition_parameters(o);
+  for (const auto& [key, value] : overrides) {
+    for (const auto& given : parameters) {
+      if (given.first == key) {
+        o.fail("parameters", std::string("'").append(printable(key)).append("' is the parameter the sweep sets: leave it out"));
+      }
+    }
+  }
   parameters.insert(parameters.end(), overrides.begin(), overrides.end());
   if (is_builtin_scene(name)) {
     try {
@@ -148,7 +156,8 @@ Scene definition_scene(const DefinitionObject& o,
   const std::filesystem::path base = std::filesystem::path(o.file()).parent_path();
   const std::filesystem::path path = base / name;
   if (!std::filesystem::is_regular_file(path)) {
-    o.fail("scene", "'" + name + "' is neither a built-in scene nor a file next to the definition");
+    o.fail("scene", std::string("'").append(printable(name)).append(
+                        "' is neither a built-in scene nor a file next to the definition"));
   }
   try {
     return load_scene_file(path.string());
@@ -176,7 +185,10 @@ std::vector<std::string> definition_integrators(const DefinitionObject& o, const
   for (const auto& item : choice) {
     if (!item.is_string()) o.fail(key, "expected integrator names");
     const std::string name = item.get<std::string>();
-    if (!is_integrator(name)) o.fail(key, "unknown integrator '" + name + "'");
+    if (!is_integrator(name)) o.fail(key, "unknown integrator '" + printable(name) + "'");
+    if (std::find(names.begin(), names.end(), name) != names.end()) {
+      o.fail(key, "'" + name + "' is listed twice");
+    }
     names.push_back(name);
   }
   return names;

@@ -57,6 +57,10 @@ class Experiment {
   virtual nlohmann::json settings() const = 0;
 };
 
+// A definition file is at most this large; its name at most this long.
+inline constexpr std::size_t kMaxDefinitionBytes = std::size_t{16} << 20;  // 16 MiB
+inline constexpr std::size_t kMaxExperimentNameLength = 100;
+
 // Reads and validates a definition file completely (throws DefinitionError
 // or SceneError with a one-line message) before any task runs.
 struct LoadedExperiment {

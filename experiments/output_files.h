@@ -1,41 +1,71 @@
-// Output files written whole or not at all (SPEC §6): rows go to a temporary
-// file beside the target, renamed over it only by commit(). The temporary is
-// created up front, so an unwritable path fails before any work is done, and
-// removed if the run ends without commit().
+// Output files (--energy, --trajectory, an experiment's tables), written the
+// way careful Unix tools write them:
+//
+//  - A path that names a regular file, or nothing yet, is written whole or
+//    not at all: rows go to a temporary beside it, which publish() renames
+//    over it when the run ends (finish() every file of a run first, so they
+//    appear all or none). An existing file keeps its permission bits; a new
+//    one gets 0666 minus the umask. A file we may not write (read-only, or
+//    another user's that we could only replace, not write) is refused, as
+//    the shell's `>` would refuse it. A file with other hard links, or owned
+//    by another user, is rewritten in place at publish() (its other names and
+//    its owner stay), from the finished temporary.
+//  - A symbolic link is followed: its target is written, the link stays.
+//  - Anything else (a FIFO, a terminal, /dev/null, /dev/stdout) is a stream:
+//    written directly, as the rows come, never replaced or renamed over.
+//  - A write error (a full disk, a closed pipe) throws std::runtime_error
+//    naming the path, at the write that failed.
+//
+// The temporary is created up front (an unwritable path fails before any
+// work is done) and named `<file>.springlab-tmp.<pid>.<host>.XXXXXX`; it is
+// removed if the run ends without publish(), also when a signal ends it
+// (signals.h). A temporary left by a killed run (kill -9, a power cut) is
+// removed by the next run that writes the same file, once its process is
+// gone.
 #pragma once
 
-#include <cstdio>
+#include <chrono>
 #include <string>
+#include <string_view>
 
 #include "experiments/simulation.h"
 
 namespace springlab {
 
-class AtomicFile {
+class OutputFile {
  public:
-  // Throws std::runtime_error naming the path when it cannot be created.
-  explicit AtomicFile(std::string path);
-  ~AtomicFile();
-  AtomicFile(const AtomicFile&) = delete;
-  AtomicFile& operator=(const AtomicFile&) = delete;
+  // Throws std::runtime_error naming the path when it cannot be written.
+  explicit OutputFile(std::string path);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
 
-  void write(const std::string& text);
-  // Flushes and closes the temporary; throws on an I/O error. Finish every
-  // file of a run before publishing any, so they appear all or none.
+  void write(std::string_view text);
+  // Flushes and closes; throws on an I/O error.
   void finish();
-  // Renames the finished temporary into place (finishing it if needed).
+  // Puts the finished temporary in place (finishing it if needed). A stream
+  // has nothing to publish.
   void publish();
   const std::string& path() const { return path_; }
+  bool is_stream() const { return mode_ == Mode::kStream; }
 
  private:
-  std::string path_;
+  enum class Mode { kStream, kReplace, kRewrite };
+  void flush();
+  [[noreturn]] void fail(const std::string& what, int error) const;
+
+  std::string path_;     // as given (for messages)
+  std::string target_;   // after following symbolic links
   std::string temp_path_;
-  std::FILE* file_ = nullptr;
-  bool failed_ = false;
+  Mode mode_ = Mode::kReplace;
+  int fd_ = -1;
+  std::string buffer_;
+  std::chrono::steady_clock::time_point last_flush_;
   bool published_ = false;
 };
 
-// True when two paths name the same file (after resolving ".", ".." and links).
+// True when two output paths name the same file (after resolving ".", ".."
+// and links). Two character devices (/dev/null twice) do not count.
 bool same_file(const std::string& a, const std::string& b);
 
 // Shortest decimal text that reads back to the same double (deterministic).
@@ -44,23 +74,23 @@ std::string format_number(double value);
 // --energy: t,kinetic,spring,gravity,total
 class EnergyCsv final : public Observer {
  public:
-  EnergyCsv(const MassSpringModel& model, AtomicFile& file);
+  EnergyCsv(const MassSpringModel& model, OutputFile& file);
   void observe(double t, const Vector& x, const Vector& v) override;
 
  private:
   const MassSpringModel& model_;
-  AtomicFile& file_;
+  OutputFile& file_;
 };
 
 // --trajectory: t,i,x,y[,z],vx,vy[,vz], one row per particle in scene order.
 class TrajectoryCsv final : public Observer {
  public:
-  TrajectoryCsv(const MassSpringModel& model, AtomicFile& file);
+  TrajectoryCsv(const MassSpringModel& model, OutputFile& file);
   void observe(double t, const Vector& x, const Vector& v) override;
 
  private:
   const MassSpringModel& model_;
-  AtomicFile& file_;
+  OutputFile& file_;
 };
 
 }  // namespace springlab

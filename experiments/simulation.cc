@@ -1,12 +1,21 @@
 #include "experiments/simulation.h"
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "integrators/registry.h"
 
 namespace springlab {
+
+namespace {
+thread_local const std::atomic<bool>* thread_stop = nullptr;
+}  // namespace
+
+StopScope::StopScope(const std::atomic<bool>* stop) : previous_(thread_stop) { thread_stop = stop; }
+StopScope::~StopScope() { thread_stop = previous_; }
 
 const char* to_string(RunStatus status) {
   switch (status) {
@@ -31,6 +40,28 @@ TimeGrid make_time_grid(double dt, double t_end) {
   grid.steps = std::abs(ratio - whole) <= 1e-9 ? static_cast<long>(whole)
                                                : static_cast<long>(std::ceil(ratio));
   grid.steps = std::max(grid.steps, 1L);
+
+  // dt's shortest decimal, d x 10^e: "0.3" -> 3, -1; "2.5e-07" -> 25, -8.
+  char text[32];
+  const auto written = std::to_chars(text, text + sizeof text, dt);
+  const std::string decimal(text, written.ptr);
+  const auto e_at = decimal.find('e');
+  std::string mantissa = decimal.substr(0, e_at);
+  int exponent = e_at == std::string::npos ? 0 : std::stoi(decimal.substr(e_at + 1));
+  if (const auto point = mantissa.find('.'); point != std::string::npos) {
+    exponent -= static_cast<int>(mantissa.size() - point - 1);
+    mantissa.erase(point, 1);
+  }
+  const double digits = std::stod(mantissa);
+  const double largest = static_cast<double>(grid.steps) * digits;  // k d for the largest k
+  if (std::abs(exponent) <= 22 && largest < 9007199254740992.0 /* 2^53 */) {
+    grid.digits = digits;
+    static constexpr double kPowersOfTen[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                              1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                              1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};  // exact
+    grid.scale = kPowersOfTen[std::abs(exponent)];
+    grid.divide = exponent < 0;
+  }
   return grid;
 }
 
@@ -62,8 +93,18 @@ RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
   };
   notify(0.0, x0, v0);
 
-  StepResult step = integrator->initialize(model, 0.0, x0, v0, settings.options);
-  if (!step.ok) {
+  IntegratorOptions options = settings.options;
+  if (options.stop == nullptr) options.stop = thread_stop;
+  auto stop_requested = [&] {
+    return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
+  };
+  StepResult step;
+  if (!std::isfinite(result.energy_initial) || !std::isfinite(bound)) {
+    // Nothing to integrate: the energy already overflows a double.
+    result.status = RunStatus::kDiverged;
+    result.failure = "the initial energy is not finite";
+    result.diverged_at = 0.0;
+  } else if (step = integrator->initialize(model, 0.0, x0, v0, options); !step.ok) {
     result.status = RunStatus::kFailed;
     result.failure = step.message;
     result.diverged_at = 0.0;
@@ -73,8 +114,10 @@ RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
   bool good_observed = true;  // has the last good state been written?
   for (long k = 1; k <= grid.steps && result.status == RunStatus::kCompleted; ++k) {
     const double t = grid.at(k);
+    if (stop_requested()) throw StopRequested();
     step = integrator->advance_to(t);
     if (!step.ok) {
+      if (stop_requested()) throw StopRequested();
       result.status = RunStatus::kFailed;
       result.failure = step.message;
       result.diverged_at = t;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -49,11 +50,25 @@ struct RunResult {
 // The grid of SPEC §6: round(T/dt) steps when T/dt is within 1e-9 of a whole
 // number, otherwise the last step is shortened to end exactly at T.
 // Step k ends at t_k = k dt, and t_N = T exactly (no accumulated drift).
+// t_k is k times dt *as written*: with dt's shortest decimal d x 10^e, t_k
+// is the double nearest to (k d) x 10^e, one correctly rounded operation on
+// exact operands while k d < 2^53 for every k and |e| <= 22 (any dt typed
+// with up to 15 digits). So --dt 0.1 gives t_3 = 0.3, not the double product
+// 0.30000000000000004, and rows print the decimal a reader expects.
+// Otherwise t_k = k dt, rounded once.
 struct TimeGrid {
   long steps = 0;
   double dt = 0.0;
   double t_end = 0.0;
-  double at(long k) const { return k == steps ? t_end : static_cast<double>(k) * dt; }
+  double digits = 0.0;  // d (0: use k dt)
+  double scale = 1.0;   // 10^|e|
+  bool divide = false;  // e < 0
+  double at(long k) const {
+    if (k == steps) return t_end;
+    if (digits == 0.0) return static_cast<double>(k) * dt;
+    const double kd = static_cast<double>(k) * digits;  // exact: below 2^53
+    return divide ? kd / scale : kd * scale;
+  }
 };
 // Throws std::invalid_argument for a non-positive or non-finite dt or t_end,
 // or more than 1e9 steps.
@@ -65,8 +80,30 @@ std::vector<double> time_grid(double dt, double t_end);
 // exceptions). Divergence: a non-finite state, or kinetic + spring energy
 // above blowup * E_s (E_s = model.energy_scale(); with E_s = 0 only a
 // non-finite state counts). Throws std::invalid_argument for bad settings.
+// A run that starts from a state whose energy does not fit in a double
+// (coordinates near 1e300) diverges at t = 0. When settings.options.stop is
+// set and becomes true, simulate throws StopRequested at the next step.
 RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers = {});
+
+class StopRequested : public std::runtime_error {
+ public:
+  StopRequested() : std::runtime_error("stopped on request") {}
+};
+
+// While alive, every simulate() on this thread whose settings carry no stop
+// request of their own honours `stop`: the experiment runner's workers set
+// it, so a Ctrl-C reaches the runs inside every experiment kind.
+class StopScope {
+ public:
+  explicit StopScope(const std::atomic<bool>* stop);
+  ~StopScope();
+  StopScope(const StopScope&) = delete;
+  StopScope& operator=(const StopScope&) = delete;
+
+ private:
+  const std::atomic<bool>* previous_;
+};
 
 const char* to_string(RunStatus status);
 

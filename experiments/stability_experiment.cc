@@ -47,29 +47,6 @@ struct MapTask {
 
 std::string k_text(double k) { return format_number(k); }
 
-// The theoretical limit for a method, or nullopt when it has none (A- and
-// L-stable methods) or declares none (unknown, A(alpha)).
-std::optional<double> theory_dt(const IntegratorInfo& info, double w, double t_end, double blowup) {
-  if (w <= 0.0 || info.stability != StabilityKind::kConditional ||
-      !std::isfinite(info.stability_limit)) {
-    return std::nullopt;
-  }
-  if (info.stability_limit > 0.0) return info.stability_limit / w;
-  if (!info.stability_function) return std::nullopt;
-  // (T / h) ln |R(i w h)|^2 = ln B, increasing in h: bisect on log h.
-  auto growth = [&](double h) {
-    return t_end / h * std::log(std::norm(info.stability_function({0.0, w * h})));
-  };
-  double lo = 1e-12 / w, hi = 10.0 / w;
-  const double target = std::log(blowup);
-  if (growth(hi) < target) return std::nullopt;
-  for (int iteration = 0; iteration < 200 && hi / lo > 1.0 + 1e-12; ++iteration) {
-    const double mid = std::sqrt(lo * hi);
-    (growth(mid) < target ? lo : hi) = mid;
-  }
-  return std::sqrt(lo * hi);
-}
-
 // Adaptive methods choose their own steps: there is no step size to limit.
 std::vector<std::string> fixed_step_integrators(const DefinitionObject& d) {
   std::vector<std::string> names = definition_integrators(d, "integrators", "fixed-step");
@@ -199,7 +176,7 @@ class StabilityExperiment final : public Experiment {
     s.rel_tol = rel_tol_;
     const StabilityResult r = find_max_stable_dt(model, s);
     const IntegratorInfo info = make_integrator(task.integrator)->info();
-    const std::optional<double> theory = theory_dt(info, w, t_end, blowup_);
+    const std::optional<double> theory = theoretical_max_dt(info, w, t_end, blowup_).dt;
     Row row;
     row.add(scene.name).add(task.integrator).add(c.k[task.k_index]).add(w).add(t_end)
         .add(r.max_stable_dt).add(r.lo).add(r.hi);

@@ -7,89 +7,85 @@ namespace springlab {
 using sundials::check;
 using sundials::check_created;
 
-ArkodeArk::ArkodeArk(bool imex, IntegratorInfo info)
-    : SundialsIntegrator(std::move(info)), imex_(imex) {}
+const SundialsCalls& ArkodeArk::calls() {
+  static const SundialsCalls calls = {
+      .prefix = "ARKStep",
+      .evolve_call = "ARKStepEvolve",
+      .order_call = "SetOrder",
+      .set_error_handler = ARKStepSetErrHandlerFn,
+      .set_tolerances = ARKStepSStolerances,
+      .set_user_data = ARKStepSetUserData,
+      .set_max_steps = ARKStepSetMaxNumSteps,
+      .set_order = ARKStepSetOrder,
+      .set_stop_time = ARKStepSetStopTime,
+      .evolve = [](void* mem, double t_out, N_Vector y, N_Vector, double* t) {
+        return ARKStepEvolve(mem, t_out, y, t, ARK_NORMAL);
+      },
+      .set_linear_solver = ARKStepSetLinearSolver,
+      .get_steps = ARKStepGetNumSteps,
+      .get_error_test_fails = ARKStepGetNumErrTestFails,
+      .get_nonlinear_iterations = ARKStepGetNumNonlinSolvIters,
+      .get_nonlinear_failures = ARKStepGetNumNonlinSolvConvFails,
+      .get_linear_setups = ARKStepGetNumLinSolvSetups,
+      .get_jacobian_evals = ARKStepGetNumJacEvals};
+  return calls;
+}
+
+ArkodeArk::ArkodeArk(bool imex, IntegratorInfo info, SundialsMethod method)
+    : SundialsIntegrator(std::move(info), calls(), std::move(method)), imex_(imex) {}
 
 ArkodeDirk::ArkodeDirk()
-    : ArkodeArk(false, {.name = "arkode-dirk",
-                        .scheme = "ARKODE diagonally implicit Runge-Kutta, Newton per stage",
-                        .order = 4,
-                        .adaptive = true,
-                        .implicit = true,
-                        .iterates_to_tolerance = true,
-                        // Hairer & Wanner's SDIRK 5-stage order 4 (ARKODE_SDIRK_5_3_4).
-                        .stability = StabilityKind::kL,
-                        .stability_limit = kInfinity,
-                        .stability_note = "at the default order 4"}) {}
+    : ArkodeArk(false,
+                {.name = "arkode-dirk",
+                 .scheme = "ARKODE diagonally implicit Runge-Kutta, Newton per stage",
+                 .order = 4,
+                 .adaptive = true,
+                 .implicit = true,
+                 .iterates_to_tolerance = true,
+                 // Hairer & Wanner's SDIRK 5-stage order 4 (ARKODE_SDIRK_5_3_4).
+                 .stability = StabilityKind::kL,
+                 .stability_limit = kInfinity,
+                 .stability_note = "at the default order 4"},
+                {.orders = {2, 3, 4, 5},
+                 .order_meaning = "the order of ARKODE's default DIRK table",
+                 .newton_matrix = true}) {}
 
 ArkodeImex::ArkodeImex()
-    : ArkodeArk(true, {.name = "arkode-imex",
-                       .scheme = "ARKODE IMEX Runge-Kutta: springs, damping, drag implicit; "
-                                 "gravity, wind explicit",
-                       .order = 4,
-                       .adaptive = true,
-                       .implicit = true,
-                       .iterates_to_tolerance = true,
-                       // ARK4(3)6L[2]SA: its implicit table is L-stable.
-                       .stability = StabilityKind::kL,
-                       .stability_limit = kInfinity,
-                       .stability_note = "for the implicit forces at the default order 4; "
-                                         "wind is explicit"}) {}
+    : ArkodeArk(true,
+                {.name = "arkode-imex",
+                 .scheme = "ARKODE IMEX Runge-Kutta: springs, damping, drag implicit; "
+                           "gravity, wind explicit",
+                 .order = 4,
+                 .adaptive = true,
+                 .implicit = true,
+                 .iterates_to_tolerance = true,
+                 // ARK4(3)6L[2]SA: its implicit table is L-stable.
+                 .stability = StabilityKind::kL,
+                 .stability_limit = kInfinity,
+                 .stability_note = "for the implicit forces at the default order 4; "
+                                   "wind is explicit"},
+                {.orders = {3, 4, 5},
+                 .order_meaning = "the order of ARKODE's default IMEX table pair",
+                 .newton_matrix = true}) {}
 
 int ArkodeArk::explicit_rhs(double t, N_Vector y, N_Vector ydot, void* self) {
   return static_cast<ArkodeArk*>(self)->evaluate_rhs(ForcePart::kNonstiff, false, t, y, ydot);
 }
 
 void ArkodeArk::create() {
-  const IntegratorOptions& o = options();
-  if (o.stald) throw sundials::Failure("--stald applies to cvode-bdf only");
   implicit_part_ = imex_ ? ForcePart::kStiff : ForcePart::kAll;
-  memory_ = sundials::SolverMemory(
-      check_created(ARKStepCreate(imex_ ? explicit_rhs : nullptr, ode_rhs, t_, y_.get(),
-                                  context_.get()),
-                    "ARKStepCreate"),
-      ARKStepFree);
-  void* mem = memory_.get();
-  check(ARKStepSetErrHandlerFn(mem, sundials::ErrorLog::handler, &log_), "ARKStepSetErrHandlerFn");
-  check(ARKStepSStolerances(mem, o.rtol, o.atol), "ARKStepSStolerances", log_.last);
-  check(ARKStepSetUserData(mem, this), "ARKStepSetUserData");
-  check(ARKStepSetMaxNumSteps(mem, o.max_steps), "ARKStepSetMaxNumSteps", log_.last);
-  if (o.max_order > 0) check(ARKStepSetOrder(mem, o.max_order), "ARKStepSetOrder", log_.last);
+  adopt(check_created(ARKStepCreate(imex_ ? explicit_rhs : nullptr, ode_rhs, t_, y_.get(),
+                                    context_.get()),
+                      "ARKStepCreate"),
+        ARKStepFree);
+}
 
-  const LinearSolverKind kind = linear_solver_kind();
-  create_linear_solver(kind);
-  check(ARKStepSetLinearSolver(mem, linear_solver_.get(), matrix_.get()), "ARKStepSetLinearSolver",
-        log_.last);
-  if (o.dq_jacobian) return;
-  if (kind == LinearSolverKind::kGmres) {
-    check(ARKStepSetJacTimes(mem, ode_jtimes_setup, ode_jtimes), "ARKStepSetJacTimes", log_.last);
+void ArkodeArk::attach_jacobian(bool matrix_free) {
+  if (matrix_free) {
+    check(ARKStepSetJacTimes(memory(), ode_jtimes_setup, ode_jtimes), "ARKStepSetJacTimes",
+          log_.last);
   } else {
-    check(ARKStepSetJacFn(mem, ode_jacobian), "ARKStepSetJacFn", log_.last);
-  }
-}
-
-int ArkodeArk::solve(double t_out, double& t_reached) {
-  realtype t = t_;
-  // Every output time is reached by a step of the solver (a stop time), not
-  // by interpolating past it: ARKODE's interpolant in particular can be far
-  // less accurate than the tolerance.
-  if (const int stop = ARKStepSetStopTime(memory_.get(), t_out); stop < 0) return stop;
-  const int flag = ARKStepEvolve(memory_.get(), t_out, y_.get(), &t, ARK_NORMAL);
-  t_reached = t;
-  return flag;
-}
-
-void ArkodeArk::read_counters(IntegratorStats& s) const {
-  void* mem = memory_.get();
-  long value = 0;
-  if (ARKStepGetNumSteps(mem, &value) == ARK_SUCCESS) s.steps = value;
-  if (ARKStepGetNumErrTestFails(mem, &value) == ARK_SUCCESS) s.rejected_steps = value;
-  if (ARKStepGetNumNonlinSolvIters(mem, &value) == ARK_SUCCESS) s.newton_iterations = value;
-  if (ARKStepGetNumNonlinSolvConvFails(mem, &value) == ARK_SUCCESS) s.nonlinear_failures = value;
-  s.linear_solves = s.newton_iterations;
-  if (ARKStepGetNumLinSolvSetups(mem, &value) == ARK_SUCCESS) s.factorizations = value;
-  if (options().dq_jacobian && ARKStepGetNumJacEvals(mem, &value) == ARK_SUCCESS) {
-    const_cast<ArkodeArk*>(this)->difference_quotient_jacobians_ = value;
+    check(ARKStepSetJacFn(memory(), ode_jacobian), "ARKStepSetJacFn", log_.last);
   }
 }
 

@@ -10,7 +10,8 @@
 //   the non-stiff part f_E = (0, M^-1 F_nonstiff) — gravity, wind — explicit,
 //   so the Newton matrix involves only the stiff forces' Jacobian.
 //
-// --max-order picks ARKODE's default table of that order (2-5).
+// --max-order picks ARKODE's default table of that order (arkode-dirk 2-5;
+// arkode-imex 3-5: ARKODE has no order-2 IMEX table and would use order 3).
 // Error control as CVODE (--rtol, --atol); --dt is the output interval.
 #pragma once
 
@@ -20,13 +21,12 @@ namespace springlab {
 
 class ArkodeArk : public SundialsIntegrator {
  protected:
-  ArkodeArk(bool imex, IntegratorInfo info);
+  ArkodeArk(bool imex, IntegratorInfo info, SundialsMethod method);
   void create() override;
-  int solve(double t_out, double& t_reached) override;
-  void read_counters(IntegratorStats& stats) const override;
-  const char* solve_call() const override { return "ARKStepEvolve"; }
+  void attach_jacobian(bool matrix_free) override;
 
  private:
+  static const SundialsCalls& calls();
   static int explicit_rhs(double t, N_Vector y, N_Vector ydot, void* self);
   bool imex_;
 };

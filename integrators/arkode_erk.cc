@@ -6,9 +6,33 @@
 
 namespace springlab {
 
-using sundials::check;
 using sundials::check_created;
 
+const SundialsCalls& ArkodeErk::calls() {
+  static const SundialsCalls calls = {
+      .prefix = "ERKStep",
+      .evolve_call = "ERKStepEvolve",
+      .order_call = "SetOrder",
+      .set_error_handler = ERKStepSetErrHandlerFn,
+      .set_tolerances = ERKStepSStolerances,
+      .set_user_data = ERKStepSetUserData,
+      .set_max_steps = ERKStepSetMaxNumSteps,
+      .set_order = ERKStepSetOrder,
+      .set_stop_time = ERKStepSetStopTime,
+      .evolve = [](void* mem, double t_out, N_Vector y, N_Vector, double* t) {
+        return ERKStepEvolve(mem, t_out, y, t, ARK_NORMAL);
+      },
+      .set_linear_solver = nullptr,
+      .get_steps = ERKStepGetNumSteps,
+      .get_error_test_fails = ERKStepGetNumErrTestFails,
+      .get_nonlinear_iterations = nullptr,
+      .get_nonlinear_failures = nullptr,
+      .get_linear_setups = nullptr,
+      .get_jacobian_evals = nullptr};
+  return calls;
+}
+
+// ARKODE has default ERK tables of orders 2-6 and 8 (7 would silently be 8).
 ArkodeErk::ArkodeErk()
     : SundialsIntegrator({.name = "arkode-erk",
                           .scheme = "ARKODE explicit Runge-Kutta, embedded error estimate",
@@ -18,38 +42,14 @@ ArkodeErk::ArkodeErk()
                           .stability = StabilityKind::kConditional,
                           .stability_limit = 2.0 * std::sqrt(2.0),
                           .stability_note = "at the default order 4; the step control keeps "
-                                            "h inside the region"}) {}
+                                            "h inside the region"},
+                         calls(),
+                         {.orders = {2, 3, 4, 5, 6, 8},
+                          .order_meaning = "the order of ARKODE's default explicit table"}) {}
 
 void ArkodeErk::create() {
-  const IntegratorOptions& o = options();
-  if (o.stald) throw sundials::Failure("--stald applies to cvode-bdf only");
-  memory_ = sundials::SolverMemory(
-      check_created(ERKStepCreate(ode_rhs, t_, y_.get(), context_.get()), "ERKStepCreate"),
-      ERKStepFree);
-  void* mem = memory_.get();
-  check(ERKStepSetErrHandlerFn(mem, sundials::ErrorLog::handler, &log_), "ERKStepSetErrHandlerFn");
-  check(ERKStepSStolerances(mem, o.rtol, o.atol), "ERKStepSStolerances", log_.last);
-  check(ERKStepSetUserData(mem, this), "ERKStepSetUserData");
-  check(ERKStepSetMaxNumSteps(mem, o.max_steps), "ERKStepSetMaxNumSteps", log_.last);
-  if (o.max_order > 0) check(ERKStepSetOrder(mem, o.max_order), "ERKStepSetOrder", log_.last);
-}
-
-int ArkodeErk::solve(double t_out, double& t_reached) {
-  realtype t = t_;
-  // Every output time is reached by a step of the solver (a stop time), not
-  // by interpolating past it: ARKODE's interpolant in particular can be far
-  // less accurate than the tolerance.
-  if (const int stop = ERKStepSetStopTime(memory_.get(), t_out); stop < 0) return stop;
-  const int flag = ERKStepEvolve(memory_.get(), t_out, y_.get(), &t, ARK_NORMAL);
-  t_reached = t;
-  return flag;
-}
-
-void ArkodeErk::read_counters(IntegratorStats& s) const {
-  void* mem = memory_.get();
-  long value = 0;
-  if (ERKStepGetNumSteps(mem, &value) == ARK_SUCCESS) s.steps = value;
-  if (ERKStepGetNumErrTestFails(mem, &value) == ARK_SUCCESS) s.rejected_steps = value;
+  adopt(check_created(ERKStepCreate(ode_rhs, t_, y_.get(), context_.get()), "ERKStepCreate"),
+        ERKStepFree);
 }
 
 }  // namespace springlab

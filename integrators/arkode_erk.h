@@ -19,9 +19,10 @@ class ArkodeErk final : public SundialsIntegrator {
 
  protected:
   void create() override;
-  int solve(double t_out, double& t_reached) override;
-  void read_counters(IntegratorStats& stats) const override;
-  const char* solve_call() const override { return "ERKStepEvolve"; }
+  void attach_jacobian(bool) override {}  // explicit: no Newton matrix
+
+ private:
+  static const SundialsCalls& calls();
 };
 
 }  // namespace springlab

@@ -23,13 +23,12 @@ namespace springlab {
 
 class CvodeIntegrator : public SundialsIntegrator {
  protected:
-  CvodeIntegrator(int multistep_method, IntegratorInfo info);
+  CvodeIntegrator(int multistep_method, IntegratorInfo info, SundialsMethod method);
   void create() override;
-  int solve(double t_out, double& t_reached) override;
-  void read_counters(IntegratorStats& stats) const override;
-  const char* solve_call() const override { return "CVode"; }
+  void attach_jacobian(bool matrix_free) override;
 
  private:
+  static const SundialsCalls& calls();
   int multistep_method_;
 };
 

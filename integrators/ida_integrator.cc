@@ -8,6 +8,30 @@ namespace springlab {
 using sundials::check;
 using sundials::check_created;
 
+const SundialsCalls& IdaIntegrator::calls() {
+  static const SundialsCalls calls = {
+      .prefix = "IDA",
+      .evolve_call = "IDASolve",
+      .order_call = "SetMaxOrd",
+      .set_error_handler = IDASetErrHandlerFn,
+      .set_tolerances = IDASStolerances,
+      .set_user_data = IDASetUserData,
+      .set_max_steps = IDASetMaxNumSteps,
+      .set_order = IDASetMaxOrd,
+      .set_stop_time = IDASetStopTime,
+      .evolve = [](void* mem, double t_out, N_Vector y, N_Vector yp, double* t) {
+        return IDASolve(mem, t_out, t, y, yp, IDA_NORMAL);
+      },
+      .set_linear_solver = IDASetLinearSolver,
+      .get_steps = IDAGetNumSteps,
+      .get_error_test_fails = IDAGetNumErrTestFails,
+      .get_nonlinear_iterations = IDAGetNumNonlinSolvIters,
+      .get_nonlinear_failures = IDAGetNumNonlinSolvConvFails,
+      .get_linear_setups = IDAGetNumLinSolvSetups,
+      .get_jacobian_evals = IDAGetNumJacEvals};
+  return calls;
+}
+
 IdaIntegrator::IdaIntegrator()
     : SundialsIntegrator({.name = "ida",
                           .scheme = "IDA BDF orders 1-5 on x' - v = 0, M v' - F(t, x, v) = 0",
@@ -19,64 +43,33 @@ IdaIntegrator::IdaIntegrator()
                           .stability = StabilityKind::kAAlpha,
                           .stability_alpha = 51.84,
                           .stability_note = "at the default --max-order 5; orders 3, 4: 86.0, "
-                                            "73.4 deg; orders 1-2 (--max-order 2): L-stable"}) {}
+                                            "73.4 deg; orders 1-2 (--max-order 2): L-stable"},
+                         calls(),
+                         {.orders = {1, 2, 3, 4, 5},
+                          .order_meaning = "its highest BDF order",
+                          .newton_matrix = true}) {}
 
 void IdaIntegrator::create() {
-  const IntegratorOptions& o = options();
   // Consistent y'(0): x' = v, v' = M^-1 F.
   yp_ = sundials::make_vector(2 * n(), context_.get());
   if (evaluate_rhs(ForcePart::kAll, true, t_, y_.get(), yp_.get()) != 0) {
     throw sundials::Failure("the initial forces are not finite");
   }
-  memory_ = sundials::SolverMemory(check_created(IDACreate(context_.get()), "IDACreate"), IDAFree);
-  void* mem = memory_.get();
-  check(IDASetErrHandlerFn(mem, sundials::ErrorLog::handler, &log_), "IDASetErrHandlerFn");
-  check(IDAInit(mem, residual, t_, y_.get(), yp_.get()), "IDAInit", log_.last);
-  check(IDASStolerances(mem, o.rtol, o.atol), "IDASStolerances", log_.last);
-  check(IDASetUserData(mem, this), "IDASetUserData");
-  check(IDASetMaxNumSteps(mem, o.max_steps), "IDASetMaxNumSteps", log_.last);
-  if (o.max_order > 0) check(IDASetMaxOrd(mem, o.max_order), "IDASetMaxOrd", log_.last);
-  if (o.stald) throw sundials::Failure("--stald applies to cvode-bdf only");
+  adopt(check_created(IDACreate(context_.get()), "IDACreate"), IDAFree);
+  check(IDAInit(memory(), residual, t_, y_.get(), yp_.get()), "IDAInit", log_.last);
+}
 
-  const LinearSolverKind kind = linear_solver_kind();
-  create_linear_solver(kind);
-  check(IDASetLinearSolver(mem, linear_solver_.get(), matrix_.get()), "IDASetLinearSolver",
-        log_.last);
-  if (o.dq_jacobian) return;
-  if (kind == LinearSolverKind::kGmres) {
-    check(IDASetJacTimes(mem, jtimes_setup, jtimes), "IDASetJacTimes", log_.last);
+void IdaIntegrator::attach_jacobian(bool matrix_free) {
+  if (matrix_free) {
+    check(IDASetJacTimes(memory(), jtimes_setup, jtimes), "IDASetJacTimes", log_.last);
   } else {
-    check(IDASetJacFn(mem, jacobian), "IDASetJacFn", log_.last);
-  }
-}
-
-int IdaIntegrator::solve(double t_out, double& t_reached) {
-  realtype t = t_;
-  // Every output time is reached by a step of the solver (a stop time), not
-  // by interpolating past it: ARKODE's interpolant in particular can be far
-  // less accurate than the tolerance.
-  if (const int stop = IDASetStopTime(memory_.get(), t_out); stop < 0) return stop;
-  const int flag = IDASolve(memory_.get(), t_out, &t, y_.get(), yp_.get(), IDA_NORMAL);
-  t_reached = t;
-  return flag;
-}
-
-void IdaIntegrator::read_counters(IntegratorStats& s) const {
-  void* mem = memory_.get();
-  long value = 0;
-  if (IDAGetNumSteps(mem, &value) == IDA_SUCCESS) s.steps = value;
-  if (IDAGetNumErrTestFails(mem, &value) == IDA_SUCCESS) s.rejected_steps = value;
-  if (IDAGetNumNonlinSolvIters(mem, &value) == IDA_SUCCESS) s.newton_iterations = value;
-  if (IDAGetNumNonlinSolvConvFails(mem, &value) == IDA_SUCCESS) s.nonlinear_failures = value;
-  s.linear_solves = s.newton_iterations;
-  if (IDAGetNumLinSolvSetups(mem, &value) == IDA_SUCCESS) s.factorizations = value;
-  if (options().dq_jacobian && IDAGetNumJacEvals(mem, &value) == IDA_SUCCESS) {
-    const_cast<IdaIntegrator*>(this)->difference_quotient_jacobians_ = value;
+    check(IDASetJacFn(memory(), jacobian), "IDASetJacFn", log_.last);
   }
 }
 
 int IdaIntegrator::residual(double t, N_Vector y, N_Vector yp, N_Vector r, void* self) {
   auto* me = static_cast<IdaIntegrator*>(self);
+  if (me->stop_requested()) return -1;  // unrecoverable: IDASolve returns at once
   const Eigen::Index n = me->n();
   const auto in = sundials::view(y);
   const auto rate = sundials::view(yp);

@@ -22,11 +22,10 @@ class IdaIntegrator final : public SundialsIntegrator {
 
  protected:
   void create() override;
-  int solve(double t_out, double& t_reached) override;
-  void read_counters(IntegratorStats& stats) const override;
-  const char* solve_call() const override { return "IDASolve"; }
+  void attach_jacobian(bool matrix_free) override;
 
  private:
+  static const SundialsCalls& calls();
   static int residual(double t, N_Vector y, N_Vector yp, N_Vector r, void* self);
   static int jacobian(double t, double cj, N_Vector y, N_Vector yp, N_Vector r, SUNMatrix G,
                       void* self, N_Vector, N_Vector, N_Vector);
@@ -34,7 +33,6 @@ class IdaIntegrator final : public SundialsIntegrator {
   static int jtimes(double t, N_Vector y, N_Vector yp, N_Vector r, N_Vector v, N_Vector Gv,
                     double cj, void* self, N_Vector, N_Vector);
 
-  sundials::VectorPtr yp_;
   Vector force_;
 };
 

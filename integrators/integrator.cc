@@ -47,6 +47,13 @@ std::string stability_text(const IntegratorInfo& info) {
   return text;
 }
 
+std::string Integrator::check_options(const IntegratorOptions&, Eigen::Index) const { return {}; }
+
+std::vector<std::string> Integrator::options_read() const {
+  if (info_.iterates_to_tolerance) return {"newton-tol", "max-newton"};
+  return {};
+}
+
 StepResult Integrator::initialize(const MechanicalSystem& system, double t0, const Vector& x0,
                                   const Vector& v0, const IntegratorOptions& options) {
   system_ = &system;

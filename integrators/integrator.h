@@ -8,11 +8,13 @@
 // StepResult, never thrown, never abort()/exit().
 #pragma once
 
+#include <atomic>
 #include <complex>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "models/mechanical_system.h"
 
@@ -36,11 +38,14 @@ struct IntegratorOptions {
   int max_newton = 20;        // Newton iterations per step before giving up
   double rtol = 1e-6;         // adaptive methods
   double atol = 1e-8;
-  long max_steps = 100000;    // adaptive: internal steps per output interval
+  long max_steps = 0;         // adaptive: internal steps per output interval; 0 = scaled to the system
   int max_order = 0;          // adaptive: 0 = the method's default
   std::string linear_solver = "auto";
   bool dq_jacobian = false;
   bool stald = false;
+  // A stop request (Ctrl-C in a sweep): when set and true, a method that
+  // takes many internal steps in one advance_to() fails at the next one.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 struct StepResult {
@@ -111,6 +116,14 @@ class Integrator {
 
   const IntegratorInfo& info() const { return info_; }
   const std::string& name() const { return info_.name; }
+
+  // Option values this method cannot take on a system of `dofs` position
+  // unknowns, checked before any run: empty when they are fine, otherwise
+  // one line naming the option and what to use instead.
+  virtual std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const;
+  // The command-line options (without "--") this method reads, so a caller
+  // can say which of the given ones it ignores.
+  virtual std::vector<std::string> options_read() const;
 
   // Binds the system and initial state; resets statistics.
   StepResult initialize(const MechanicalSystem& system, double t0, const Vector& x0,

@@ -6,6 +6,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <algorithm>
 #include <sstream>
 
 namespace springlab {
@@ -13,11 +14,101 @@ namespace springlab {
 using sundials::check;
 using sundials::check_created;
 
-SundialsIntegrator::SundialsIntegrator(IntegratorInfo info) : Integrator(std::move(info)) {}
+namespace {
+
+// The return codes every package shares (CV_, IDA_, ARK_ TOO_MUCH_WORK, ...).
+constexpr int kTooMuchWork = -1, kTooMuchAccuracy = -2, kErrorTestFailures = -3,
+              kConvergenceFailures = -4;
+
+// {1, 2, 3, 4, 5, 8} -> "1-5, 8"
+std::string join(const std::vector<int>& orders) {
+  std::string text;
+  for (std::size_t k = 0; k < orders.size();) {
+    std::size_t end = k;
+    while (end + 1 < orders.size() && orders[end + 1] == orders[end] + 1) ++end;
+    if (!text.empty()) text += ", ";
+    text += std::to_string(orders[k]);
+    if (end > k) {
+      text += '-';
+      text += std::to_string(orders[end]);
+    }
+    k = end + 1;
+  }
+  return text;
+}
+
+std::string number(double value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
+
+}  // namespace
+
+long sundials_step_limit(const IntegratorOptions& options, Eigen::Index first_order_unknowns) {
+  if (options.max_steps > 0) return options.max_steps;
+  const double scaled = kStepBudget / static_cast<double>(std::max<Eigen::Index>(first_order_unknowns, 1));
+  return std::clamp(static_cast<long>(scaled), kMinStepLimit, kMaxStepLimit);
+}
+
+SundialsIntegrator::SundialsIntegrator(IntegratorInfo info, const SundialsCalls& calls,
+                                       SundialsMethod method)
+    : Integrator(std::move(info)), calls_(calls), method_(std::move(method)) {}
 
 // Members are destroyed in reverse order: memory_ (which refers to the
 // solvers and vectors) first, then the rest, the context last.
 SundialsIntegrator::~SundialsIntegrator() { memory_.reset(); }
+
+std::vector<std::string> SundialsIntegrator::options_read() const {
+  std::vector<std::string> names = {"rtol", "atol", "max-steps", "max-order"};
+  if (method_.newton_matrix) names.insert(names.end(), {"linear-solver", "dq-jacobian"});
+  if (method_.stald) names.push_back("stald");
+  return names;
+}
+
+std::string SundialsIntegrator::check_options(const IntegratorOptions& o, Eigen::Index dofs) const {
+  const Eigen::Index unknowns = 2 * dofs;
+  if (o.rtol < kMinRelativeTolerance) {
+    return "--rtol " + number(o.rtol) + ": below double precision's unit roundoff (2.2e-16), a "
+           "tolerance no solver can meet: use --rtol 1e-14 or more";
+  }
+  if (o.max_order != 0 &&
+      std::find(method_.orders.begin(), method_.orders.end(), o.max_order) == method_.orders.end()) {
+    return "--max-order " + std::to_string(o.max_order) + ": " + name() + " takes " +
+           join(method_.orders) + " (" + method_.order_meaning + ")";
+  }
+  if (o.stald && !method_.stald) {
+    return "--stald: stability limit detection is cvode-bdf's, " + name() + " has none";
+  }
+  if (!method_.newton_matrix) return {};
+  LinearSolverKind kind = LinearSolverKind::kNone;
+  try {
+    kind = linear_solver_kind(o.linear_solver, unknowns);
+  } catch (const sundials::Failure& e) {
+    return e.what();
+  }
+  const std::string picked =
+      o.linear_solver == "auto" ? " (--linear-solver auto picks klu above 100 unknowns; this system has " +
+                                      std::to_string(unknowns) + ")"
+                                : "";
+  if (o.dq_jacobian && kind == LinearSolverKind::kKlu) {
+    return "--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as dense matrices" +
+           picked + ": add --linear-solver dense or gmres";
+  }
+  if (kind == LinearSolverKind::kDense && unknowns > kMaxDenseUnknowns) {
+    return "--linear-solver dense: a " + std::to_string(unknowns) + " x " + std::to_string(unknowns) +
+           " Newton matrix, over the cap of " + std::to_string(kMaxDenseUnknowns) +
+           " unknowns for a dense one (each factorization would take seconds): use --linear-solver "
+           "klu or gmres";
+  }
+  return {};
+}
+
+void SundialsIntegrator::adopt(void* memory, sundials::SolverMemory::FreeFn free_fn) {
+  memory_ = sundials::SolverMemory(memory, free_fn);
+  check(calls_.set_error_handler(memory, sundials::ErrorLog::handler, &log_),
+        call("SetErrHandlerFn").c_str());
+}
 
 StepResult SundialsIntegrator::do_initialize() {
   memory_.reset();
@@ -25,9 +116,13 @@ StepResult SundialsIntegrator::do_initialize() {
   nonlinear_solver_.reset();
   matrix_.reset();
   y_.reset();
+  yp_.reset();
   log_.last.clear();
   analytic_jacobians_ = 0;
-  difference_quotient_jacobians_ = 0;
+  if (std::string why = check_options(options(), n()); !why.empty()) {
+    return StepResult::failure(name() + ": " + why);
+  }
+  step_limit_ = sundials_step_limit(options(), 2 * n());
   try {
     if (!context_) {
       SUNContext context = nullptr;
@@ -37,10 +132,28 @@ StepResult SundialsIntegrator::do_initialize() {
     y_ = sundials::make_vector(2 * n(), context_.get());
     state_to_vector(y_.get());
     create();
+    configure();
   } catch (const sundials::Failure& e) {
     return StepResult::failure(name() + ": " + e.what());
   }
   return StepResult::success();
+}
+
+void SundialsIntegrator::configure() {
+  const IntegratorOptions& o = options();
+  void* mem = memory();
+  check(calls_.set_tolerances(mem, o.rtol, o.atol), call("SStolerances").c_str(), log_.last);
+  check(calls_.set_user_data(mem, this), call("SetUserData").c_str());
+  check(calls_.set_max_steps(mem, step_limit_), call("SetMaxNumSteps").c_str(), log_.last);
+  if (o.max_order > 0) check(calls_.set_order(mem, o.max_order), call(calls_.order_call).c_str(), log_.last);
+  if (!method_.newton_matrix) return;
+  const LinearSolverKind kind = linear_solver_kind();
+  create_linear_solver(kind);
+  check(calls_.set_linear_solver(mem, linear_solver_.get(), matrix_.get()),
+        call("SetLinearSolver").c_str(), log_.last);
+  // Without our callbacks the package differences f itself: dense
+  // difference quotients, or J v products for GMRES.
+  if (!o.dq_jacobian) attach_jacobian(kind == LinearSolverKind::kGmres);
 }
 
 StepResult SundialsIntegrator::do_step(double) {
@@ -50,42 +163,80 @@ StepResult SundialsIntegrator::do_step(double) {
 StepResult SundialsIntegrator::advance_to(double t_out) {
   if (!(t_out > t_)) return StepResult::failure(name() + ": output time must increase");
   double t_reached = t_;
-  const int flag = solve(t_out, t_reached);
+  int flag = calls_.set_stop_time(memory(), t_out);
+  if (flag >= 0) flag = calls_.evolve(memory(), t_out, y_.get(), yp_.get(), &t_reached);
   vector_to_state(y_.get());
-  IntegratorStats& s = mutable_stats();
-  const long evals = s.force_evals;
-  read_counters(s);
-  s.force_evals = evals;  // counted in our callbacks, difference quotients included
-  s.jacobian_evals = analytic_jacobians_ + difference_quotient_jacobians_;
-  if (flag < 0) {
-    t_ = t_reached;
-    std::ostringstream message;
-    message << name() << ": " << solve_call() << " failed at t = " << t_reached << " (flag "
-            << flag << ")";
-    if (!log_.last.empty()) message << ": " << log_.last;
+  read_counters(mutable_stats());
+  if (flag >= 0) {
+    t_ = t_out;
+    return StepResult::success();
+  }
+  t_ = t_reached;
+  std::ostringstream message;
+  message << name() << ": " << calls_.evolve_call << " failed at t = " << t_reached << " (flag "
+          << flag << ")";
+  if (stop_requested()) {
+    message << ": stopped on request";
     return StepResult::failure(message.str());
   }
-  t_ = t_out;
-  return StepResult::success();
+  if (!log_.last.empty()) message << ": " << log_.last;
+  // What to try, for the failures a student meets.
+  switch (flag) {
+    case kTooMuchWork:
+      message << "; " << step_limit_ << " internal steps did not reach the next output time ("
+              << (options().max_steps > 0 ? "--max-steps" : "the default limit, 5e6 / unknowns")
+              << "): the system may be too stiff for this method, try an implicit one, a looser "
+                 "--rtol, or more with --max-steps";
+      break;
+    case kTooMuchAccuracy:
+      message << "; the tolerance is below what double precision resolves here: raise --rtol or "
+                 "--atol";
+      break;
+    case kErrorTestFailures:
+      message << "; the error test kept failing (the step shrank to nothing): the tolerance may be "
+                 "too tight for double precision, try a looser --rtol or --atol";
+      break;
+    case kConvergenceFailures:
+      message << "; Newton kept failing to converge: try a looser --rtol, another "
+                 "--linear-solver, or a shorter --dt output interval";
+      break;
+    default:
+      break;
+  }
+  return StepResult::failure(message.str());
 }
 
-SundialsIntegrator::LinearSolverKind SundialsIntegrator::linear_solver_kind() const {
-  const std::string& choice = options().linear_solver;
+void SundialsIntegrator::read_counters(IntegratorStats& s) {
+  void* mem = memory();
+  auto get = [mem](int (*fn)(void*, long*), long& out) {
+    long value = 0;
+    if (fn != nullptr && fn(mem, &value) >= 0) out = value;
+  };
+  get(calls_.get_steps, s.steps);
+  get(calls_.get_error_test_fails, s.rejected_steps);
+  get(calls_.get_nonlinear_iterations, s.newton_iterations);
+  get(calls_.get_nonlinear_failures, s.nonlinear_failures);
+  // force_evals are counted in our callbacks, difference quotients included.
+  long difference_quotients = 0;
+  if (method_.newton_matrix) {
+    s.linear_solves = s.newton_iterations;  // one linear solve per Newton iteration
+    get(calls_.get_linear_setups, s.factorizations);
+    if (options().dq_jacobian) get(calls_.get_jacobian_evals, difference_quotients);
+  }
+  s.jacobian_evals = analytic_jacobians_ + difference_quotients;
+}
+
+SundialsIntegrator::LinearSolverKind SundialsIntegrator::linear_solver_kind(const std::string& choice,
+                                                                            Eigen::Index unknowns) {
   if (choice == "dense") return LinearSolverKind::kDense;
   if (choice == "klu") return LinearSolverKind::kKlu;
   if (choice == "gmres") return LinearSolverKind::kGmres;
-  if (choice == "auto") return 2 * n() <= 100 ? LinearSolverKind::kDense : LinearSolverKind::kKlu;
-  throw sundials::Failure("unknown --linear-solver '" + choice + "' (dense, klu, gmres, auto)");
+  if (choice == "auto") return unknowns <= 100 ? LinearSolverKind::kDense : LinearSolverKind::kKlu;
+  throw sundials::Failure("--linear-solver: unknown '" + choice + "' (dense, klu, gmres, auto)");
 }
 
-const char* SundialsIntegrator::linear_solver_name(LinearSolverKind kind) const {
-  switch (kind) {
-    case LinearSolverKind::kNone: return "none";
-    case LinearSolverKind::kDense: return "dense";
-    case LinearSolverKind::kKlu: return "klu";
-    case LinearSolverKind::kGmres: return "gmres";
-  }
-  return "?";
+SundialsIntegrator::LinearSolverKind SundialsIntegrator::linear_solver_kind() const {
+  return linear_solver_kind(options().linear_solver, 2 * n());
 }
 
 void SundialsIntegrator::create_linear_solver(LinearSolverKind kind) {
@@ -101,10 +252,6 @@ void SundialsIntegrator::create_linear_solver(LinearSolverKind kind) {
           check_created(SUNLinSol_Dense(y_.get(), matrix_.get(), ctx), "SUNLinSol_Dense"));
       return;
     case LinearSolverKind::kKlu:
-      if (options().dq_jacobian) {
-        throw sundials::Failure("--dq-jacobian needs --linear-solver dense or gmres: SUNDIALS "
-                                "forms difference-quotient Jacobians only as dense matrices");
-      }
       matrix_.reset(check_created(SUNSparseMatrix(size, size, jacobian_->nonzeros(), CSC_MAT, ctx),
                                   "SUNSparseMatrix"));
       linear_solver_.reset(
@@ -133,8 +280,13 @@ void SundialsIntegrator::vector_to_state(N_Vector y) {
   v_ = v.tail(n());
 }
 
+bool SundialsIntegrator::stop_requested() const {
+  return options().stop != nullptr && options().stop->load(std::memory_order_relaxed);
+}
+
 int SundialsIntegrator::evaluate_rhs(ForcePart part, bool with_velocity, double t, N_Vector y,
                                      N_Vector ydot) {
+  if (stop_requested()) return -1;  // unrecoverable: the solver returns at once
   const auto in = sundials::view(y);
   auto out = sundials::view(ydot);
   x_scratch_ = in.head(n());

@@ -38,12 +38,6 @@ std::string field(const std::string& where, const std::string& key) {
   return where.empty() ? key : where + "." + key;
 }
 
-// A key as typed, escaped so that the message stays on one line.
-std::string printable(const std::string& key) {
-  const std::string quoted = Json(key).dump(-1, ' ', false, Json::error_handler_t::replace);
-  return quoted.substr(1, quoted.size() - 2);
-}
-
 std::string join(std::initializer_list<const char*> names) {
   std::string out;
   for (const char* name : names) out += (out.empty() ? "" : ", ") + std::string(name);
@@ -481,11 +475,55 @@ std::string json_vector(const Eigen::Vector3d& v, int dimension) {
 
 }  // namespace
 
+std::optional<std::string> json_text_problem(const std::string& text) {
+  auto white = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
+  bool in_string = false, escaped = false;
+  std::size_t line = 1, column = 0, run = 0;
+  auto at = [&] { return " at line " + std::to_string(line) + ", column " + std::to_string(column); };
+  for (const char c : text) {
+    ++column;
+    if (c == '\0') return "malformed JSON: a NUL byte" + at() + " (JSON text cannot hold one)";
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    }
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (white(c)) {
+      if (++run > kMaxJsonWhitespaceRun) {
+        return "more than " + std::to_string(kMaxJsonWhitespaceRun) +
+               " whitespace characters in a row, up to line " + std::to_string(line) +
+               ", over the cap for a JSON file";
+      }
+    } else {
+      run = 0;
+      in_string = c == '"';
+    }
+  }
+  return std::nullopt;
+}
+
+std::string printable(const std::string& text) {
+  constexpr std::size_t kShown = 100;
+  const std::string shown = text.size() > kShown ? text.substr(0, kShown) : text;
+  const std::string quoted = Json(shown).dump(-1, ' ', false, Json::error_handler_t::replace);
+  std::string out = quoted.substr(1, quoted.size() - 2);
+  if (text.size() > kShown) out += "... (" + std::to_string(text.size()) + " bytes)";
+  return out;
+}
+
 Scene parse_scene(const std::string& json_text, const std::string& source) {
   const Reporter r(source);
   if (json_text.size() > kMaxSceneFileBytes) {
     r.fail("", file_size_error(std::to_string(json_text.size())));
   }
+  if (const std::optional<std::string> problem = json_text_problem(json_text)) r.fail("", *problem);
   const Json doc = parse_document(json_text, r);
   require_object(r, "", doc);
   check_keys(r, "", doc, {"name", "dimension", "gravity", "drag", "wind", "particles", "springs"},
@@ -558,32 +596,34 @@ void validate_scene(const Scene& scene, const std::string& source) {
   });
 }
 
-Scene load_scene_file(const std::string& path) {
+Scene load_scene_file(const std::string& path, const std::string& source) {
+  const std::string& name = source.empty() ? path : source;
   std::error_code ignored;
   std::ifstream in(path, std::ios::binary);
   // A directory opens as a stream on Linux but cannot be read.
   if (!in || std::filesystem::is_directory(path, ignored))
-    throw SceneError(path + ": cannot open file");
+    throw SceneError(name + ": cannot open file");
   // The size cap is checked before reading: a huge file is refused, not loaded.
   std::error_code size_error;
   const std::uintmax_t size = std::filesystem::file_size(path, size_error);
   if (!size_error && size > kMaxSceneFileBytes) {
-    throw SceneError(path + ": " + file_size_error(std::to_string(size)));
+    throw SceneError(name + ": " + file_size_error(std::to_string(size)));
   }
   // Read in chunks up to one byte past the cap: a file whose size is not
   // known in advance (a pipe, /proc) cannot grow without bound either.
   std::string text;
+  if (!size_error) text.reserve(static_cast<std::size_t>(size) + 1);  // no doubling
   char chunk[1 << 16];
   while (in && text.size() <= kMaxSceneFileBytes) {
     in.read(chunk, sizeof chunk);
     text.append(chunk, static_cast<std::size_t>(in.gcount()));
   }
-  if (in.bad()) throw SceneError(path + ": cannot open file");
+  if (in.bad()) throw SceneError(name + ": cannot open file");
   if (text.size() > kMaxSceneFileBytes) {
-    throw SceneError(path + ": " +
+    throw SceneError(name + ": " +
                      file_size_error("more than " + std::to_string(kMaxSceneFileBytes)));
   }
-  return parse_scene(text, path);  // an empty file is left to the parser ("malformed JSON")
+  return parse_scene(text, name);  // an empty file is left to the parser ("malformed JSON")
 }
 
 // One particle or spring per line: a scene file stays readable (and diffable)

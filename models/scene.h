@@ -64,14 +64,29 @@ inline constexpr std::size_t kMaxSceneSprings = 2'000'000;
 inline constexpr std::size_t kMaxSceneFileBytes = std::size_t{512} << 20;  // 512 MiB
 inline constexpr std::size_t kMaxSceneNesting = 64;
 inline constexpr std::size_t kMaxSceneJsonValues = 32'000'000;
+// The JSON reader keeps every character between two strings or numbers for
+// its messages: a long run of whitespace would cost its length in memory.
+inline constexpr std::size_t kMaxJsonWhitespaceRun = std::size_t{1} << 20;  // 1 MiB
 
 // Parses and validates a scene (SPEC §3). `source` names the file in messages.
 // Throws SceneError on any violation; never returns a half-valid scene.
 Scene parse_scene(const std::string& json_text, const std::string& source);
-Scene load_scene_file(const std::string& path);
+// `source` names the file in messages (default: the path). A FIFO or a
+// pipe (/dev/stdin) is read like a file, within the same size cap.
+Scene load_scene_file(const std::string& path, const std::string& source = "");
 
 // The scene as a scene file (round-trips through parse_scene).
 std::string scene_to_json(const Scene& scene);
+
+// What makes a text unfit for the JSON reader before it is parsed: a NUL
+// byte (the reader would stop there and ignore the rest), or a run of
+// whitespace over kMaxJsonWhitespaceRun. nullopt when none.
+std::optional<std::string> json_text_problem(const std::string& text);
+
+// A name or key as the user typed it, for a one-line message: control
+// characters escaped (JSON style), at most 100 characters shown, then its
+// length ("aaaa... (1048576 bytes)").
+std::string printable(const std::string& text);
 
 // Runs every SPEC §3 check on an already-built scene (used for built-ins too).
 void validate_scene(const Scene& scene, const std::string& source);

@@ -255,7 +255,7 @@ TEST_F(CliRun, SpringImplicitEulerJsonAndEnergyCsv) {
   EXPECT_EQ(csv.rows.front()[0], 0.0);
   EXPECT_EQ(csv.rows.back()[0], 5.0);
   for (std::size_t k_row = 1; k_row < 500; ++k_row) {
-    EXPECT_EQ(csv.rows[k_row][0], static_cast<double>(k_row) * 0.01) << "row " << k_row;
+    EXPECT_EQ(csv.rows[k_row][0], static_cast<double>(k_row) / 100.0) << "row " << k_row;  // k x 0.01
   }
   // The JSON energies are the first and last rows' totals (same doubles).
   EXPECT_EQ(csv.rows.front()[4], j["energy_initial"].get<double>());
@@ -272,7 +272,7 @@ TEST_F(CliRun, EveryKthStepAndTheLast) {
   const Csv csv = csv_fields::read_number_csv(ws.file("e.csv"));
   expect_energy_csv(csv);
   std::vector<double> expected = {0.0};
-  for (int k = 7; k < 100; k += 7) expected.push_back(static_cast<double>(k) * 0.01);
+  for (int k = 7; k < 100; k += 7) expected.push_back(static_cast<double>(k) / 100.0);
   expected.push_back(1.0);
   ASSERT_EQ(expected.size(), 16u);
   EXPECT_EQ(column(csv, 0), expected);
@@ -288,10 +288,18 @@ TEST_F(CliRun, LastStepShortenedToEndAtT) {
   const std::vector<double> t = column(csv_fields::read_number_csv(ws.file("e.csv")), 0);
   ASSERT_EQ(t.size(), 5u);
   EXPECT_EQ(t[0], 0.0);
-  EXPECT_DOUBLE_EQ(t[1], 1 * 0.3);
-  EXPECT_DOUBLE_EQ(t[2], 2 * 0.3);
-  EXPECT_DOUBLE_EQ(t[3], 3 * 0.3);
+  EXPECT_EQ(t[1], 0.3);
+  EXPECT_EQ(t[2], 0.6);
+  EXPECT_EQ(t[3], 0.9);
   EXPECT_EQ(t[4], 1.0);
+  // As text, the decimals a reader expects.
+  const std::vector<std::string> lines = [&] {
+    std::vector<std::string> out;
+    std::istringstream in(read_text(ws.file("e.csv")));
+    for (std::string line; std::getline(in, line);) out.push_back(line.substr(0, line.find(',')));
+    return out;
+  }();
+  EXPECT_EQ(lines, (std::vector<std::string>{"t", "0", "0.3", "0.6", "0.9", "1"}));
 }
 
 TEST_F(CliRun, WholeStepCountWhenTOverDtIsInexact) {
@@ -301,7 +309,7 @@ TEST_F(CliRun, WholeStepCountWhenTOverDtIsInexact) {
   EXPECT_EQ(j["steps"], 10);
   const std::vector<double> t = column(csv_fields::read_number_csv(ws.file("e.csv")), 0);
   ASSERT_EQ(t.size(), 11u);
-  for (std::size_t k = 0; k < 10; ++k) EXPECT_EQ(t[k], static_cast<double>(k) * 0.1) << k;
+  for (std::size_t k = 0; k < 10; ++k) EXPECT_EQ(t[k], static_cast<double>(k) / 10.0) << k;
   EXPECT_EQ(t[10], 1.0);
 }
 
@@ -565,8 +573,8 @@ INSTANTIATE_TEST_SUITE_P(
                  {"--every"}},
         BadInput{"MissingDt", run_args("spring", plus({"--t-end", "1"}, kOutputs)), {"--dt"}},
         BadInput{"UnwritableEnergyPath",
-                 run_args("chain", {"-p", "n=50", "--dt", "1e-4", "--t-end", "100", "--energy",
-                                    "/nonexistent-dir/e.csv", "--trajectory", "t.csv"}),
+                 run_args("chain", {"-p", "n=50", "--dt", "1e-4", "--t-end", "100", "--every", "100",
+                                    "--energy", "/nonexistent-dir/e.csv", "--trajectory", "t.csv"}),
                  {"/nonexistent-dir/e.csv"}},
         BadInput{"UnwritableTrajectoryPath",
                  run_args("spring", {"--dt", "0.01", "--t-end", "1", "--energy", "e.csv",

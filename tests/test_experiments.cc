@@ -200,14 +200,59 @@ TEST(ExperimentDefinition, ClothFramesMustBeMultiplesOfTheStep) {
   EXPECT_EQ(definition_error(d), "");
 }
 
+// The name becomes file names: no folders, no hidden files, no control
+// characters (a newline in a file name), nothing too long for one.
 TEST(ExperimentDefinition, NameMustBeAPlainFileName) {
+  const std::string plain =
+      "def.json: name: must be a plain file name (no '/', no leading '.', no control characters)";
   Json d = kEnergy;
-  d["name"] = "results/energy";
-  EXPECT_EQ(definition_error(d), "def.json: name: must be a plain file name");
-  d["name"] = "..";
-  EXPECT_EQ(definition_error(d), "def.json: name: must be a plain file name");
-  d["name"] = "";
-  EXPECT_EQ(definition_error(d), "def.json: name: must be a plain file name");
+  for (const char* bad : {"results/energy", "..", "", "two\nlines", "tab\there", "bell\a"}) {
+    d["name"] = bad;
+    EXPECT_EQ(definition_error(d), plain) << bad;
+  }
+  d["name"] = std::string(101, 'e');
+  EXPECT_EQ(definition_error(d),
+            "def.json: name: longer than 100 characters (it names the output files)");
+  d["name"] = std::string(100, 'e');
+  EXPECT_EQ(definition_error(d), "");
+}
+
+// A key twice in one object is refused (the JSON library would keep the
+// last one silently), naming the object, as scene files do.
+TEST(ExperimentDefinition, DuplicateKeysAreRefused) {
+  EXPECT_EQ(definition_error(std::string(R"({"experiment": "energy", "experiment": "energy",
+                                 "cases": [{"scene": "spring", "dt": 0.01, "t_end": 1}]})")),
+            "def.json: duplicate key 'experiment'");
+  EXPECT_EQ(definition_error(std::string(R"({"experiment": "energy", "cases": [
+                                 {"scene": "spring", "dt": 0.01, "t_end": 1},
+                                 {"scene": "spring", "dt": 0.01, "dt": 0.02, "t_end": 1}]})")),
+            "def.json: cases[1]: duplicate key 'dt'");
+  EXPECT_EQ(definition_error(std::string(R"({"experiment": "energy", "cases": [{"scene": "chain",
+                                 "parameters": {"n": 3, "n": 4}, "dt": 0.01, "t_end": 1}]})")),
+            "def.json: cases[0].parameters: duplicate key 'n'");
+}
+
+TEST(ExperimentDefinition, AnIntegratorListedTwiceIsRefused) {
+  Json d = kEnergy;
+  d["integrators"] = {"rk4", "verlet", "rk4"};
+  EXPECT_EQ(definition_error(d), "def.json: integrators: 'rk4' is listed twice");
+}
+
+// The JSON reader stops at a NUL byte: what follows must not be ignored.
+TEST(ExperimentDefinition, NulByteIsRefused) {
+  const std::string text = kEnergy.dump() + std::string(1, '\0') + "{garbage";
+  EXPECT_EQ(definition_error(text),
+            "def.json: malformed JSON: a NUL byte at line 1, column " +
+                std::to_string(kEnergy.dump().size() + 1) + " (JSON text cannot hold one)");
+}
+
+// A sweep's own parameter cannot also be given as a fixed one.
+TEST(ExperimentDefinition, SweptParameterGivenTwiceIsRefused) {
+  const Json d = {{"experiment", "stability"},
+                  {"integrators", {"rk4"}},
+                  {"cases", {{{"scene", "oscillator"}, {"parameters", {{"k", 5}}}, {"k", {1, 2}}}}}};
+  EXPECT_EQ(definition_error(d),
+            "def.json: cases[0].parameters: 'k' is the parameter the sweep sets: leave it out");
 }
 
 TEST(ExperimentDefinition, ShippedDefinitionsParse) {
@@ -709,7 +754,7 @@ TEST(ExperimentRunner, ShardsMergeToTheUnshardedTables) {
   }
   EXPECT_FALSE(fs::exists(sharded / "budget.csv"));
 
-  EXPECT_EQ(run_experiment(definition, merge_of(sharded, 3)).tasks_done, 3u);
+  EXPECT_EQ(run_experiment(definition, merge_of(sharded, 3)).tasks_done, 5u);
   const std::string merged = read_text(sharded / "budget.csv");
   EXPECT_EQ(merged, read_text(whole / "budget.csv"));
   const std::vector<long> tasks = task_column(merged, kBudgetHeader);
@@ -741,7 +786,7 @@ TEST(ExperimentRunner, MergeRefusesAMissingShard) {
   const std::string definition = dir.write("budget.json", kBudget);
   const fs::path out = dir.path() / "out";
   for (int i : {1, 3}) run_experiment(definition, shard(out, i, 3));
-  const std::string missing = (out / "budget.shard-2-of-3.csv").string();
+  const std::string missing = (out / "budget.shard-2-of-3.json").string();
   EXPECT_EQ(run_error(definition, merge_of(out, 3)),
             missing + ": missing shard (run --shard 2/3 first)");
   EXPECT_FALSE(fs::exists(out / "budget.csv"));
@@ -759,7 +804,7 @@ TEST(ExperimentRunner, MoreShardsThanTasks) {
     EXPECT_EQ(run_experiment(definition, shard(sharded, i, 7, 3)).tasks_done, i <= 5 ? 1u : 0u);
   }
   EXPECT_EQ(read_text(sharded / "budget.shard-7-of-7.csv"), kBudgetHeader + "\n");
-  EXPECT_EQ(run_experiment(definition, merge_of(sharded, 7)).tasks_done, 7u);
+  EXPECT_EQ(run_experiment(definition, merge_of(sharded, 7)).tasks_done, 5u);
   EXPECT_EQ(read_text(sharded / "budget.csv"), read_text(whole / "budget.csv"));
 }
 
@@ -771,14 +816,91 @@ TEST(ExperimentRunner, MergeRefusesForeignShards) {
   const fs::path second = out / "budget.shard-2-of-2.csv";
   const std::string original = read_text(second);
   auto merge_error = [&] { return run_error(definition, merge_of(out, 2)); };
+  // Any change to a shard's table (another header, rows without a task
+  // index, rows of another run) shows in its digest.
+  const std::string changed = second.string() +
+                              ": not the table its shard wrote (its digest differs from the one "
+                              "in the shard's settings file): run --shard 2/2 again";
   std::ofstream(second) << "task,scene,integrator,t\n1,spring,rk4,0\n";
-  EXPECT_EQ(merge_error(), second.string() + ": unexpected header");
+  EXPECT_EQ(merge_error(), changed);
   std::ofstream(second) << kBudgetHeader << "\n1,spring\nspring,rk4\n";
-  EXPECT_EQ(merge_error(), second.string() + ":3: no task index");
+  EXPECT_EQ(merge_error(), changed);
   EXPECT_FALSE(fs::exists(out / "budget.csv"));
   std::ofstream(second) << original;
   EXPECT_EQ(merge_error(), "");
   EXPECT_TRUE(fs::exists(out / "budget.csv"));
+}
+
+// Issue 17, class 3: each shard says what it was run from (the definition's
+// digest), which shard of how many it is, and that it finished; a merge
+// refuses shards of another definition, copies, the wrong count and
+// incomplete shards, naming the shard and what to do.
+TEST(ExperimentRunner, MergeRefusesShardsItCannotVouchFor) {
+  ScratchDir dir("vouch");
+  const std::string definition = dir.write("budget.json", kBudget);
+  Json other_json = kBudget;
+  other_json["cases"][0]["t_end"] = 0.6;  // another t_end: another sweep
+  const std::string other = dir.write("other.json", other_json);
+  const fs::path out = dir.path() / "out";
+  auto run_shard = [&](const std::string& def, int i, int n) { run_experiment(def, shard(out, i, n)); };
+  auto merge_error = [&](const std::string& def, int n) { return run_error(def, merge_of(out, n)); };
+  const std::string shard2 = (out / "budget.shard-2-of-2.json").string();
+  run_shard(definition, 1, 2);
+  run_shard(other, 2, 2);  // same name, other definition
+  const std::string expected_digest = Json::parse(read_text(out / "budget.shard-1-of-2.json"))
+                                          .at("definition_digest")
+                                          .get<std::string>();
+  const std::string other_digest = Json::parse(read_text(shard2)).at("definition_digest").get<std::string>();
+  EXPECT_NE(expected_digest, other_digest);
+  EXPECT_EQ(merge_error(definition, 2), shard2 + ": made from a different definition (digest " +
+                                            other_digest + ", this one gives " + expected_digest +
+                                            "): run --shard 2/2 again with this definition");
+
+  // A copy of shard 1 under shard 2's names.
+  for (const char* ext : {".csv", ".json"}) {
+    fs::copy_file(out / (std::string("budget.shard-1-of-2") + ext),
+                  out / (std::string("budget.shard-2-of-2") + ext), fs::copy_options::overwrite_existing);
+  }
+  EXPECT_EQ(merge_error(definition, 2),
+            shard2 + ": holds shard 1/2, not 2/2 (a copy or another split?): run --shard 2/2 again");
+
+  // Shards of another split: 1/3 and 2/3 given to --merge 2 under 2's names.
+  run_shard(definition, 2, 3);
+  for (const char* ext : {".csv", ".json"}) {
+    fs::copy_file(out / (std::string("budget.shard-2-of-3") + ext),
+                  out / (std::string("budget.shard-2-of-2") + ext), fs::copy_options::overwrite_existing);
+  }
+  EXPECT_EQ(merge_error(definition, 2),
+            shard2 + ": holds shard 2/3, not 2/2 (a copy or another split?): run --shard 2/2 again");
+
+  // An interrupted shard (complete: false) leaves a gap.
+  run_shard(definition, 2, 2);
+  Json settings = Json::parse(read_text(shard2));
+  settings["tasks_done"] = 1;
+  settings["complete"] = false;
+  std::ofstream(shard2) << settings.dump(2) << "\n";
+  EXPECT_EQ(merge_error(definition, 2),
+            shard2 + ": incomplete (1 of 2 tasks): run --shard 2/2 again");
+  EXPECT_FALSE(fs::exists(out / "budget.csv"));
+  EXPECT_FALSE(fs::exists(out / "budget.json"));
+
+  run_shard(definition, 2, 2);
+  EXPECT_EQ(merge_error(definition, 2), "");
+  const Json merged = Json::parse(read_text(out / "budget.json"));
+  EXPECT_EQ(merged.at("complete"), true);
+  EXPECT_EQ(merged.at("tasks_total"), 5);
+  EXPECT_FALSE(merged.contains("shard"));
+  EXPECT_EQ(merged.at("definition_digest"), expected_digest);
+}
+
+// --merge with --shard is a usage error, not a merge of shard 1's files.
+TEST(ExperimentRunner, MergeWithShardIsRefused) {
+  ScratchDir dir("merge-shard");
+  const std::string definition = dir.write("budget.json", kBudget);
+  ExperimentRunOptions o = shard(dir.path() / "out", 1, 2);
+  o.merge = 2;
+  EXPECT_THROW(run_experiment(definition, o), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
 }
 
 TEST(ExperimentRunner, ThreadCountDoesNotChangeTables) {

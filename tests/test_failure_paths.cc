@@ -142,16 +142,34 @@ TEST_F(FailurePaths, SundialsTooMuchWork) {
   expect_consistent(j, 36, 3);
 }
 
-// A tolerance no double can meet: the failure comes on the first call, so
-// the files hold the initial state only.
-TEST_F(FailurePaths, SundialsImpossibleTolerance) {
-  const Json j = run({"run", "spring", "--integrator", "cvode-bdf", "--dt", "0.1", "--t-end", "1",
-                      "--rtol", "1e-300", "--atol", "1e-300"});
+// A tolerance no double can meet is refused before anything is written
+// (it used to fail on the first call and replace the old files).
+TEST_F(FailurePaths, SundialsImpossibleToleranceIsRefusedUpFront) {
+  write_text(work() / "e.csv", "old\n");
+  const std::vector<std::string> args = {"run",   "spring", "--integrator", "ida",     "--dt",
+                                         "0.1",   "--t-end", "1",           "--rtol",  "1e-300",
+                                         "--atol", "1e-300", "--energy",    "e.csv",   "--json"};
+  const ProcessResult r = run_springlab(args, work(), io());
+  ASSERT_TRUE(r.exited) << describe(args, r);
+  EXPECT_EQ(r.status, 1) << describe(args, r);
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(r.err,
+            "springlab: error: --rtol 1e-300: below double precision's unit roundoff (2.2e-16), a "
+            "tolerance no solver can meet: use --rtol 1e-14 or more\n");
+  EXPECT_EQ(read_text(work() / "e.csv"), "old\n");
+  EXPECT_EQ(listing(work()), std::vector<std::string>{"e.csv"});
+}
+
+// Near double precision's limit SUNDIALS can still fail; the failure says
+// what to try.
+TEST_F(FailurePaths, SundialsErrorTestFailuresSayWhatToTry) {
+  const Json j = run({"run", "spring", "--integrator", "ida", "--dt", "0.1", "--t-end", "1",
+                      "--rtol", "3e-16", "--atol", "1e-20"});
   EXPECT_EQ(j["status"], "failed");
   ASSERT_TRUE(j["failure"].is_string()) << j.dump();
-  EXPECT_NE(j["failure"].get<std::string>().find("too much accuracy"), std::string::npos)
+  EXPECT_NE(j["failure"].get<std::string>().find("(flag -3)"), std::string::npos) << j["failure"];
+  EXPECT_NE(j["failure"].get<std::string>().find("try a looser --rtol or --atol"), std::string::npos)
       << j["failure"];
-  EXPECT_EQ(j["last_output_t"], 0.0);
   expect_consistent(j, 2, 2);
 }
 

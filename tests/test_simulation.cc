@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "experiments/simulation.h"
@@ -56,7 +58,7 @@ TEST(SimulationTimeGrid, WholeNumberOfStepsEvenWhenTOverDtIsInexact) {
   const std::vector<double> grid = time_grid(0.1, 1.0);
   ASSERT_EQ(grid.size(), 10u);
   for (std::size_t k = 0; k + 1 < grid.size(); ++k) {
-    EXPECT_EQ(grid[k], static_cast<double>(k + 1) * 0.1) << "k = " << k + 1;
+    EXPECT_EQ(grid[k], static_cast<double>(k + 1) / 10.0) << "k = " << k + 1;  // k x 0.1 in decimal
   }
   EXPECT_EQ(grid.back(), 1.0);
 
@@ -77,14 +79,49 @@ TEST(SimulationTimeGrid, WholeNumberOfStepsEvenWhenTOverDtIsInexact) {
 TEST(SimulationTimeGrid, LastStepShortenedToEndExactlyAtT) {
   const std::vector<double> grid = time_grid(0.3, 1.0);
   ASSERT_EQ(grid.size(), 4u);
-  EXPECT_EQ(grid[0], 1 * 0.3);
-  EXPECT_EQ(grid[1], 2 * 0.3);
-  EXPECT_EQ(grid[2], 3 * 0.3);
+  EXPECT_EQ(grid[0], 0.3);
+  EXPECT_EQ(grid[1], 0.6);
+  EXPECT_EQ(grid[2], 0.9);  // the double nearest 0.9, not 3 * 0.3 = 0.8999999999999999
   EXPECT_EQ(grid[3], 1.0);
 
   EXPECT_EQ(time_grid(1.0, 3.5), (std::vector<double>{1.0, 2.0, 3.0, 3.5}));
   // 1e-6 past a whole number is far outside the 1e-9 rounding window.
   EXPECT_EQ(time_grid(1.0, 3.0 + 1e-6), (std::vector<double>{1.0, 2.0, 3.0, 3.0 + 1e-6}));
+}
+
+// t_k is k times dt as written: the double nearest (k d) x 10^e for dt's
+// shortest decimal d x 10^e, checked against strtod of that decimal, so its
+// shortest text is the decimal a reader expects ("0.9", not
+// "0.8999999999999999"). A dt with 17 digits (1/60) keeps k dt.
+TEST(SimulationTimeGrid, GridTimesAreTheDecimalsAReaderExpects) {
+  struct Case {
+    double dt;
+    long long d;
+    int e;
+  };
+  for (const Case c : {Case{0.1, 1, -1}, Case{0.3, 3, -1}, Case{0.01, 1, -2}, Case{0.05, 5, -2},
+                       Case{0.0166667, 166667, -7}, Case{2.5e-7, 25, -8}, Case{0.007, 7, -3},
+                       Case{1.5, 15, -1}, Case{40.0, 4, 1}}) {
+    SCOPED_TRACE(c.dt);
+    const std::vector<double> grid = time_grid(c.dt, 1000 * c.dt);
+    ASSERT_EQ(grid.size(), 1000u);
+    for (std::size_t k = 1; k < grid.size(); ++k) {
+      const std::string decimal = std::to_string(static_cast<long long>(k) * c.d) + "e" + std::to_string(c.e);
+      EXPECT_EQ(grid[k - 1], std::strtod(decimal.c_str(), nullptr)) << "k = " << k;
+      EXPECT_LT(grid[k - 1], grid[k]);
+    }
+  }
+  EXPECT_EQ(time_grid(0.3, 0.9)[1], 0.6);
+  // 3 * 0.3 and 3 * 0.1 as doubles are not 0.9 and 0.3; the grid's are.
+  ASSERT_NE(3 * 0.3, 0.9);
+  EXPECT_EQ(time_grid(0.3, 3.0)[2], 0.9);
+  ASSERT_NE(3 * 0.1, 0.3);
+  EXPECT_EQ(time_grid(0.1, 1.0)[2], 0.3);
+  // 1/60 has a 17-digit shortest decimal: k d passes 2^53 at once.
+  const double sixtieth = 1.0 / 60.0;
+  const std::vector<double> frames = time_grid(sixtieth, 1.0);
+  ASSERT_EQ(frames.size(), 60u);
+  for (std::size_t k = 1; k < frames.size(); ++k) EXPECT_EQ(frames[k - 1], static_cast<double>(k) * sixtieth);
 }
 
 TEST(SimulationTimeGrid, StepLongerThanTGivesOnePointAtT) {
@@ -144,7 +181,7 @@ TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
   ASSERT_EQ(a.times.size(), 11u);
   EXPECT_EQ(a.times, b.times);  // every observer sees every output time
   EXPECT_EQ(a.times.front(), 0.0);
-  for (std::size_t k = 1; k + 1 < a.times.size(); ++k) EXPECT_EQ(a.times[k], static_cast<double>(k) * 0.1);
+  for (std::size_t k = 1; k + 1 < a.times.size(); ++k) EXPECT_EQ(a.times[k], static_cast<double>(k) / 10.0);
   EXPECT_EQ(a.times.back(), 1.0);
 
   // The first observation is the initial state, the last the final one.
@@ -162,7 +199,7 @@ TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
     RunSettings s = settings("rk4", 0.1, 1.0);
     s.every = 3;
     simulate(model, s, {&o});
-    EXPECT_EQ(o.times, (std::vector<double>{0.0, 3 * 0.1, 6 * 0.1, 9 * 0.1, 1.0}));
+    EXPECT_EQ(o.times, (std::vector<double>{0.0, 0.3, 0.6, 0.9, 1.0}));
   }
   {
     RecordingObserver o;  // 10 steps, every 5: the last is also a 5th

@@ -3,10 +3,16 @@
 // Jacobian really used, linear solvers agreeing, failures as results.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <map>
+#include <set>
+#include <thread>
 
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
+#include "integrators/sundials_integrator.h"
 #include "models/builtin_scenes.h"
 #include "models/mass_spring_model.h"
 #include "scenes_for_tests.h"
@@ -104,7 +110,9 @@ TEST_P(AdaptiveIntegrator, StabilityLimitDetectionIsCvodeBdfOnly) {
     EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   } else {
     ASSERT_EQ(r.status, RunStatus::kFailed);
-    EXPECT_NE(r.failure.find("--stald applies to cvode-bdf only"), std::string::npos)
+    EXPECT_NE(r.failure.find(GetParam() + ": --stald: stability limit detection is cvode-bdf's, " +
+                             GetParam() + " has none"),
+              std::string::npos)
         << r.failure;
   }
 }
@@ -168,9 +176,145 @@ TEST_P(AdaptiveImplicitIntegrator, KluRefusesDifferenceQuotients) {
   s.options.dq_jacobian = true;
   const RunResult r = simulate(model, s);
   ASSERT_EQ(r.status, RunStatus::kFailed);
-  EXPECT_NE(r.failure.find("--dq-jacobian needs --linear-solver dense or gmres"),
+  EXPECT_NE(r.failure.find("--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as "
+                           "dense matrices: add --linear-solver dense or gmres"),
             std::string::npos)
       << r.failure;
+}
+
+// --max-order is checked against the method before any run (issue 17,
+// class 4): the orders a method takes are the ones its package has
+// (SUNDIALS 6.4: CVODE BDF 1-5, Adams 1-12, IDA 1-5; ARKODE's default ERK
+// tables 2-6 and 8, DIRK 2-5, IMEX 3-5 -- ARKODE would silently swap any
+// other for a default). Each accepted order runs; each refused one is a
+// message naming the accepted ones, and a failed run through simulate().
+TEST_P(AdaptiveIntegrator, MaxOrderIsCheckedAgainstTheMethod) {
+  const std::map<std::string, std::set<int>> orders = {
+      {"cvode-bdf", {1, 2, 3, 4, 5}},        {"cvode-adams", {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}},
+      {"ida", {1, 2, 3, 4, 5}},              {"arkode-erk", {2, 3, 4, 5, 6, 8}},
+      {"arkode-dirk", {2, 3, 4, 5}},         {"arkode-imex", {3, 4, 5}}};
+  ASSERT_TRUE(orders.count(GetParam())) << "a new adaptive method: add its orders here";
+  const auto integrator = make_integrator(GetParam());
+  const MassSpringModel model(testing::swinging_spring());
+  std::set<int> accepted;
+  for (int q = 1; q <= 14; ++q) {
+    IntegratorOptions o;
+    o.max_order = q;
+    const std::string why = integrator->check_options(o, model.dofs());
+    if (why.empty()) {
+      accepted.insert(q);
+      RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 0.5);
+      s.options.max_order = q;
+      const RunResult r = simulate(model, s);
+      EXPECT_EQ(r.status, RunStatus::kCompleted) << "order " << q << ": " << r.failure;
+    } else {
+      EXPECT_EQ(why.rfind("--max-order " + std::to_string(q) + ": " + GetParam() + " takes ", 0), 0u) << why;
+      RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 0.5);
+      s.options.max_order = q;
+      const RunResult r = simulate(model, s);
+      EXPECT_EQ(r.status, RunStatus::kFailed);
+      EXPECT_EQ(r.failure, GetParam() + ": " + why);
+    }
+  }
+  EXPECT_EQ(accepted, orders.at(GetParam()));
+}
+
+// Below double precision's unit roundoff no solver can meet a tolerance:
+// refused up front instead of SUNDIALS' "too much accuracy" at t = 0.
+TEST_P(AdaptiveIntegrator, ToleranceBelowRoundoffIsRefused) {
+  const auto integrator = make_integrator(GetParam());
+  IntegratorOptions o;
+  for (const double rtol : {1e-300, 1e-16, 2.2e-16}) {
+    o.rtol = rtol;
+    EXPECT_NE(integrator->check_options(o, 3).find("below double precision's unit roundoff"),
+              std::string::npos)
+        << rtol;
+  }
+  o.rtol = 2.3e-16;
+  EXPECT_EQ(integrator->check_options(o, 3), "");
+}
+
+// The steps per output interval scale with the system (5e6 / unknowns,
+// within [500, 100000]) unless --max-steps is given: a hopeless run on a
+// large scene fails after a few thousand steps, not 100000.
+TEST(SundialsWorkLimit, ScalesWithTheSystem) {
+  IntegratorOptions o;
+  EXPECT_EQ(sundials_step_limit(o, 2), kMaxStepLimit);
+  EXPECT_EQ(sundials_step_limit(o, 1524), 3280);  // the 16 x 16 cloth
+  EXPECT_EQ(sundials_step_limit(o, 2'000'000), kMinStepLimit);
+  o.max_steps = 7;
+  EXPECT_EQ(sundials_step_limit(o, 1524), 7);
+}
+
+// A stiff cloth asked for one output at t = 1000 s: explicit arkode-erk
+// needs ~10^6 steps; it stops at the scaled limit with what to try.
+TEST(SundialsWorkLimit, HopelessRunFailsAtTheScaledLimit) {
+  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "8"}, {"k", "1e5"}}));
+  const double unknowns = 2.0 * static_cast<double>(model.dofs());
+  const long limit = static_cast<long>(kStepBudget / unknowns);
+  RunSettings s = adaptive("arkode-erk", 1e-6, 1000.0, 1000.0);
+  const RunResult r = simulate(model, s);
+  ASSERT_EQ(r.status, RunStatus::kFailed);
+  EXPECT_EQ(r.stats.steps, limit);
+  EXPECT_NE(r.failure.find(std::to_string(limit) + " internal steps did not reach the next output "
+                           "time (the default limit, 5e6 / unknowns)"),
+            std::string::npos)
+      << r.failure;
+  EXPECT_NE(r.failure.find("try an implicit one"), std::string::npos) << r.failure;
+}
+
+// --linear-solver dense is refused above kMaxDenseUnknowns first-order
+// unknowns, --dq-jacobian where auto picks KLU (above 100 unknowns).
+TEST(SundialsOptions, DenseSizeCapAndDifferenceQuotientsWithAuto) {
+  const auto bdf = make_integrator("cvode-bdf");
+  IntegratorOptions o;
+  o.linear_solver = "dense";
+  EXPECT_EQ(bdf->check_options(o, kMaxDenseUnknowns / 2), "");
+  EXPECT_EQ(bdf->check_options(o, kMaxDenseUnknowns / 2 + 1),
+            "--linear-solver dense: a 1002 x 1002 Newton matrix, over the cap of 1000 unknowns "
+            "for a dense one (each factorization would take seconds): use --linear-solver klu "
+            "or gmres");
+  o.linear_solver = "auto";
+  o.dq_jacobian = true;
+  EXPECT_EQ(bdf->check_options(o, 50), "");  // 100 unknowns: dense
+  EXPECT_EQ(bdf->check_options(o, 51),
+            "--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as dense matrices "
+            "(--linear-solver auto picks klu above 100 unknowns; this system has 102): add "
+            "--linear-solver dense or gmres");
+  o.linear_solver = "gmres";
+  EXPECT_EQ(bdf->check_options(o, 5000), "");
+  // Methods without a Newton matrix neither use nor refuse these.
+  for (const char* name : {"cvode-adams", "arkode-erk"}) {
+    o.linear_solver = "dense";
+    EXPECT_EQ(make_integrator(name)->check_options(o, 5000), "") << name;
+    const std::vector<std::string> read = make_integrator(name)->options_read();
+    EXPECT_EQ(std::count(read.begin(), read.end(), "linear-solver"), 0) << name;
+  }
+}
+
+// A stop request (Ctrl-C in a sweep) reaches a solver deep inside one long
+// output interval: simulate throws StopRequested within a fraction of a
+// second, through the right-hand side (ODE packages) or residual (IDA).
+TEST(SundialsStop, StopRequestEndsALongIntervalAtOnce) {
+  // w = 1000 rad/s for 10^4 s: ~10^6 periods to resolve.
+  const MassSpringModel model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
+  for (const char* name : {"arkode-erk", "ida"}) {
+    SCOPED_TRACE(name);
+    std::atomic<bool> stop{false};
+    RunSettings s = adaptive(name, 1e-8, 1e4, 1e4);
+    s.options.max_steps = 1'000'000'000;  // minutes of work in one interval
+    s.options.stop = &stop;
+    std::thread requester([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      stop.store(true);
+    });
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_THROW(simulate(model, s), StopRequested);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    requester.join();
+    EXPECT_LT(seconds, 2.0);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, AdaptiveIntegrator, ::testing::ValuesIn(adaptive_names(false)),

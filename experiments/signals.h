@@ -1,0 +1,43 @@
+// What springlab does when it is told to stop (SIGINT from Ctrl-C, SIGTERM
+// from a job scheduler, SIGHUP when the terminal goes away), in two ways:
+//
+//  - A command that makes one result (`run`, `stability`, `scene`, a merge)
+//    ends by the signal, as any Unix tool does, after removing the
+//    temporaries of its output files (register_temporary): the files at the
+//    output paths keep what they held before.
+//  - A sweep (`experiment`) turns the first signal into a stop request
+//    (StopOnSignals): no task starts, running ones stop at their next step,
+//    and the finished ones are written whole and marked incomplete. A second
+//    signal ends it at once, as above.
+//
+// SIGPIPE is ignored, so writing into a closed pipe is an error (EPIPE) that
+// the writer reports, not a silent death.
+#pragma once
+
+#include <atomic>
+#include <string>
+
+namespace springlab {
+
+// Ignores SIGPIPE and installs the removing-then-dying handler for SIGINT,
+// SIGTERM and SIGHUP (once per process; the command line calls it first).
+void install_signal_handlers();
+
+// The temporaries a signal removes before the process ends. The removal runs
+// inside the signal handler: paths live in a fixed table (64 at once; more
+// are not removed by a signal, only by their owner).
+void register_temporary(const std::string& path);
+void unregister_temporary(const std::string& path);
+
+// While alive, SIGINT, SIGTERM and SIGHUP set stop_requested() instead of
+// ending the process (a second one ends it, removing the temporaries).
+class StopOnSignals {
+ public:
+  StopOnSignals();
+  ~StopOnSignals();
+  StopOnSignals(const StopOnSignals&) = delete;
+  StopOnSignals& operator=(const StopOnSignals&) = delete;
+  const std::atomic<bool>& flag() const;
+};
+
+}  // namespace springlab
