@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <memory>
@@ -280,9 +281,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--dt, --t-end: ") + e.what());
   }
-  const MassSpringModel model(scene);
-  check_initial_energy(model, common.scene);
-  common.check_against_method(model);
+  // Row caps from the scene alone, before its model takes any memory.
   const double times = output_times(grid, common.run.every);
   auto check_rows = [&](const char* option, double rows, const std::string& what) {
     if (rows > kMaxOutputRows) {
@@ -297,11 +296,14 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     check_rows("--energy", times, std::to_string(static_cast<long long>(times)) + " output times");
   }
   if (!trajectory_path.empty()) {
-    const double particles = static_cast<double>(model.particle_count());
+    const double particles = static_cast<double>(scene.particles.size());
     check_rows("--trajectory", times * particles,
-               std::to_string(model.particle_count()) + " particles x " +
+               std::to_string(scene.particles.size()) + " particles x " +
                    std::to_string(static_cast<long long>(times)) + " output times");
   }
+  const MassSpringModel model(scene);
+  check_initial_energy(model, common.scene);
+  common.check_against_method(model);
 
   // Files are opened (regular files as temporaries) before any step runs.
   std::unique_ptr<OutputFile> energy_file, trajectory_file;

@@ -12,6 +12,7 @@
 #include <cctype>
 #include <cerrno>
 #include <charconv>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
@@ -155,7 +156,7 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     if (fd_ < 0) fail("cannot write", errno);
     return;
   }
-  if (exists && ::access(path_.c_str(), W_OK) != 0) fail("cannot write", errno);
+  if (exists && ::faccessat(AT_FDCWD, path_.c_str(), W_OK, AT_EACCESS) != 0) fail("cannot write", errno);
 
   target_ = follow_links(path_);
   if (target_.empty()) fail("cannot write", errno);
@@ -172,6 +173,16 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
   std::string name = (dir == "/" ? "/" : dir + "/") + stem + std::to_string(::getpid()) + "." + host +
                      ".XXXXXX";
   fd_ = ::mkostemp(name.data(), O_CLOEXEC);
+  if (fd_ < 0 && errno == EACCES && exists) {
+    // A file we may write in a folder we may not: rewritten in place, from
+    // a temporary in the temporary-files folder.
+    const char* tmp = std::getenv("TMPDIR");
+    name = std::string(tmp != nullptr && tmp[0] != '\0' ? tmp : "/tmp") + "/" + stem +
+           std::to_string(::getpid()) + "." + host + ".XXXXXX";
+    mode_ = Mode::kRewrite;
+    fd_ = ::mkostemp(name.data(), O_CLOEXEC);
+    if (fd_ < 0) errno = EACCES;
+  }
   if (fd_ < 0) fail("cannot write", errno);
   temp_path_ = name;
   register_temporary(temp_path_);

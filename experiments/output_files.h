@@ -8,8 +8,9 @@
 //    one gets 0666 minus the umask. A file we may not write (read-only, or
 //    another user's that we could only replace, not write) is refused, as
 //    the shell's `>` would refuse it. A file with other hard links, or owned
-//    by another user, is rewritten in place at publish() (its other names and
-//    its owner stay), from the finished temporary.
+//    by another user, or in a folder we may not write, is rewritten in place
+//    at publish() (its other names and its owner stay), from the finished
+//    temporary (then in $TMPDIR or /tmp).
 //  - A symbolic link is followed: its target is written, the link stays.
 //  - Anything else (a FIFO, a terminal, /dev/null, /dev/stdout) is a stream:
 //    written directly, as the rows come, never replaced or renamed over.

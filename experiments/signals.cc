@@ -44,7 +44,8 @@ void install_signal_handlers() {
   struct sigaction ignore {};
   ignore.sa_handler = SIG_IGN;
   sigemptyset(&ignore.sa_mask);
-  ::sigaction(SIGPIPE, &ignore, nullptr);
+  ::sigaction(SIGPIPE, &ignore, nullptr);  // a closed pipe: EPIPE
+  ::sigaction(SIGXFSZ, &ignore, nullptr);  // over a file-size limit: EFBIG
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigemptyset(&action.sa_mask);

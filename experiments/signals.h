@@ -10,8 +10,9 @@
 //    and the finished ones are written whole and marked incomplete. A second
 //    signal ends it at once, as above.
 //
-// SIGPIPE is ignored, so writing into a closed pipe is an error (EPIPE) that
-// the writer reports, not a silent death.
+// SIGPIPE and SIGXFSZ are ignored, so writing into a closed pipe (EPIPE) or
+// past a file-size limit (EFBIG) is an error that the writer reports, not a
+// silent death.
 #pragma once
 
 #include <atomic>
@@ -19,7 +20,7 @@
 
 namespace springlab {
 
-// Ignores SIGPIPE and installs the removing-then-dying handler for SIGINT,
+// Ignores SIGPIPE and SIGXFSZ and installs the removing-then-dying handler for SIGINT,
 // SIGTERM and SIGHUP (once per process; the command line calls it first).
 void install_signal_handlers();
 

@@ -16,6 +16,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -53,9 +54,11 @@ inline void write_text(const fs::path& path, const std::string& text) {
 
 // Runs `springlab args...` in `cwd`; stdout and stderr go to files in `io_dir`
 // (which must exist and should not be `cwd`, so that they are not mistaken
-// for output files).
+// for output files). `child_setup`, when given, runs in the child just before
+// exec, after the redirections (to replace stdin or stdout, set a limit).
 inline ProcessResult run_springlab(const std::vector<std::string>& args, const fs::path& cwd,
-                                   const fs::path& io_dir, double timeout_seconds = 120.0) {
+                                   const fs::path& io_dir, double timeout_seconds = 120.0,
+                                   const std::function<void()>& child_setup = {}) {
   static int runs = 0;
   const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(runs++);
   const std::string out_path = (io_dir / (tag + ".out")).string();
@@ -77,6 +80,7 @@ inline ProcessResult run_springlab(const std::vector<std::string>& args, const f
         ::dup2(err, 2) < 0) {
       ::_exit(126);
     }
+    if (child_setup) child_setup();
     ::execv(argv[0], argv.data());
     ::_exit(127);
   }

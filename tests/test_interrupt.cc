@@ -73,3 +73,49 @@ TEST(Interrupt, CtrlCDuringASweepWritesFinishedTasksMarkedIncomplete) {
 }
 
 }  // namespace
+
+namespace {
+
+// A single task that would run for minutes (a bisection at --rel-tol 1e-16
+// over 10^5 periods): SIGTERM stops it inside the task, within a second, and
+// the sweep is written, marked incomplete, with exit status 130.
+TEST(Interrupt, SignalStopsALongTaskWithinASecond) {
+  const fs::path dir = fs::temp_directory_path() / ("springlab-interrupt-task-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path definition = dir / "long.json";
+  std::ofstream(definition) << R"({"experiment": "stability", "name": "long", "integrators": ["rk4"],
+      "periods": 1e5, "rel_tol": 1e-16, "cases": [{"scene": "oscillator", "k": [1]}]})";
+  const fs::path out = dir / "out";
+  std::vector<std::string> args = {SPRINGLAB_EXE, "experiment", definition.string(), "--out",
+                                   out.string(), "--no-progress"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, nullptr, argv.data(), environ), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  const auto signalled = std::chrono::steady_clock::now();
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_LT(seconds, 1.0);
+  nlohmann::json settings;
+  std::ifstream(out / "long.json") >> settings;
+  EXPECT_EQ(settings["complete"], false);
+  EXPECT_EQ(settings["tasks_done"], 0);
+  std::ifstream table(out / "long.csv");
+  std::string header;
+  std::getline(table, header);
+  EXPECT_EQ(header.rfind("task,scene,integrator", 0), 0u);
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace

@@ -228,6 +228,37 @@ TEST_F(MalformedGenerated, MillionLevelsOfNesting) {
                                            "scene file");
 }
 
+// The JSON reader stops at a NUL byte: garbage after one must not pass.
+TEST_F(MalformedGenerated, NulByteEndsNothing) {
+  const std::string scene =
+      "{\"dimension\": 2, \"particles\": [{\"x\": [0, 0]}], \"springs\": []}\n";
+  write_text(work() / "nul.json", scene + std::string(1, '\0') + "garbage");
+  expect_scene_refused("nul.json", "malformed JSON: a NUL byte at line 2, column 1 (JSON text cannot "
+                                   "hold one)");
+}
+
+// A 1 MB unknown key is named, not echoed whole: its first 100 characters
+// and its length.
+TEST_F(MalformedGenerated, HugeUnknownKeyIsShortenedInTheMessage) {
+  const std::string key(1 << 20, 'k');
+  write_text(work() / "key.json", "{\"dimension\": 2, \"particles\": [{\"x\": [0, 0], \"" + key +
+                                      "\": 1}], \"springs\": []}\n");
+  expect_scene_refused("key.json", "particles[0]: unknown key '" + std::string(100, 'k') +
+                                       "... (1048576 bytes)' (allowed keys: x, v, mass, fixed)");
+}
+
+// The JSON reader keeps every character between two tokens: a long run of
+// whitespace (a 512 MiB file of spaces took 2 GB and 11 s) is refused while
+// scanning, at the cap of 1 MiB in a row.
+TEST_F(MalformedGenerated, LongWhitespaceRunIsRefused) {
+  write_text(work() / "spaces.json", "{\"dimension\": 2," + std::string((1 << 20) + 1, ' ') + "}\n");
+  expect_scene_refused("spaces.json", "more than 1048576 whitespace characters in a row, up to line "
+                                      "1, over the cap for a JSON file");
+  write_text(work() / "spaces.json", std::string((1 << 21), ' '));
+  expect_scene_refused("spaces.json", "more than 1048576 whitespace characters in a row, up to line "
+                                      "1, over the cap for a JSON file");
+}
+
 std::vector<std::string> plus(std::vector<std::string> a, const std::vector<std::string>& b) {
   a.insert(a.end(), b.begin(), b.end());
   return a;

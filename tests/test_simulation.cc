@@ -4,6 +4,7 @@
 // bisection on dt, each checked against a value worked out by hand.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -329,6 +330,80 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
   EXPECT_TRUE(overflow.v_final.allFinite());
 }
 
+// Near its limit a stable symplectic method's energy is bounded but large.
+// Symplectic Euler (v+ = v - h w^2 x, x+ = x + h v+) conserves
+// Q = v^2 + w^2 x^2 - h w^2 x v, so released from rest its energy peaks at
+// E0 / (1 - w h / 2): 1000 E0 at w h = 1.998, 2000 E0 at 1.999. The blow-up
+// rule (kinetic + spring > B E_s, E_s = E0 here) therefore calls it diverged
+// above w h = 2 (1 - 1/B), 0.1% below the limit for B = 1000 -- inside the
+// stability bisection's tolerance -- and a larger --blowup sees closer.
+double peak_energy_ratio(const MassSpringModel& model, const RunSettings& s, RunResult& r) {
+  RecordingObserver o;
+  r = simulate(model, s, {&o});
+  double peak = 0.0;
+  for (std::size_t k = 0; k < o.times.size(); ++k) {
+    const Energies e = model.energies(o.xs[k], o.vs[k]);
+    peak = std::max(peak, e.kinetic + e.spring);
+  }
+  return peak / r.energy_initial;
+}
+
+TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalfWh) {
+  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const double w = 10.0;
+  RunResult r;
+  for (const double wh : {1.9, 1.99, 1.997}) {
+    SCOPED_TRACE(wh);
+    // Sampled at steps, the peak is approached to within a few 1e-6.
+    const double ratio = peak_energy_ratio(model, settings("symplectic-euler", wh / w, 20000 * wh / w), r);
+    EXPECT_EQ(r.status, RunStatus::kCompleted);
+    EXPECT_NEAR(ratio, 1.0 / (1.0 - wh / 2.0), 1e-4 / (1.0 - wh / 2.0));
+  }
+  // At 1.999 (stable) the peak is 2000 E0: over the default blow-up factor.
+  RunSettings s = settings("symplectic-euler", 1.999 / w, 20000 * 1.999 / w);
+  EXPECT_EQ(simulate(model, s).status, RunStatus::kDiverged);
+  s.blowup = 4000.0;
+  const double ratio = peak_energy_ratio(model, s, r);
+  EXPECT_EQ(r.status, RunStatus::kCompleted);
+  EXPECT_NEAR(ratio, 2000.0, 2000.0 * 1e-4);
+}
+
+// A state whose energy overflows a double has nothing to integrate: the run
+// diverges at t = 0 (it used to complete, with inf energies in every row).
+TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
+  Scene s = linear_oscillator(100.0, 1.0, 1e200);  // k x^2 / 2 = 5e401
+  const MassSpringModel model(s);
+  ASSERT_FALSE(std::isfinite(model.energies(model.initial_positions(), model.initial_velocities()).total()));
+  const RunResult r = simulate(model, settings("rk4", 0.1, 1.0));
+  EXPECT_EQ(r.status, RunStatus::kDiverged);
+  ASSERT_TRUE(r.diverged_at.has_value());
+  EXPECT_EQ(*r.diverged_at, 0.0);
+  EXPECT_EQ(r.failure, "the initial energy is not finite");
+  EXPECT_EQ(r.stats.steps, 0);
+}
+
+// A stop request ends a run at its next step, as an exception the
+// experiment runner turns into "not done".
+TEST(SimulationStop, StopRequestThrowsAtTheNextStep) {
+  const MassSpringModel model(linear_oscillator());
+  std::atomic<bool> stop{true};
+  RunSettings s = settings("rk4", 0.01, 1.0);
+  s.options.stop = &stop;
+  EXPECT_THROW(simulate(model, s), StopRequested);
+  stop = false;
+  EXPECT_EQ(simulate(model, s).status, RunStatus::kCompleted);
+  // The same through a StopScope, for runs whose settings carry none.
+  stop = true;
+  const StopScope scope(&stop);
+  EXPECT_THROW(simulate(model, settings("rk4", 0.01, 1.0)), StopRequested);
+  EXPECT_THROW(find_max_stable_dt(model, [] {
+                 StabilitySettings st;
+                 st.run = settings("rk4", 0.01, 1.0);
+                 return st;
+               }()),
+               StopRequested);
+}
+
 // ---------------------------------------------------------------- stability
 
 StabilitySettings stability_settings(const std::string& integrator, double t_end) {
@@ -368,6 +443,36 @@ TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
   const StabilitySettings s = stability_settings("rk4", 1e4 / w);
   const StabilityResult r = find_max_stable_dt(model, s);
   expect_limit(r, 2.0 * std::sqrt(2.0) / w, s.rel_tol);
+}
+
+// The bisection ends in floating point: with a tolerance no ratio of two
+// doubles can meet (1e-16, or 0 + the smallest positive) it stops when the
+// bracket's ends are neighbours, after about 60 runs.
+TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
+  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  for (const double rel_tol : {1e-16, 4.9e-324}) {
+    SCOPED_TRACE(rel_tol);
+    StabilitySettings s = stability_settings("symplectic-euler", 10.0);
+    s.rel_tol = rel_tol;
+    const StabilityResult r = find_max_stable_dt(model, s);
+    EXPECT_LT(r.lo, r.hi);
+    EXPECT_LE(r.hi, r.lo * (1.0 + 4 * std::numeric_limits<double>::epsilon()));
+    EXPECT_LE(r.runs, 70);
+    EXPECT_EQ(r.outcome, StabilityOutcome::kBracketed);
+  }
+}
+
+// A range with no valid grid is refused before the first run.
+TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
+  const MassSpringModel model(linear_oscillator());
+  StabilitySettings s = stability_settings("rk4", 1000.0);
+  s.dt_min = 1e-12;
+  try {
+    find_max_stable_dt(model, s);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "--dt-min 1e-12 with --t-end 1000: t_end / dt exceeds 1e9 steps");
+  }
 }
 
 TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
