@@ -185,8 +185,11 @@ StepResult SundialsIntegrator::advance_to(double t_out) {
     case kTooMuchWork:
       message << "; " << step_limit_ << " internal steps did not reach the next output time ("
               << (options().max_steps > 0 ? "--max-steps" : "the default limit, 5e6 / unknowns")
-              << "): the system may be too stiff for this method, try an implicit one, a looser "
-                 "--rtol, or more with --max-steps";
+              << "): "
+              << (info().implicit ? "try a shorter --dt output interval, a looser --rtol"
+                                  : "the system may be too stiff for an explicit method, try an "
+                                    "implicit one, a looser --rtol")
+              << ", or allow more with --max-steps";
       break;
     case kTooMuchAccuracy:
       message << "; the tolerance is below what double precision resolves here: raise --rtol or "
