@@ -3,6 +3,7 @@
 // 17, classes 4, 5 and 10; issue 16, "The command line"). Each case runs
 // with `--energy e.csv` where it applies, in a folder holding an old e.csv.
 #include <fcntl.h>
+#include <sched.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -246,6 +247,32 @@ TEST(CliStabilityBounds, NothingDivergingIsSaidSo) {
   EXPECT_EQ(r.out,
             "implicit-euler on oscillator for t_end 10: no step diverged up to --dt-max 1 (1 run)\n"
             "w_max 10 rad/s; theory: none: A-stable\n");
+}
+
+}  // namespace
+}  // namespace springlab
+
+namespace springlab {
+namespace {
+
+// --jobs above the usable CPUs holds that many more models for no speed:
+// capped, and said so.
+TEST(CliNotes, JobsAreCappedAtTheUsableCpus) {
+  TempDir temp("cli-jobs");
+  fs::create_directories(temp.path() / "io");
+  write_text(temp.path() / "def.json",
+             R"({"experiment": "energy", "integrators": ["rk4"],
+                 "cases": [{"scene": "spring", "dt": 0.1, "t_end": 1}]})");
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  ASSERT_EQ(::sched_getaffinity(0, sizeof set, &set), 0);
+  const int cpus = CPU_COUNT(&set);
+  const std::vector<std::string> args = {"experiment", "def.json", "--out", "out", "--jobs", "1000",
+                                         "--no-progress"};
+  const ProcessResult r = run_springlab(args, temp.path(), temp.path() / "io");
+  ASSERT_TRUE(r.exited && r.status == 0) << describe(args, r);
+  EXPECT_EQ(r.err, "springlab: note: --jobs 1000 capped at " + std::to_string(cpus) +
+                       ", the CPUs this process may use\n");
 }
 
 }  // namespace
