@@ -37,6 +37,14 @@ constexpr auto kStreamLatency = std::chrono::milliseconds(250);  // a quarter se
 
 std::string error_text(int error) { return std::strerror(error); }
 
+// A path for a one-line message: as given, unless it holds control
+// characters (a newline), which are escaped.
+std::string shown(const std::string& path) {
+  const bool control = std::any_of(path.begin(), path.end(),
+                                   [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+  return control ? printable(path) : path;
+}
+
 // The path a chain of symbolic links at its last component leads to (the
 // links in the folders before it are the kernel's business). A link to
 // nothing yet leads to the file it would create.
@@ -126,7 +134,7 @@ void write_all(int fd, const char* data, std::size_t size, int& error) {
 }  // namespace
 
 void OutputFile::fail(const std::string& what, int error) const {
-  throw std::runtime_error(path_ + ": " + what + " (" + error_text(error) + ")");
+  throw std::runtime_error(shown(path_) + ": " + what + " (" + error_text(error) + ")");
 }
 
 OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
@@ -135,7 +143,7 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
   struct stat st {};
   const bool exists = ::stat(path_.c_str(), &st) == 0;  // through any links
   if (!exists && errno != ENOENT) fail("cannot write", errno);
-  if (exists && S_ISDIR(st.st_mode)) throw std::runtime_error(path_ + ": is a directory, not a file");
+  if (exists && S_ISDIR(st.st_mode)) throw std::runtime_error(shown(path_) + ": is a directory, not a file");
   if (exists && S_ISREG(st.st_mode)) {
     // Our own standard output or error, redirected to a file
     // (`--energy /dev/stdout > log`): write on at its offset.
@@ -165,7 +173,7 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
   const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : target_.substr(0, slash);
   const std::string base = slash == std::string::npos ? target_ : target_.substr(slash + 1);
   if (base.empty() || base == "." || base == "..") {
-    throw std::runtime_error(path_ + ": is a directory, not a file");
+    throw std::runtime_error(shown(path_) + ": is a directory, not a file");
   }
   const std::string host = host_name();
   const std::string stem = temporary_stem(base, host);
@@ -224,7 +232,7 @@ void OutputFile::flush() {
 }
 
 void OutputFile::write(std::string_view text) {
-  if (fd_ < 0) throw std::runtime_error(path_ + ": written after it was closed");
+  if (fd_ < 0) throw std::runtime_error(shown(path_) + ": written after it was closed");
   if (text.size() >= kFileBuffer) {  // a whole table: no copy
     flush();
     int error = 0;

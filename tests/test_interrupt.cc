@@ -20,6 +20,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The child gets the default action for the signals a test sends, even if
+// this process was started with them ignored (a background job ignores
+// SIGINT; springlab keeps a signal ignored at start ignored, as nohup needs).
+struct DefaultSignals {
+  DefaultSignals() {
+    posix_spawnattr_init(&attr);
+    sigset_t set;
+    sigemptyset(&set);
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&set, s);
+    posix_spawnattr_setsigdefault(&attr, &set);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
+  }
+  ~DefaultSignals() { posix_spawnattr_destroy(&attr); }
+  posix_spawnattr_t attr;
+};
+
 TEST(Interrupt, CtrlCDuringASweepWritesFinishedTasksMarkedIncomplete) {
   const fs::path dir = fs::temp_directory_path() / ("springlab-interrupt-" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -37,7 +53,8 @@ TEST(Interrupt, CtrlCDuringASweepWritesFinishedTasksMarkedIncomplete) {
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, nullptr, argv.data(), environ), 0);
+  const DefaultSignals defaults;
+  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, &defaults.attr, argv.data(), environ), 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ASSERT_EQ(::kill(pid, SIGINT), 0);
   int status = 0;
@@ -93,7 +110,8 @@ TEST(Interrupt, SignalStopsALongTaskWithinASecond) {
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, nullptr, argv.data(), environ), 0);
+  const DefaultSignals defaults;
+  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, &defaults.attr, argv.data(), environ), 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   const auto signalled = std::chrono::steady_clock::now();

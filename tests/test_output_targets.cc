@@ -322,9 +322,19 @@ TEST_F(OutputTargets, SignalsDuringARunRemoveItsTemporaries) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    // The default action for the signal even if this process ignores it
+    // (a background job ignores SIGINT, and springlab keeps it ignored).
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    sigset_t defaults;
+    sigemptyset(&defaults);
+    sigaddset(&defaults, signal_number);
+    posix_spawnattr_setsigdefault(&attr, &defaults);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
     pid_t pid = 0;
-    ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, &actions, nullptr, argv.data(), environ), 0);
+    ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, &actions, &attr, argv.data(), environ), 0);
     posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attr);
     // Wait until both temporaries exist: the run is under way.
     const auto start = std::chrono::steady_clock::now();
     while (listing(work()).size() < 3 &&
