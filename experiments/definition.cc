@@ -155,7 +155,8 @@ Scene definition_scene(const DefinitionObject& o,
   if (!parameters.empty()) o.fail("parameters", "apply to built-in scenes only");
   const std::filesystem::path base = std::filesystem::path(o.file()).parent_path();
   const std::filesystem::path path = base / name;
-  if (!std::filesystem::is_regular_file(path)) {
+  std::error_code ec;  // a name too long for the file system is "not a file", not an exception
+  if (!std::filesystem::is_regular_file(path, ec)) {
     o.fail("scene", std::string("'").append(printable(name)).append(
                         "' is neither a built-in scene nor a file next to the definition"));
   }

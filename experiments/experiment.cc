@@ -1,6 +1,8 @@
 #include "experiments/experiment.h"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -194,8 +196,13 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
 LoadedExperiment load_experiment(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw DefinitionError(path + ": is a directory, not a file");
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw DefinitionError(path + ": cannot open file");
+  if (!in) {
+    const int error = errno;
+    throw DefinitionError(printable(path) + ": cannot open file" +
+                          (error != 0 ? std::string(" (") + std::strerror(error) + ")" : std::string()));
+  }
   // At most one byte past the cap is read, whatever the file (or pipe) holds.
   std::string text;
   char chunk[1 << 16];

@@ -232,6 +232,16 @@ TEST(ExperimentDefinition, DuplicateKeysAreRefused) {
             "def.json: cases[0].parameters: duplicate key 'n'");
 }
 
+// A scene name too long for the file system is a one-line refusal (it was a
+// raw "filesystem error"), shown to 100 characters.
+TEST(ExperimentDefinition, OverLongSceneNameIsRefused) {
+  Json d = kEnergy;
+  d["cases"][0]["scene"] = std::string(300, 's') + ".json";
+  EXPECT_EQ(definition_error(d), "def.json: cases[0].scene: '" + std::string(100, 's') +
+                                     "... (305 bytes)' is neither a built-in scene nor a file next "
+                                     "to the definition");
+}
+
 TEST(ExperimentDefinition, AnIntegratorListedTwiceIsRefused) {
   Json d = kEnergy;
   d["integrators"] = {"rk4", "verlet", "rk4"};
