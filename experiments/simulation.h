@@ -52,10 +52,10 @@ struct RunResult {
 // Step k ends at t_k = k dt, and t_N = T exactly (no accumulated drift).
 // t_k is k times dt *as written*: with dt's shortest decimal d x 10^e, t_k
 // is the double nearest to (k d) x 10^e, one correctly rounded operation on
-// exact operands while k d < 2^53 for every k and |e| <= 22 (any dt typed
-// with up to 15 digits). So --dt 0.1 gives t_3 = 0.3, not the double product
-// 0.30000000000000004, and rows print the decimal a reader expects.
-// Otherwise t_k = k dt, rounded once.
+// exact operands while k d < 2^53 for every k and |e| <= 22 (any dt of up
+// to 6 digits on any grid up to the 1e9-step cap). So --dt 0.1 gives
+// t_3 = 0.3, not the double product 0.30000000000000004, and rows print the
+// decimal a reader expects. Otherwise t_k = k dt, rounded once.
 struct TimeGrid {
   long steps = 0;
   double dt = 0.0;
