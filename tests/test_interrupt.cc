@@ -112,7 +112,20 @@ TEST(Interrupt, SignalStopsALongTaskWithinASecond) {
   pid_t pid = 0;
   const DefaultSignals defaults;
   ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, &defaults.attr, argv.data(), environ), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  // The task is running once the tables' temporaries exist (they are made
+  // after the definition is read, before any task starts).
+  const auto started = std::chrono::steady_clock::now();
+  auto temporaries = [&] {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(out, ec)) {
+      if (entry.path().string().find("springlab-tmp") != std::string::npos) return true;
+    }
+    return false;
+  };
+  while (!temporaries() && std::chrono::steady_clock::now() - started < std::chrono::seconds(30)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // well inside the task
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   const auto signalled = std::chrono::steady_clock::now();
   int status = 0;
