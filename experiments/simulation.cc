@@ -99,8 +99,9 @@ RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
     return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
   };
   StepResult step;
-  if (!std::isfinite(result.energy_initial) || !std::isfinite(bound)) {
-    // Nothing to integrate: the energy already overflows a double.
+  if (!std::isfinite(result.energy_initial) || !std::isfinite(model.energy_scale())) {
+    // Nothing to integrate: the energy already overflows a double. (An
+    // infinite --blowup is a request: only a non-finite state then stops.)
     result.status = RunStatus::kDiverged;
     result.failure = "the initial energy is not finite";
     result.diverged_at = 0.0;

@@ -246,7 +246,7 @@ TEST(CliStabilityBounds, NothingDivergingIsSaidSo) {
   ASSERT_TRUE(r.exited && r.status == 0) << describe(args, r);
   EXPECT_EQ(r.out,
             "implicit-euler on oscillator for t_end 10: no step diverged up to --dt-max 1 (1 run)\n"
-            "w_max 10 rad/s; theory: none: A-stable\n");
+            "w_max 10 rad/s; theory: none: L-stable\n");
 }
 
 }  // namespace
