@@ -48,9 +48,7 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
-#ifdef SPRINGLAB_HAVE_CHOLMOD
 #include <Eigen/CholmodSupport>
-#endif
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
@@ -191,7 +189,6 @@ void cg_benchmark(benchmark::State& state, const SceneCase& c, bool warm) {
   finish(state, c, sys, t, x, 0.0);
 }
 
-#ifdef SPRINGLAB_HAVE_CHOLMOD
 void cholmod_benchmark(benchmark::State& state, const SceneCase& c) {
   const LinearSystem& sys = system_for(c);
   Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> solver;
@@ -219,7 +216,6 @@ void cholmod_benchmark(benchmark::State& state, const SceneCase& c) {
   }
   finish(state, c, sys, t, x, 0.0);
 }
-#endif
 
 // SUNDIALS' KLU on a copy of A in a SUNDIALS sparse (CSC) matrix.
 void klu_benchmark(benchmark::State& state, const SceneCase& c, int ordering) {
@@ -291,9 +287,7 @@ void register_linear_solver_benchmarks() {
     reg("ldlt", [c](benchmark::State& s) { direct_benchmark<Ldlt>(s, c, true); });
     reg("ldlt-scratch", [c](benchmark::State& s) { direct_benchmark<Ldlt>(s, c, false); });
     reg("sparselu", [c](benchmark::State& s) { direct_benchmark<Lu>(s, c, true); });
-#ifdef SPRINGLAB_HAVE_CHOLMOD
     reg("cholmod-supernodal", [c](benchmark::State& s) { cholmod_benchmark(s, c); });
-#endif
     reg("klu", [c](benchmark::State& s) { klu_benchmark(s, c, -1); });
     reg("klu-amd", [c](benchmark::State& s) { klu_benchmark(s, c, 0); });
     reg("cg-jacobi-warm", [c](benchmark::State& s) { cg_benchmark(s, c, true); });

@@ -116,6 +116,7 @@ void add(IntegratorStats& sum, const IntegratorStats& s) {
   sum.force_evals += s.force_evals;
   sum.jacobian_evals += s.jacobian_evals;
   sum.linear_solves += s.linear_solves;
+  sum.linear_iterations += s.linear_iterations;
   sum.newton_iterations += s.newton_iterations;
   sum.factorizations += s.factorizations;
   sum.nonlinear_failures += s.nonlinear_failures;

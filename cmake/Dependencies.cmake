@@ -15,6 +15,30 @@ springlab_require(Eigen3 libeigen3-dev 3.4 NO_MODULE)
 springlab_require(nlohmann_json nlohmann-json3-dev)
 springlab_require(CLI11 libcli11-dev)
 springlab_require(SUNDIALS libsundials-dev 6.4)
+# CHOLMOD (SuiteSparse) factors the implicit methods' positive definite
+# Newton matrices (supernodal LL^T); its dense blocks run in OpenBLAS, linked
+# directly so springlab can set its thread count (integrators/
+# sparse_direct_solver.h). No CMake config ships with either: look for the
+# header and the libraries.
+find_path(SPRINGLAB_CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+find_library(SPRINGLAB_CHOLMOD_LIBRARY cholmod)
+if(NOT SPRINGLAB_CHOLMOD_INCLUDE_DIR OR NOT SPRINGLAB_CHOLMOD_LIBRARY)
+  message(FATAL_ERROR
+    "springlab: dependency CHOLMOD (SuiteSparse) not found.\n"
+    "Install it with:  ${SPRINGLAB_APT_HINT} libsuitesparse-dev")
+endif()
+find_library(SPRINGLAB_OPENBLAS_LIBRARY openblas)
+if(NOT SPRINGLAB_OPENBLAS_LIBRARY)
+  message(FATAL_ERROR
+    "springlab: dependency OpenBLAS not found (CHOLMOD's dense kernels).\n"
+    "Install it with:  ${SPRINGLAB_APT_HINT} libopenblas-dev")
+endif()
+add_library(springlab_cholmod INTERFACE)
+target_include_directories(springlab_cholmod INTERFACE ${SPRINGLAB_CHOLMOD_INCLUDE_DIR})
+target_link_libraries(springlab_cholmod INTERFACE ${SPRINGLAB_OPENBLAS_LIBRARY}
+                      ${SPRINGLAB_CHOLMOD_LIBRARY})
+message(STATUS "springlab: CHOLMOD: ${SPRINGLAB_CHOLMOD_LIBRARY}, BLAS: ${SPRINGLAB_OPENBLAS_LIBRARY}")
+
 if(SPRINGLAB_BUILD_TESTS)
   springlab_require(GTest libgtest-dev)
 endif()

@@ -124,6 +124,7 @@ Json stats_json(const IntegratorStats& s) {
               {"force_evals", s.force_evals},
               {"jacobian_evals", s.jacobian_evals},
               {"linear_solves", s.linear_solves},
+              {"linear_iterations", s.linear_iterations},
               {"newton_iterations", s.newton_iterations},
               {"factorizations", s.factorizations},
               {"nonlinear_failures", s.nonlinear_failures}};

@@ -27,15 +27,22 @@ struct IntegratorStats {
   long force_evals = 0;         // evaluations of F(t, x, v)
   long jacobian_evals = 0;      // evaluations of dF/dx and/or dF/dv
   long linear_solves = 0;       // solves with a factorized (or iterative) matrix
+  long linear_iterations = 0;   // iterations of the iterative ones (conjugate gradients)
   long newton_iterations = 0;   // nonlinear iterations
   long factorizations = 0;      // numeric factorizations / linear solver setups
   long nonlinear_failures = 0;  // nonlinear solves that did not converge
 };
 
+// Which stiffness dF/dx a linearized step uses: the exact one, or its
+// definite part (each compressed spring's negative transverse stiffness
+// dropped, Choi and Ko 2002), which keeps M - h^2 dF/dx positive definite.
+enum class Stiffness { kExact, kDefinite };
+
 // Every knob any method reads; each method uses only the ones it needs.
 struct IntegratorOptions {
-  double newton_tol = 1e-10;  // converged when ||M^-1 r||_inf <= tol * max(1, ||v||_inf)
+  double newton_tol = 1e-4;   // m/s: converged when the Newton update ||dv||_inf is below it
   int max_newton = 20;        // Newton iterations per step before giving up
+  Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
   double rtol = 1e-6;         // adaptive methods
   double atol = 1e-8;
   long max_steps = 0;         // adaptive: internal steps per output interval; 0 = scaled to the system

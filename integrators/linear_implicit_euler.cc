@@ -20,16 +20,13 @@ StepResult LinearImplicitEuler::do_step(double h) {
   const double t1 = t_ + h;
   eval_force(t1, x_, v_, f0_);
   std::string error;
-  if (!factorize_newton_matrix(t1, x_, v_, h, /*c=*/1.0, /*b=*/1.0, error)) {
+  const bool definite = options().stiffness == Stiffness::kDefinite;
+  ++mutable_stats().newton_iterations;
+  if (!solve_linearized(t1, x_, v_, f0_, h, /*b=*/1.0, /*c=*/1.0, definite, dv_, error)) {
     ++mutable_stats().nonlinear_failures;
     std::ostringstream message;
-    message << name() << ": singular matrix at t = " << t_ << " (" << error << ")";
+    message << name() << ": the linear solve failed at t = " << t_ << " (" << error << ")";
     return StepResult::failure(message.str());
-  }
-  ++mutable_stats().newton_iterations;
-  rhs_ = h * (f0_ + h * (last_dfdx() * v_));
-  if (!solve_newton_system(rhs_, dv_)) {
-    return StepResult::failure(name() + ": the velocity update is not finite");
   }
   v_ += dv_;
   x_ += h * v_;

@@ -23,7 +23,7 @@ class LinearImplicitEuler final : public ImplicitIntegrator {
   StepResult do_step(double h) override;
 
  private:
-  Vector f0_, rhs_, dv_;
+  Vector f0_, dv_;
 };
 
 }  // namespace springlab

@@ -6,23 +6,97 @@
 #include <sstream>
 
 namespace springlab {
+namespace {
+
+// A CG solve that needed more products than this has the preconditioner
+// refreshed before the next solve; one not converged after kCgHardLimit is
+// redone at once with a fresh one. A factorization costs about 15-30
+// preconditioned CG iterations on cloth 64 and 128 (benchmarks/README.md):
+// of the pairs (6, 20), (10, 30), (15, 40), (25, 60) measured on cloth 64
+// at 1/60 s, (10, 30) cost least.
+constexpr int kCgSoftLimit = 10;
+constexpr int kCgHardLimit = 30;
+// Forcing term of the inexact Newton method: CG stops once its estimated
+// error is below eta ||dv||_inf, eta = min(kForcing, ||r|| / ||r_0||) (so
+// tighter as Newton converges), or below kForcingTolerance x the Newton
+// tolerance.
+constexpr double kForcing = 0.1;
+constexpr double kForcingTolerance = 0.1;
+// The accurate solves where the update must be a true Newton update (the
+// discrete gradient's second phase, a retry on the residual's path).
+constexpr double kAccurateForcing = 1e-3;
+// The discrete gradient's rank-one term is used while 1 + z.q stays above
+// this (near 0 it makes the matrix nearly singular).
+constexpr double kMinShermanMorrison = 0.5;
+// Relative residual of the one linear solve of a linearized step.
+constexpr double kLinearRtol = 1e-8;
+// Armijo's sufficient-decrease fraction.
+constexpr double kArmijo = 1e-4;
+// Updates below this many units of round-off of ||v||_inf are noise.
+constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();
+// The longest update tried along a direction of negative curvature, m/s.
+constexpr double kMaxEscape = 10.0;
+
+}  // namespace
+
+StepResult ImplicitIntegrator::do_initialize() {
+  direct_.reset();
+  preconditioner_.reset();
+  preconditioner_valid_ = false;
+  direct_current_ = false;
+  cg_slow_ = 0;
+  jacobian_ = SparseMatrix();
+  preconditioner_matrix_ = SparseMatrix();
+  dfdv_ = SparseMatrix();  // the next system may not need it
+  return StepResult::success();
+}
+
+void ImplicitIntegrator::stage(double h, const VelocityImplicitScheme& s, const Vector& v) {
+  xs_ = x_ + h * (s.a * v_ + s.b * v);
+  vs_ = (1.0 - s.c) * v_ + s.c * v;
+}
 
 void ImplicitIntegrator::residual(double h, const VelocityImplicitScheme& s, const Vector& v,
                                   Vector& r) {
-  xs_ = x_ + h * (s.a * v_ + s.b * v);
-  vs_ = (1.0 - s.c) * v_ + s.c * v;
-  eval_force(t_ + s.t_eval_offset * h, xs_, vs_, f_);
+  stage(h, s, v);
+  const double t = t_ + s.t_eval_offset * h;
+  eval_force(t, xs_, vs_, f_);
   r = system().mass().cwiseProduct(v - v_) - h * f_;
+  if (!s.discrete_gradient) return;
+  // Gonzalez (1996): grad V(x*) becomes
+  //   grad V(x*) + (V(y) - V(x_n) - grad V(x*).Delta) / |Delta|^2 Delta,
+  // Delta = y - x_n = h v*, x* the midpoint. grad V(x*).Delta is -F.Delta
+  // plus the work of the forces that do not derive from V.
+  delta_ = h * vs_;
+  y_ = x_ + delta_;
+  const double v_end = system().position_potential(t, y_);
+  const double slope =
+      -f_.dot(delta_) + h * system().nonconservative_power(t, xs_, vs_);
+  const double numerator = v_end - v_start_potential_ - slope;
+  const double noise = 1e3 * std::numeric_limits<double>::epsilon() *
+                       (std::abs(v_end) + std::abs(v_start_potential_) + std::abs(slope));
+  const double length2 = delta_.squaredNorm();
+  correction_ = std::abs(numerator) > noise && length2 > 0.0 ? numerator / length2 : 0.0;
+  const double c = frozen_ ? frozen_c_ : correction_;
+  if (c != 0.0) r += (h * c) * delta_;
 }
 
-double ImplicitIntegrator::converged_norm(const Vector& r) const {
-  return r.cwiseQuotient(system().mass()).lpNorm<Eigen::Infinity>();
+double ImplicitIntegrator::potential(double h, const VelocityImplicitScheme& s, const Vector& v,
+                                     double& magnitude) const {
+  // xs_ and vs_ are those of the last residual(), at this v.
+  const double t = t_ + s.t_eval_offset * h;
+  const double inertia = 0.5 * (v - v_).cwiseAbs2().dot(system().mass());
+  const double stored = system().position_potential(t, xs_) / s.b;
+  const double dissipated = h / s.c * system().velocity_potential(t, vs_);
+  // The discrete gradient's correction with its coefficient frozen,
+  // h c D = d/dv (c |D|^2).
+  const double corrected = s.discrete_gradient ? frozen_c_ * delta_.squaredNorm() : 0.0;
+  magnitude = inertia + std::abs(stored) + std::abs(dissipated) + std::abs(corrected);
+  return inertia + stored + dissipated + corrected;
 }
 
-bool ImplicitIntegrator::factorize_newton_matrix(double t, const Vector& x, const Vector& v,
-                                                 double h, double c, double b,
-                                                 std::string& error, bool definite) {
-  factor_h_ = 0.0;  // refresh() records what the new matrix is for
+void ImplicitIntegrator::assemble(double t, const Vector& x, const Vector& v, double h,
+                                  double b, double c, bool definite, SparseMatrix& out) {
   // No force depends on v: dF/dv = 0 is neither assembled nor stored (on
   // cloth n = 128, 23 MB of values and indices).
   SparseMatrix* dfdv =
@@ -33,11 +107,11 @@ bool ImplicitIntegrator::factorize_newton_matrix(double t, const Vector& x, cons
     eval_jacobians(t, x, v, &dfdx_, dfdv);
   }
   // All three share the model's pattern: combine value by value.
-  if (jacobian_.nonZeros() != dfdx_.nonZeros()) jacobian_ = dfdx_;
-  const Vector& m = system().mass();
+  if (&out == &jacobian_) direct_current_ = false;
+  if (out.nonZeros() != dfdx_.nonZeros()) out = dfdx_;
   const Eigen::Index nnz = dfdx_.nonZeros();
   const double* px = dfdx_.valuePtr();
-  double* pj = jacobian_.valuePtr();
+  double* pj = out.valuePtr();
   const double cx = -h * h * b, cv = -h * c;
   if (dfdv != nullptr) {
     const double* pv = dfdv_.valuePtr();
@@ -45,248 +119,347 @@ bool ImplicitIntegrator::factorize_newton_matrix(double t, const Vector& x, cons
   } else {
     for (Eigen::Index k = 0; k < nnz; ++k) pj[k] = cx * px[k];
   }
-  jacobian_.diagonal() += m;
+  out.diagonal() += system().mass();
+}
+
+bool ImplicitIntegrator::refresh_preconditioner(double t, const Vector& x, const Vector& v,
+                                                double h, double b, double c,
+                                                bool jacobian_is_definite, std::string& error) {
+  const SparseMatrix* a = &jacobian_;
+  preconditioner_valid_ = false;
+  if (!jacobian_is_definite) {
+    assemble(t, x, v, h, b, c, /*definite=*/true, preconditioner_matrix_);
+    a = &preconditioner_matrix_;
+  }
   ++mutable_stats().factorizations;
-  if (!solver_.factorize(jacobian_, system().jacobian_symmetric())) {
-    error = solver_.error();
-    return false;
+  preconditioner_valid_ = preconditioner_.factorize(*a, MatrixKind::kPositiveDefinite) &&
+                          preconditioner_.positive_definite();
+  cg_slow_ = 0;
+  if (!preconditioner_valid_) {
+    error = "the definite Newton matrix is not positive definite";
+    if (!preconditioner_.error().empty()) error += " (" + preconditioner_.error() + ")";
   }
-  return true;
+  return preconditioner_valid_;
 }
 
-bool ImplicitIntegrator::solve_newton_system(const Vector& rhs, Vector& dv) {
+ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
+    double t, const Vector& x, const Vector& v, double h, double b, double c, bool definite,
+    const Vector& rhs, double rtol, double atol, bool truncate, Vector& d, std::string& error) {
+  LinearSolve out;
   ++mutable_stats().linear_solves;
-  return solver_.solve(rhs, dv);
-}
+  auto direct = [&](MatrixKind kind) {
+    // The same matrix as the last direct solve's (a second right-hand side).
+    if (direct_current_ && direct_.has_factor()) {
+      out.ok = direct_.solve(rhs, d);
+      out.converged = true;
+      if (!out.ok) error = "the linear solve gave a non-finite update";
+      return out;
+    }
+    ++mutable_stats().factorizations;
+    direct_current_ = true;
+    if (!direct_.factorize(jacobian_, kind)) {
+      direct_current_ = false;
+      error = "the Newton matrix is singular (" + direct_.error() + ")";
+      out.ok = false;
+      return out;
+    }
+    out.ok = direct_.solve(rhs, d);
+    out.converged = true;
+    if (!out.ok) error = "the linear solve gave a non-finite update";
+    return out;
+  };
+  // Spring damping makes the Jacobian non-symmetric: no CG, LU.
+  if (!system().jacobian_symmetric()) return direct(MatrixKind::kGeneral);
 
-StepResult ImplicitIntegrator::do_initialize() {
-  solver_.reset();
-  jacobian_ = SparseMatrix();
-  dfdv_ = SparseMatrix();  // the next system may not need it
-  factor_h_ = 0.0;
-  refresh_next_step_ = false;
-  return StepResult::success();
-}
-
-namespace {
-// See the header: a kept matrix contracting the error by less than this per
-// iteration is refactorized at once ...
-constexpr double kRefreshRate = 0.5;
-// ... and one that ended a step contracting by less than this is
-// refactorized at the start of the next step.
-constexpr double kRefreshNextStep = 0.25;
-// The kept matrix is for another step size when h differs by more than this.
-constexpr double kMaxStepChange = 0.2;
-}  // namespace
-
-bool ImplicitIntegrator::refresh(double h, const VelocityImplicitScheme& s, const Vector& v,
-                                 bool definite, std::string& error) {
-  xs_ = x_ + h * (s.a * v_ + s.b * v);
-  vs_ = (1.0 - s.c) * v_ + s.c * v;
-  if (!factorize_newton_matrix(t_ + s.t_eval_offset * h, xs_, vs_, h, s.c, s.b, error, definite)) {
-    return false;
+  if ((!preconditioner_valid_ || cg_slow_ > 0) &&
+      !refresh_preconditioner(t, x, v, h, b, c, definite, error)) {
+    // No positive definite matrix to precondition with (a negative mass,
+    // say, cannot happen; round-off in a nearly singular one can).
+    return direct(MatrixKind::kSymmetric);
   }
-  factor_h_ = h;
-  factor_b_ = s.b;
-  factor_c_ = s.c;
-  factor_definite_ = definite;
-  return true;
+  CgResult cg = preconditioned_cg(jacobian_, preconditioner_, rhs, rtol, atol, kCgHardLimit, d, cg_);
+  mutable_stats().linear_iterations += cg.iterations;
+  if (cg.finite && !cg.converged && !cg.negative_curvature) {
+    // The kept factor is too far from this matrix: a fresh one, at once.
+    if (!refresh_preconditioner(t, x, v, h, b, c, definite, error)) {
+      return direct(MatrixKind::kSymmetric);
+    }
+    cg = preconditioned_cg(jacobian_, preconditioner_, rhs, rtol, atol, kCgHardLimit, d, cg_);
+    mutable_stats().linear_iterations += cg.iterations;
+  }
+  cg_slow_ = cg.iterations > kCgSoftLimit ? 1 : 0;
+  if (!cg.finite) {
+    error = "the linear solve gave a non-finite update";
+    out.ok = false;
+    return out;
+  }
+  if (cg.converged || (truncate && cg.negative_curvature)) {
+    out.converged = cg.converged;
+    out.negative_curvature = cg.negative_curvature && cg.iterations == 1;
+    return out;
+  }
+  // Indefinite (or still not converged) and a true solve is wanted.
+  return direct(definite ? MatrixKind::kPositiveDefinite : MatrixKind::kSymmetric);
+}
+
+bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vector& v,
+                                          const Vector& f, double h, double b, double c,
+                                          bool definite, Vector& dv, std::string& error) {
+  assemble(t, x, v, h, b, c, definite, jacobian_);
+  jd_.noalias() = dfdx_ * v;
+  jd_ = h * (f + h * jd_);  // the right-hand side, before dfdx_ is reused
+  return solve_linear(t, x, v, h, b, c, definite, jd_, kLinearRtol, 0.0, /*truncate=*/false, dv,
+                      error)
+      .ok;
 }
 
 StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitScheme& s,
                                               Vector& v) {
-  // On the incremental potential when the forces derive from potentials,
-  // else on ||r||: first with kept matrices, then with a fresh one at every
-  // iteration (the classic Newton-Raphson) -- kept matrices lead Newton along
-  // another path than fresh ones -- and, if the potential path fails too (a
-  // term whose projected stiffness is not definite), the classic one on ||r||.
-  const bool potential = system().derives_from_potentials() && s.b > 0.0 && s.c > 0.0;
-  StepResult result = newton(h, s, v, /*keep_matrix=*/true, potential);
-  if (!result.ok) {
-    factor_h_ = 0.0;
-    result = newton(h, s, v, /*keep_matrix=*/false, potential);
-  }
-  if (!result.ok && potential) {
-    factor_h_ = 0.0;
-    result = newton(h, s, v, /*keep_matrix=*/false, /*potential=*/false);
-  }
-  if (!result.ok) {
-    ++mutable_stats().nonlinear_failures;
-    factor_h_ = 0.0;
-  }
+  StepResult result = newton(h, s, v);
+  if (!result.ok) ++mutable_stats().nonlinear_failures;
   return result;
 }
 
-double ImplicitIntegrator::merit(double h, const VelocityImplicitScheme& s, const Vector& v,
-                                 double& magnitude) const {
-  // xs_ and vs_ are those of the last residual(), at this v.
-  const double t = t_ + s.t_eval_offset * h;
-  const double inertia = 0.5 * (v - v_).cwiseAbs2().dot(system().mass());
-  const double stored = system().position_potential(t, xs_) / s.b;
-  const double dissipated = h / s.c * system().velocity_potential(t, vs_);
-  magnitude = inertia + std::abs(stored) + std::abs(dissipated);
-  return inertia + stored + dissipated;
-}
-
-StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s, Vector& v,
-                                      bool keep_matrix, bool potential) {
+StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s, Vector& v) {
+  std::string error;
   auto fail = [&](const std::string& why) {
     std::ostringstream message;
     message << name() << ": Newton failed at t = " << t_ << " (h = " << h << "): " << why;
     return StepResult::failure(message.str());
   };
-  std::string error;
-  // `exact`: the kept matrix is the one made at the current iterate v (on the
-  // potential path: the definite part of the Jacobian there).
-  bool exact = false;
-  // Far from the root, where the Jacobian's update needed a line search, the
-  // definite part of the Jacobian leads the way (longer steps); near it, the
-  // Jacobian itself (quadratic convergence).
-  bool prefer_definite = false;
-  auto make_exact = [&](bool definite = false) {
-    if (!refresh(h, s, v, definite || prefer_definite, error)) return false;
-    exact = true;
-    return true;
-  };
-
+  const double t = t_ + s.t_eval_offset * h;
   const double tol = options().newton_tol;
+  const bool symmetric = system().jacobian_symmetric();
+  // Newton minimizes the incremental potential when r is its gradient.
+  const bool has_potential = system().derives_from_potentials() && s.b > 0.0 && s.c > 0.0;
+  bool minimize = has_potential;
+  // The discrete gradient on the potential path: phase 1 minimizes the
+  // potential with the coefficient frozen (robust far from the solution);
+  // once a full exact update is taken, phase 2 is Newton with the exact
+  // Jacobian (rank-one term included) and a search on ||r||, quadratic near
+  // the solution; back to phase 1 when that search fails.
+  bool dg_newton = false;
+  frozen_ = s.discrete_gradient && minimize;
+  frozen_c_ = 0.0;
+  if (s.discrete_gradient) v_start_potential_ = system().position_potential(t, x_);
+
   v = v_;
   residual(h, s, v, r_);
   double magnitude = 0.0, magnitude_try = 0.0;
-  double phi = potential ? merit(h, s, v, magnitude) : 0.0;
-  const bool kept_fits = factor_h_ > 0.0 && factor_b_ == s.b && factor_c_ == s.c &&
-                         std::abs(h / factor_h_ - 1.0) <= kMaxStepChange;
-  bool refresh_first = !kept_fits || refresh_next_step_;
-  refresh_next_step_ = false;
-  double previous_update = 0.0;  // ||dv||_inf of the last full update with the kept matrix
-  double rate = 0.0;             // observed contraction rate (0: not observed yet)
-  // iteration: updates taken (a kept matrix's update that is refused and
-  // redone with a fresh one is a linear solve, not an iteration).
+  double phi = minimize ? potential(h, s, v, magnitude) : 0.0;
+  const double r_start = r_.norm();
+  bool definite = false;
+  double previous_update = 0.0;  // ||dv||_inf of the last full update
+  double rate = 0.0;             // its ratio to the one before (0: not known)
+  double last_update = 0.0;
+  bool careful = false;
   for (int iteration = 0;;) {
-    const double bound = tol * std::max(1.0, v.lpNorm<Eigen::Infinity>());
-    const double size = converged_norm(r_);
-    if (!std::isfinite(size)) return fail("the residual is not finite");
-    if (size <= bound) break;
+    if (!r_.allFinite()) return fail("the residual is not finite");
     if (iteration == options().max_newton) {
       std::ostringstream why;
-      why << "no convergence in " << options().max_newton << " iterations (||M^-1 r|| = " << size
-          << ", tolerance " << tol << ")";
+      why << "no convergence in " << options().max_newton << " iterations (last update "
+          << last_update << " m/s, tolerance " << tol
+          << " m/s); try a larger --max-newton or a smaller --dt";
       return fail(why.str());
     }
-    if ((refresh_first || (!keep_matrix && !exact)) && !make_exact()) {
-      return fail("Newton matrix is singular (" + error + ")");
+    if (s.discrete_gradient && has_potential) {
+      minimize = !dg_newton;
+      frozen_ = minimize;
+      careful = careful || dg_newton;
     }
-    refresh_first = false;
-
-    bool finite = solve_newton_system(-r_, dv_);
-    double update = dv_.lpNorm<Eigen::Infinity>();
-    // A kept matrix that gives no update, one contracting too slowly, or one
-    // that would not reach the tolerance within max_newton iterations at the
-    // rate it shows: refactorize here and take the true Newton update instead.
-    bool too_slow = false;
-    if (previous_update > 0.0) {
-      const double r = update / previous_update;
-      // Updates still to come at rate r before the error is below the bound,
-      // and a margin of two: the budget is for the true Newton iteration.
-      too_slow = r >= kRefreshRate ||
-                 iteration + 1 + std::log(bound * (1.0 - r) / (r * update)) / std::log(r) >
-                     options().max_newton - 2;
+    if (frozen_ && correction_ != frozen_c_) {
+      // The discrete gradient's coefficient at this v: the potential and r
+      // of the next iterations use it.
+      r_ += (h * (correction_ - frozen_c_)) * delta_;
+      phi += (correction_ - frozen_c_) * delta_.squaredNorm();
+      frozen_c_ = correction_;
     }
-    if (!exact && (!finite || too_slow)) {
-      if (!make_exact()) return fail("Newton matrix is singular (" + error + ")");
-      previous_update = 0.0;
-      rate = 0.0;
-      finite = solve_newton_system(-r_, dv_);
-      update = dv_.lpNorm<Eigen::Infinity>();
-    }
-    if (!finite) return fail("the Newton update is not finite");
-    // The slope of the merit function along dv: negative with a positive
-    // definite matrix, fresh or kept.
-    const double slope = r_.dot(dv_);
-    if (potential && !(slope < 0.0)) {
-      // The Jacobian is indefinite (compressed springs) and its update
-      // climbs the potential: take the update of its definite part instead.
-      if (exact && factor_definite_) {
-        return fail("the Newton update does not descend the incremental potential");
-      }
-      if (!make_exact(/*definite=*/exact)) {
-        return fail("Newton matrix is singular (" + error + ")");
-      }
-      previous_update = 0.0;
-      rate = 0.0;
-      continue;
-    }
-    if (previous_update > 0.0) rate = update / previous_update;
-
-    // The update shows the error left after it below the tolerance: take it
-    // and stop (an exact Newton update: the error left is far smaller).
-    // (A kept matrix contracts at rate < kRefreshRate here, or was replaced.)
-    const double remaining =
-        exact || rate == 0.0 ? update : update * std::min(1.0, rate / (1.0 - rate));
-    if (remaining <= bound) {
-      ++mutable_stats().newton_iterations;
-      v += dv_;
-      refresh_next_step_ = refresh_next_step_ || (!exact && rate > kRefreshNextStep);
-      return StepResult::success();
-    }
-
-    // Whether the update scaled by alpha is taken: on the potential path,
-    // when the incremental potential decreases by 1e-4 of its first-order
-    // prediction (Armijo) -- or, once that prediction is below the
-    // potential's round-off, when ||r|| decreases; on the other path, when
-    // ||r|| decreases by 1e-4 alpha.
+    stage(h, s, v);
+    assemble(t, xs_, vs_, h, s.b, s.c, definite, jacobian_);
     const double r_norm = r_.norm();
+    const double eta =
+        careful ? kAccurateForcing
+                : std::min(kForcing, r_start > 0.0 ? r_norm / r_start : kForcing);
+    const double atol = careful ? 0.0 : kForcingTolerance * tol;
+    // The discrete gradient's correction c D (c = correction_) has the
+    // derivative (h^2/2) (c I + D (w - 2 c D)^T / |D|^2) with respect to v,
+    // w = grad V(y) - grad V(x*) - H(x*) D / 2 (H = -dF/dx): a shift of the
+    // diagonal and a rank-one term, solved by Sherman and Morrison.
+    const bool rank_one = s.discrete_gradient && correction_ != 0.0;
+    if (rank_one) {
+      eval_force(t, y_, vs_, f_end_);
+      z_.noalias() = dfdx_ * delta_;
+      z_ = 0.5 * z_ - (f_end_ - f_) - 2.0 * correction_ * delta_;
+      z_ *= 0.5 * h * h / delta_.squaredNorm();
+      jacobian_.diagonal().array() += 0.5 * h * h * correction_;
+      direct_current_ = false;
+    }
+    r_try_ = -r_;
+    const LinearSolve ls =
+        solve_linear(t, xs_, vs_, h, s.b, s.c, definite, r_try_, eta, atol, minimize, dv_, error);
+    if (!ls.ok) return fail(error);
+    if (rank_one) {
+      const LinearSolve lq = solve_linear(t, xs_, vs_, h, s.b, s.c, definite, delta_, eta, 0.0,
+                                          /*truncate=*/false, q_, error);
+      if (!lq.ok) return fail(error);
+      // Near zero the rank-one term makes the matrix nearly singular: there
+      // the midpoint matrix alone gives the better direction.
+      const double denominator = 1.0 + z_.dot(q_);
+      if (denominator > kMinShermanMorrison || (careful && denominator != 0.0)) {
+        // Where the coefficient is frozen, only if the update still descends.
+        const double step = z_.dot(dv_) / denominator;
+        if (!frozen_ || r_.dot(dv_ - step * q_) < 0.0) dv_ -= step * q_;
+      }
+    }
+    const double update = dv_.lpNorm<Eigen::Infinity>();
+    last_update = update;
+
+    // The slope of the potential along dv (negative: CG's iterates descend
+    // but for round-off).
+    const double slope = minimize ? r_.dot(dv_) : 0.0;
+    if (minimize && !(slope < 0.0) && update > 0.0) {
+      if (!definite) {
+        definite = true;
+        continue;
+      }
+      return fail("the Newton update does not descend the incremental potential");
+    }
+
+    // Line search: on the potential, Armijo (below the potential's
+    // round-off, ||r|| must decrease); on the residual, ||r|| must decrease.
     double phi_try = 0.0;
+    auto noise = [&] {
+      return 1e3 * std::numeric_limits<double>::epsilon() * std::max(magnitude, magnitude_try);
+    };
     auto accept = [&](double alpha) {
       const double r_try_norm = r_try_.norm();
       if (!std::isfinite(r_try_norm)) return false;
-      const bool residual_decreases = r_try_norm <= (1.0 - 1e-4 * alpha) * r_norm;
-      if (!potential) return residual_decreases;
-      phi_try = merit(h, s, v_try_, magnitude_try);
+      const bool residual_decreases = r_try_norm <= (1.0 - kArmijo * alpha) * r_norm;
+      if (!minimize) return residual_decreases;
+      phi_try = potential(h, s, v_try_, magnitude_try);
       if (!std::isfinite(phi_try)) return false;
-      if (phi_try - phi <= 1e-4 * alpha * slope) return true;
-      const double noise = 1e3 * std::numeric_limits<double>::epsilon() *
-                           std::max(magnitude, magnitude_try);
-      return alpha * -slope <= noise && residual_decreases;
+      if (phi_try - phi <= kArmijo * alpha * slope) return true;
+      return alpha * -slope <= noise() && residual_decreases;
     };
-    v_try_ = v + dv_;
-    residual(h, s, v_try_, r_try_);
-    if (accept(1.0)) {
-      previous_update = update;
-      if (exact && factor_definite_) prefer_definite = false;
-    } else if (!exact) {
-      // Refused at the first iteration: the kept matrix is too old for this
-      // motion; the next step starts with a fresh one instead of trying it.
-      if (iteration == 0) refresh_next_step_ = true;
-      if (!make_exact()) return fail("Newton matrix is singular (" + error + ")");
-      previous_update = 0.0;
-      rate = 0.0;
-      continue;
-    } else {
-      double alpha = 1.0;
-      do {
-        alpha *= 0.5;
-        if (alpha < 1.0 / 1024.0) {
-          return fail(potential ? "the line search could not decrease the incremental potential"
-                                : "the line search could not reduce the residual");
-        }
+    // dv is a direction of negative curvature (CG stopped at its first
+    // product): the potential falls faster than linearly along it, so try
+    // longer steps, doubling from `alpha` while the potential keeps falling
+    // (and not visibly rising: tiny steps change it below its round-off).
+    // True, with v_try_, r_try_, phi_try at the best step, when the
+    // potential fell beyond its round-off.
+    auto expand = [&](double& alpha) {
+      double best_phi = phi, best_magnitude = magnitude, best_alpha = 0.0;
+      for (int k = 0; k < 40; ++k, alpha *= 2.0) {
+        if (alpha * update > kMaxEscape) break;
         v_try_ = v + alpha * dv_;
         residual(h, s, v_try_, r_try_);
-      } while (!accept(alpha));
-      if (potential) prefer_definite = true;
-      previous_update = 0.0;  // a partial update says nothing of the contraction rate
-      rate = 0.0;
+        phi_try = potential(h, s, v_try_, magnitude_try);
+        if (!std::isfinite(phi_try) || phi_try > best_phi + noise()) break;
+        if (phi_try < best_phi) {
+          best_phi = phi_try;
+          best_magnitude = magnitude_try;
+          best_alpha = alpha;
+        }
+      }
+      if (!(best_phi < phi - noise())) return false;
+      alpha = best_alpha;
+      v_try_ = v + alpha * dv_;
+      residual(h, s, v_try_, r_try_);
+      phi_try = best_phi;
+      magnitude_try = best_magnitude;
+      return true;
+    };
+
+    // Converged: the update (an estimate of the error before it) is below the
+    // tolerance, or, converging linearly at `rate`, what remains after it is.
+    // Where the potential curves down (a saddle of it, not a minimum: a
+    // buckling cloth), the step's equations have lower solutions nearby:
+    // leave along that direction if the potential visibly falls.
+    double alpha = 1.0;
+    bool accepted = false;
+    if (ls.converged || ls.negative_curvature) {
+      const double remaining = rate > 0.5 && rate < 1.0 ? update * rate / (1.0 - rate) : update;
+      // A tolerance below the round-off of v is met at that round-off.
+      const double floor =
+          kRoundoff * (v.lpNorm<Eigen::Infinity>() + v_.lpNorm<Eigen::Infinity>());
+      if (remaining <= tol || update <= floor) {
+        alpha = update > 0.0 ? tol / update : 1.0;
+        if (!ls.negative_curvature || !expand(alpha)) {
+          ++mutable_stats().newton_iterations;
+          v += dv_;
+          return StepResult::success();
+        }
+        accepted = true;
+      }
     }
+
+    // With a descent direction of the potential the search cannot fail but
+    // to round-off; otherwise give up at 1/1024 and try the definite matrix.
+    const double alpha_min = minimize && definite ? 1e-12 : 1.0 / 1024.0;
+    while (!accepted) {
+      v_try_ = v + alpha * dv_;
+      residual(h, s, v_try_, r_try_);
+      if (accept(alpha)) {
+        accepted = true;
+        if (alpha == 1.0 && minimize && ls.negative_curvature) {
+          double beta = 2.0;
+          const Vector v_one = v_try_, r_one = r_try_;
+          const double phi_one = phi_try, magnitude_one = magnitude_try;
+          if (expand(beta) && phi_try < phi_one) {
+            alpha = beta;
+          } else {
+            v_try_ = v_one;
+            r_try_ = r_one;
+            phi_try = phi_one;
+            magnitude_try = magnitude_one;
+          }
+        }
+        break;
+      }
+      alpha *= 0.5;
+      if (alpha < alpha_min) break;
+    }
+    if (!accepted && dg_newton) {
+      // Back to the frozen potential, from v.
+      dg_newton = false;
+      careful = false;
+      frozen_ = false;
+      residual(h, s, v, r_);  // sets correction_ at v, and r_ with it
+      frozen_ = true;
+      frozen_c_ = correction_;
+      phi = potential(h, s, v, magnitude);
+      continue;
+    }
+    if (!accepted) {
+      if (!minimize && !careful && symmetric) {
+        careful = true;  // an accurate Newton update descends ||r||: retry with one
+        residual(h, s, v, r_);
+        continue;
+      }
+      if (!definite && symmetric) {
+        definite = true;  // its update descends: retry from the same v
+        residual(h, s, v, r_);  // the state of the residual at v again
+        continue;
+      }
+      return fail(minimize ? "the line search could not decrease the incremental potential; try "
+                             "a smaller --dt"
+                           : "the line search could not reduce the residual; try a smaller --dt");
+    }
+    rate = alpha == 1.0 && previous_update > 0.0 ? update / previous_update : 0.0;
+    previous_update = alpha == 1.0 ? update : 0.0;
+    if (s.discrete_gradient && has_potential && !dg_newton && alpha == 1.0 && !definite) {
+      dg_newton = true;
+    }
+    // The definite matrix after a line search, the exact one after a full
+    // update (quadratic convergence near the solution).
+    if (symmetric) definite = alpha < 1.0;
     ++mutable_stats().newton_iterations;
     ++iteration;
     v.swap(v_try_);
     r_.swap(r_try_);
     phi = phi_try;
     magnitude = magnitude_try;
-    exact = false;
   }
-  refresh_next_step_ = refresh_next_step_ || (!exact && rate > kRefreshNextStep);
-  return StepResult::success();
 }
 
 }  // namespace springlab

@@ -8,58 +8,69 @@
 //
 // with Jacobian  J = dr/dv = M - h c dF/dv - h^2 b dF/dx  (sparse, on the
 // model's pattern). Backward Euler is (a, b, c) = (0, 1, 1) at t* = t_n + h;
-// the implicit midpoint rule is (1/4, 1/4, 1/2) at t* = t_n + h/2.
+// the implicit midpoint rule is (1/4, 1/4, 1/2) at t* = t_n + h/2; the
+// discrete gradient adds Gonzalez's correction to the midpoint rule
+// (discrete_gradient.h).
 //
-// The Newton matrix is factorized rarely (a chord, or modified, Newton
-// method, as CVODE and IDA do): its sparse LDL^T -- the dominant cost, ~170 ms
-// for cloth n = 64 against ~6 ms for a solve with it -- is kept across
-// iterations and steps while the iteration converges fast with it, and
-// refactorized at the current iterate when
-//   - there is none yet, or h moved by more than 20% from the h it was made
-//     for (the last step of a run may be cut short to land on t_end);
-//   - the contraction rate ||dv_k|| / ||dv_k-1|| reached 1/2, or would not
-//     reach the tolerance within max_newton iterations: a stale matrix is
-//     slowing Newton down;
-//   - a full update with the stale matrix does not decrease ||r||.
-// A step that ended contracting slower than 1/4 per iteration, or whose first
-// update with the kept matrix was refused, has the next step start with a
-// fresh matrix. Newton iterations count the updates taken; a refused one is
-// a linear solve only.
-// The residual is always the exact one, so the root is the same as with a
-// fresh matrix; only the path to it changes.
-//
-// The line search. When every force derives from potentials (Mechanical-
-// System::derives_from_potentials), r is the gradient of the step's
-// incremental potential
+// Minimization. When every force derives from potentials (Mechanical-
+// System::derives_from_potentials: springs, gravity; drag and wind through a
+// dissipation potential of v), r is the gradient of the step's incremental
+// potential
 //   Phi(v) = |v - v_n|^2_M / 2 + V(x*(v)) / b + (h / c) W(t*, v*(v)),
-// and Newton minimizes it: an update is taken when Phi decreases by at least
-// 1e-4 of its first-order prediction (Armijo; below Phi's round-off, when
-// ||r|| decreases), else a fresh matrix backtracks (alpha = 1, 1/2, ...
-// 1/1024). Phi is not convex where springs are compressed, and there the
-// Jacobian's update may climb it: then, and for the rest of the solve once a
-// line search was needed, the matrix is made of the definite part of the
-// Jacobian (MechanicalSystem::definite_jacobians), whose updates always
-// descend; a full update taken with it goes back to the Jacobian, which
-// converges quadratically near the root. Without such a potential (spring
-// damping), the merit function is ||r||^2, for which the exact Newton update
-// is a descent direction whether or not J is definite -- but that search can
-// stall at a local minimum of ||r||. A step that fails with kept matrices is
-// solved again with a fresh matrix at every iteration (the classic
-// Newton-Raphson), and a potential-path failure once more on ||r||, before
-// the failure is reported.
+// J is its Hessian, and Newton minimizes Phi (the variational form of
+// implicit Euler; Kane et al. 2000, Gast et al. 2015):
+//   - the update dv solves J dv = -r by conjugate gradients (CG), truncated
+//     where J has negative curvature (compressed springs make it indefinite),
+//     so dv always descends Phi (preconditioned_cg.h);
+//   - a line search asks Phi to fall by 1e-4 of its first-order prediction
+//     (Armijo; below Phi's round-off, ||r|| must fall);
+//   - where the update of the exact J needed a line search, or none of its
+//     steps descends, the next update uses the definite part of J (each
+//     compressed spring's negative transverse stiffness dropped: Mechanical-
+//     System::definite_jacobians), positive definite, whose update always
+//     descends; a full update goes back to the exact J, which converges
+//     quadratically near the solution. With a definite matrix the search
+//     cannot fail but to round-off: Newton does not give up while a descent
+//     direction exists, only after --max-newton iterations.
+//   - Where the potential curves down along the update (a saddle of Phi: a
+//     buckling cloth), the step's equations have solutions of lower Phi
+//     nearby: the search doubles the step while Phi keeps falling, also when
+//     the update is already below the tolerance. Where the step's equations
+//     have several solutions, Newton thus prefers the lower potential.
+// Without such a potential (spring damping depends on x and v together) the
+// merit function is ||r||^2, for which the exact Newton update is a descent
+// direction whatever J's inertia; J is not symmetric there and is factored
+// by sparse LU at every iteration.
 //
-// Converged when ||M^-1 r||_inf <= newton_tol * max(1, ||v||_inf) (a
-// velocity, in m/s), or when the update dv just taken shows the remaining
-// error below that same bound: an exact Newton update ||dv||_inf itself, a
-// chord update rate / (1 - rate) ||dv||_inf with rate its observed
-// contraction rate (||dv||_inf itself before a rate is observed). The
-// residual of a stiff system bottoms out at round-off, h k eps |x| / m, so
-// the update test is the one that ends most solves.
+// Linear algebra. CG is preconditioned by a Cholesky factor (CHOLMOD,
+// supernodal: sparse_direct_solver.h) of the definite Newton matrix, made
+// at some earlier iterate and kept across iterations and steps while CG
+// converges fast with it: a CG solve that needs more than kCgSoftLimit
+// products has it refreshed before the next solve; one not converged after
+// kCgHardLimit is redone at once with a fresh factor. On cloth 64 a
+// factorization costs as much as 15-30 CG iterations (a triangular solve
+// pair with the factor and a product with J each).
+//
+// Stopping (--newton-tol, in m/s). Converged when the update just computed
+// -- an estimate of the error before it -- is below the tolerance in the max
+// norm: ||dv||_inf <= newton_tol, or, while Newton converges only linearly
+// at an observed rate q > 1/2 (a soft, nearly singular direction),
+// q/(1-q) ||dv||_inf <= newton_tol; the update is then taken. A velocity
+// tolerance scales with the problem: its round-off floor is about
+// eps ||v||, independent of the cloth's size and stiffness, where the
+// residual's floor (h k eps |x| / m) grows like n^2 for an n x n cloth. A
+// tolerance below 1e3 eps (||v|| + ||v_n||) is met at that floor. The
+// default (integrator.h) is chosen from a measurement: the solver error it
+// leaves stays far below the step's own discretization error
+// (benchmarks/README.md, BM_NewtonAccuracy). CG stops when its estimated
+// error (the preconditioned residual) is below min(0.1, ||r||/||r_0||) of
+// ||dv||, or 0.1 x the tolerance.
 #pragma once
 
 #include <string>
 
 #include "integrators/integrator.h"
+#include "integrators/preconditioned_cg.h"
 #include "integrators/sparse_direct_solver.h"
 
 namespace springlab {
@@ -67,56 +78,82 @@ namespace springlab {
 struct VelocityImplicitScheme {
   double t_eval_offset;  // t* = t_n + t_eval_offset * h
   double a, b, c;        // see the header comment
+  // Gonzalez's discrete gradient of V in place of grad V(x*) (needs the
+  // midpoint's (a, b, c) = (1/4, 1/4, 1/2), t* = t_n + h/2).
+  bool discrete_gradient = false;
 };
 
 class ImplicitIntegrator : public Integrator {
  protected:
   using Integrator::Integrator;
 
-  // A new run (maybe of another system): forget the symbolic analysis and
+  // A new run (maybe of another system): forget the symbolic analyses and
   // the kept factorization.
   StepResult do_initialize() override;
 
   // Solves r(v) = 0 for v starting from v_n = v_; on success `v` holds the
   // solution. Counts force and Jacobian evaluations, factorizations, linear
-  // solves and Newton iterations.
+  // solves and their iterations, Newton iterations.
   StepResult solve_velocity(double h, const VelocityImplicitScheme& scheme, Vector& v);
 
-  // Assembles J = M - h c dF/dv - h^2 b dF/dx at the given point and
-  // factorizes it; false (with message) when it is singular.
-  // With `definite`, of the definite part of the Jacobians (MechanicalSystem::
-  // definite_jacobians), which makes J positive definite.
-  bool factorize_newton_matrix(double t, const Vector& x, const Vector& v, double h, double c,
-                               double b, std::string& error, bool definite = false);
-  // dv = J^-1 rhs with the last factorization.
-  bool solve_newton_system(const Vector& rhs, Vector& dv);
-  // dF/dx from the last factorize_newton_matrix().
-  const SparseMatrix& last_dfdx() const { return dfdx_; }
+  // One linear solve of a linearized step (linear-implicit-euler): with
+  // K = dF/dx and D = dF/dv at (t, x, v) -- or their definite parts --
+  //   (M - h c D - h^2 b K) dv = h (f + h K v_rhs).
+  // False (with `error`) when the matrix is singular or dv not finite.
+  bool solve_linearized(double t, const Vector& x, const Vector& v, const Vector& f, double h,
+                        double b, double c, bool definite, Vector& dv, std::string& error);
 
  private:
+  // r(v) of the step (x_n, v_n) = (x_, v_), and the merit function at v.
   void residual(double h, const VelocityImplicitScheme& s, const Vector& v, Vector& r);
-  double converged_norm(const Vector& r) const;
-  // The incremental potential at v, whose gradient is r(v) (after residual()
-  // at this v), and the sum of its parts' magnitudes (its round-off scale).
-  double merit(double h, const VelocityImplicitScheme& s, const Vector& v,
-               double& magnitude) const;
-  // One Newton solve; keep_matrix false: a fresh matrix at every iteration;
-  // potential: definite matrices, line search on the incremental potential.
-  StepResult newton(double h, const VelocityImplicitScheme& s, Vector& v, bool keep_matrix,
-                    bool potential);
-  // Factorizes the Newton matrix at iterate v of the step (x_n, v_n, h).
-  bool refresh(double h, const VelocityImplicitScheme& s, const Vector& v, bool definite,
-               std::string& error);
+  // The incremental potential at v (after residual() at this v), and the sum
+  // of its parts' magnitudes (its round-off scale).
+  double potential(double h, const VelocityImplicitScheme& s, const Vector& v,
+                   double& magnitude) const;
+  StepResult newton(double h, const VelocityImplicitScheme& s, Vector& v);
 
-  // The kept factorization: made for step size factor_h_ and weights
-  // (b, c) = (factor_b_, factor_c_); none when factor_h_ == 0.
-  double factor_h_ = 0.0, factor_b_ = 0.0, factor_c_ = 0.0;
-  bool factor_definite_ = false;
-  bool refresh_next_step_ = false;
+  // Sets xs_ = x*(v), vs_ = v*(v) of the step.
+  void stage(double h, const VelocityImplicitScheme& s, const Vector& v);
+  // Assembles out = M - h c D - h^2 b K at (t, x, v), of the exact or the
+  // definite Jacobians; K stays in dfdx_.
+  void assemble(double t, const Vector& x, const Vector& v, double h, double b, double c,
+                bool definite, SparseMatrix& out);
+  // Makes the kept preconditioner the Cholesky factor of the definite Newton
+  // matrix at (t, x, v) (jacobian_ itself when it is that matrix). False,
+  // with `error`, when that matrix is singular.
+  bool refresh_preconditioner(double t, const Vector& x, const Vector& v, double h, double b,
+                              double c, bool jacobian_is_definite, std::string& error);
+  // d ~ jacobian_^-1 rhs: PCG preconditioned by the kept factor (refreshed
+  // at (t, x, v) when it converges too slowly), or a direct factorization of
+  // jacobian_ when it is not symmetric. `truncate`: stop CG at negative
+  // curvature (Newton on a potential); else a direct LDL^T solves what CG
+  // cannot. `exact`: jacobian_ holds the exact Jacobians.
+  struct LinearSolve {
+    bool ok = true;
+    bool negative_curvature = false;
+    bool converged = false;
+  };
+  LinearSolve solve_linear(double t, const Vector& x, const Vector& v, double h, double b,
+                           double c, bool definite, const Vector& rhs, double rtol,
+                           double atol, bool truncate, Vector& d, std::string& error);
 
-  SparseMatrix dfdx_, dfdv_, jacobian_;
-  SparseDirectSolver solver_;
-  Vector xs_, vs_, f_, r_, r_try_, dv_, v_try_;
+  SparseMatrix dfdx_, dfdv_, jacobian_, preconditioner_matrix_;
+  SparseDirectSolver direct_;          // factorizations of jacobian_ itself
+  SparseDirectSolver preconditioner_;  // the kept Cholesky factor
+  bool preconditioner_valid_ = false;
+  bool direct_current_ = false;  // direct_ holds a factorization of jacobian_ as it is
+  int cg_slow_ = 0;  // the last CG solve needed more than the soft limit
+  CgScratch cg_;
+  Vector xs_, vs_, f_, r_, r_try_, dv_, v_try_, jd_;
+  // The discrete gradient's: D = y - x_n, y = x_n + D, the correction's
+  // coefficient c (0: left out), F at y, the rank-one term's vectors.
+  Vector delta_, y_, f_end_, z_, q_;
+  double correction_ = 0.0;
+  // On the potential path the coefficient is frozen for each iteration
+  // (r is then the gradient of the midpoint's potential + c |D|^2).
+  bool frozen_ = false;
+  double frozen_c_ = 0.0;
+  double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
 };
 
 }  // namespace springlab

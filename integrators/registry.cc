@@ -7,6 +7,7 @@
 #include "integrators/arkode_ark.h"
 #include "integrators/arkode_erk.h"
 #include "integrators/cvode_integrator.h"
+#include "integrators/discrete_gradient.h"
 #include "integrators/explicit_euler.h"
 #include "integrators/ida_integrator.h"
 #include "integrators/implicit_euler.h"
@@ -38,6 +39,7 @@ const std::vector<Entry>& registry() {
       entry<ArkodeImex>(),
       entry<CvodeAdams>(),
       entry<CvodeBdf>(),
+      entry<DiscreteGradient>(),
       entry<ExplicitEuler>(),
       entry<IdaIntegrator>(),
       entry<ImplicitEuler>(),

@@ -1,40 +1,83 @@
 // Sparse direct solves for the implicit methods' matrices, all on the
 // model's one fixed pattern, so the symbolic analysis (fill-reducing
-// ordering, elimination tree) is done once per run and only the numeric
-// factorization is repeated.
-//   - symmetric matrices: LDL^T (SimplicialLDLT). No positive definiteness
-//     is assumed: compressed springs make M + h^2 K indefinite, LDL^T still
-//     factors it unless a pivot is exactly zero;
-//   - otherwise, or when LDL^T meets a zero pivot: sparse LU with partial
-//     pivoting.
+// ordering, elimination tree, supernodes) is done once per run and only the
+// numeric factorization is repeated. Three kinds of matrix, three methods:
+//   - kPositiveDefinite (the Newton matrix made of the definite part of the
+//     Jacobians, M - h c D - h^2 b K~ with K~ negative semidefinite):
+//     CHOLMOD's supernodal LL^T (SuiteSparse), whose dense blocks run in
+//     BLAS (OpenBLAS): ~4 x faster than a simplicial LDL^T on cloth 64 and
+//     ~8 x on cloth 128 (benchmarks/README.md). Only such a factor may
+//     precondition conjugate gradients (it is symmetric positive definite).
+//     A matrix that turns out not to be positive definite after all is
+//     factored as kSymmetric instead;
+//   - kSymmetric (the exact Jacobian, indefinite where springs are
+//     compressed): LDL^T without pivoting (Eigen's SimplicialLDLT), which
+//     factors an indefinite matrix unless a pivot is exactly zero;
+//   - kGeneral (spring damping makes dF/dx non-symmetric), or a zero pivot
+//     in LDL^T: sparse LU with partial pivoting (Eigen's SparseLU).
+//
+// BLAS threads: CHOLMOD calls BLAS on each supernode, blocks of a few
+// hundred columns at most for these meshes. On the 2-core machine the
+// benchmarks run on, one OpenBLAS thread factors cloth 64 and 128 as fast as
+// two when the machine is idle and much faster when it is not (OpenBLAS's
+// threads spin while they wait), and keeps `experiment --jobs N`'s tasks off
+// each other's cores; one thread is also deterministic run to run. The
+// solver therefore sets one BLAS thread (see benchmarks/README.md for the
+// figures); the environment variable SPRINGLAB_BLAS_THREADS overrides it.
 #pragma once
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
+#include <memory>
 #include <string>
 
 #include "models/mechanical_system.h"
 
 namespace springlab {
 
+enum class MatrixKind { kPositiveDefinite, kSymmetric, kGeneral };
+
 class SparseDirectSolver {
  public:
-  // False, with error() set, when the matrix is numerically singular.
-  bool factorize(const SparseMatrix& a, bool symmetric);
-  // Forgets the symbolic analysis: the next matrix may have another pattern.
-  void reset() { ldlt_analyzed_ = lu_analyzed_ = using_lu_ = false; }
-  // False when the solution is not finite.
-  bool solve(const Vector& b, Vector& x) const;
+  SparseDirectSolver();
+  ~SparseDirectSolver();
+  SparseDirectSolver(const SparseDirectSolver&) = delete;
+  SparseDirectSolver& operator=(const SparseDirectSolver&) = delete;
+
+  // False, with error() set, when the matrix is numerically singular (or
+  // too large for the factorization's index type).
+  bool factorize(const SparseMatrix& a, MatrixKind kind);
+  // Forgets the symbolic analyses and the factorization: the next matrix may
+  // have another pattern.
+  void reset();
+  // x = A^-1 b with the last factorization; false when x is not finite.
+  bool solve(const Vector& b, Vector& x);
+  // Whether the last factorization is a Cholesky factor of a positive
+  // definite matrix (and so a valid preconditioner for conjugate gradients).
+  bool positive_definite() const { return method_ == Method::kCholesky; }
+  bool has_factor() const { return method_ != Method::kNone; }
+  // Nonzeros of the last factor's L (LL^T and LDL^T; 0 for LU).
+  double factor_nonzeros() const { return factor_nonzeros_; }
+  // Floating-point operations of the last numeric factorization (CHOLMOD's
+  // own count; 0 for the other methods).
+  double factor_flops() const { return factor_flops_; }
   const std::string& error() const { return error_; }
 
  private:
+  enum class Method { kNone, kCholesky, kLdlt, kLu };
+  bool factorize_cholesky(const SparseMatrix& a);
+  bool factorize_ldlt(const SparseMatrix& a);
   bool factorize_lu(const SparseMatrix& a);
 
+  struct Cholmod;  // CHOLMOD's common block and factor (cholmod.h stays in the .cc)
+  std::unique_ptr<Cholmod> cholmod_;
   Eigen::SimplicialLDLT<SparseMatrix> ldlt_;
   Eigen::SparseLU<SparseMatrix> lu_;
   bool ldlt_analyzed_ = false;
   bool lu_analyzed_ = false;
-  bool using_lu_ = false;
+  Method method_ = Method::kNone;
+  double factor_nonzeros_ = 0.0;
+  double factor_flops_ = 0.0;
   std::string error_;
 };
 

@@ -12,6 +12,7 @@ VelocityVerlet::VelocityVerlet()
 
 StepResult VelocityVerlet::do_initialize() {
   have_acceleration_ = false;
+  solver_.reset();  // the next system's matrix may have another pattern
   return StepResult::success();
 }
 
@@ -47,7 +48,7 @@ StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half
     // M - h/2 dF/dv is symmetric positive definite: dF/dv of drag, wind and
     // spring damping is symmetric negative semidefinite.
     ++mutable_stats().factorizations;
-    if (!solver_.factorize(lhs_, /*symmetric=*/true)) {
+    if (!solver_.factorize(lhs_, MatrixKind::kPositiveDefinite)) {
       return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
     }
     ++mutable_stats().linear_solves;

@@ -156,7 +156,6 @@ void MassSpringModel::definite_jacobians(double t, const Vector& x, const Vector
 // The potentials read only the half of the configuration they depend on:
 // each sets that half, the other holds whatever was stored last.
 double MassSpringModel::position_potential(double t, const Vector& x) const {
-  if (!derives_from_potentials_) return 0.0;
   x_all_.head(dofs()) = x;
   const Configuration c = stored_configuration(t);
   double sum = 0.0;

@@ -42,6 +42,9 @@ class MassSpringModel final : public MechanicalSystem {
   bool derives_from_potentials() const override { return derives_from_potentials_; }
   double position_potential(double t, const Vector& x) const override;
   double velocity_potential(double t, const Vector& v) const override;
+  // Power of the non-conservative forces (drag, spring damping, wind): the
+  // rate at which they change the mechanical energy.
+  double nonconservative_power(double t, const Vector& x, const Vector& v) const override;
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
@@ -56,9 +59,6 @@ class MassSpringModel final : public MechanicalSystem {
   const Vector& initial_velocities() const { return v0_; }
 
   Energies energies(const Vector& x, const Vector& v) const;
-  // Power of the non-conservative forces (drag, spring damping, wind): the
-  // rate at which they change the mechanical energy.
-  double nonconservative_power(double t, const Vector& x, const Vector& v) const;
 
   // SPEC §6's energy scale E_s = T(0) + U_spring(0) + sum_free m (|g| d + |w_max|^2/2).
   double energy_scale() const { return energy_scale_; }

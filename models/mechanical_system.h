@@ -74,9 +74,14 @@ class MechanicalSystem {
   // when some force has no such form (spring damping depends on x and v
   // together).
   virtual bool derives_from_potentials() const = 0;
-  // V(t, x) and W(t, v); zero when !derives_from_potentials().
+  // V(t, x), the stored energy of the forces that derive from one (springs,
+  // gravity) whatever the others are, and W(t, v), zero when
+  // !derives_from_potentials().
   virtual double position_potential(double t, const Vector& x) const = 0;
   virtual double velocity_potential(double t, const Vector& v) const = 0;
+  // F_nc . v, the power of the forces that do not derive from V (drag,
+  // wind, spring damping): F = -dV/dx + F_nc.
+  virtual double nonconservative_power(double t, const Vector& x, const Vector& v) const = 0;
 
   // The shared pattern (union of both Jacobians' entries plus the full
   // diagonal), values all zero. Built once per scene.

@@ -1,0 +1,26 @@
+#include "integrators/discrete_gradient.h"
+
+namespace springlab {
+
+DiscreteGradient::DiscreteGradient()
+    : ImplicitIntegrator(
+          {.name = "discrete-gradient",
+           .scheme = "x' = x + h (v + v')/2,  M (v' - v) = -h grad_d V(x, x') + h F_nc(t + h/2, "
+                     "(x + x')/2, (v + v')/2)",
+           .order = 2,
+           .implicit = true,
+           .iterates_to_tolerance = true,
+           .stability_function =
+               [](std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }}) {}
+
+StepResult DiscreteGradient::do_step(double h) {
+  const StepResult result = solve_velocity(
+      h, {.t_eval_offset = 0.5, .a = 0.25, .b = 0.25, .c = 0.5, .discrete_gradient = true},
+      v_new_);
+  if (!result.ok) return result;
+  x_ += 0.5 * h * (v_ + v_new_);
+  v_.swap(v_new_);
+  return result;
+}
+
+}  // namespace springlab

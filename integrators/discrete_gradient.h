@@ -1,0 +1,58 @@
+// discrete-gradient — the energy-conserving implicit method of Gonzalez
+// ("Time integration and discrete Hamiltonian systems", J. Nonlinear Sci. 6,
+// 1996), on M x'' = -grad V(x) + F_nc(t, x, v):
+//
+//   x_{n+1} = x_n + h (v_n + v_{n+1}) / 2
+//   M (v_{n+1} - v_n) = -h grad_d V(x_n, x_{n+1}) + h F_nc(t_n + h/2, x_m, v_m)
+//
+// with x_m, v_m the midpoints and Gonzalez's discrete gradient
+//
+//   grad_d V(x, y) = grad V(x_m) + (V(y) - V(x) - grad V(x_m).D) / |D|^2 D,
+//   D = y - x,
+//
+// the midpoint gradient corrected along D so that grad_d V . D = V(y) - V(x)
+// exactly. Then the kinetic energy changes by
+//   (v_{n+1} - v_n)^T M (v_{n+1} + v_n) / 2 = -(V(x_{n+1}) - V(x_n)) + h F_nc . v_m,
+// so without non-conservative forces the mechanical energy T + V is
+// conserved exactly, whatever h -- up to how well Newton solves the step
+// (the energy error of a step is r . v_m, r the residual left). The
+// implicit midpoint rule, which lacks the correction, does not conserve it
+// for nonlinear springs and can gain energy at large steps.
+//
+// Forces that do not derive from V (drag, wind, spring damping) and the time
+// dependence (wind gusts) are evaluated at the midpoint, t_n + h/2: their
+// energy balance is exactly h F_nc(t_m, x_m, v_m) . v_m per step, which for
+// drag is -h gamma |v_m|^2 <= 0, dissipative as the true motion is. V is
+// evaluated at t_n + h/2 at both ends (the models' V does not depend on t).
+//
+// Needs only V, its gradient (-F) and F_nc . v (MechanicalSystem::
+// position_potential, force, nonconservative_power): it runs every model.
+// The correction is left out when its numerator is below the round-off of
+// V(y) - V(x) (tiny steps, equilibrium): there it is noise, and the midpoint
+// rule's own energy error is smaller still.
+//
+// Newton (newton_velocity_solver.h) uses the midpoint rule's matrix
+// M - h/2 dF/dv - h^2/4 dF/dx at the midpoint, which omits the derivative of
+// the correction (small: the correction is O(|D|^2)), and a line search on
+// ||r||: the residual is not the gradient of a potential. Order 2 (as the
+// midpoint rule: the correction is O(h^3) per step); A-stable, and on the
+// linear oscillator (V quadratic: the correction vanishes) it is the
+// midpoint rule, R(z) = (1 + z/2) / (1 - z/2).
+#pragma once
+
+#include "integrators/newton_velocity_solver.h"
+
+namespace springlab {
+
+class DiscreteGradient final : public ImplicitIntegrator {
+ public:
+  DiscreteGradient();
+
+ protected:
+  StepResult do_step(double h) override;
+
+ private:
+  Vector v_new_;
+};
+
+}  // namespace springlab
