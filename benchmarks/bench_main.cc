@@ -10,6 +10,9 @@
 //   BM_OdeintStep/<rk4|symplectic-euler>/<scene>/<n>            bench_odeint.cc
 //   BM_OdeintPair/<rk4|symplectic-euler>/<scene>/<n>            bench_odeint.cc
 //   BM_LinearSolver/<solver>/<scene>/<n>                        bench_linear_solver.cc
+//   BM_RunPair/<symplectic-euler|rk4>/<scene>/<n>               bench_run.cc
+//   BM_Run/<integrator>/cloth/<n>, BM_NewtonAccuracy/...         bench_newton.cc
+//     (long: only with SPRINGLAB_BENCH_LONG=1)
 // `cmake --build --preset bench` runs it all and writes
 // build/release/report-data/benchmarks.json, which report/make_report.py reads.
 #include <benchmark/benchmark.h>
@@ -22,6 +25,8 @@ int main(int argc, char** argv) {
   sb::register_step_benchmarks();
   sb::register_odeint_benchmarks();
   sb::register_linear_solver_benchmarks();
+  sb::register_run_benchmarks();
+  sb::register_newton_benchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

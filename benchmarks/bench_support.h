@@ -53,5 +53,7 @@ void register_force_benchmarks();
 void register_step_benchmarks();
 void register_linear_solver_benchmarks();
 void register_odeint_benchmarks();
+void register_run_benchmarks();
+void register_newton_benchmarks();
 
 }  // namespace springlab::bench

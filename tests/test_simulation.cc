@@ -8,12 +8,16 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <optional>
+#include <string>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
+#include "integrators/registry.h"
+#include "models/builtin_scenes.h"
 #include "models/mass_spring_model.h"
 #include "models/scene.h"
 
@@ -265,6 +269,67 @@ TEST(SimulationDivergence, ExplicitEulerDivergesAtThePredictedStep) {
     EXPECT_NEAR(r.energy_final, 0.5 * std::pow(growth, n - 1), 1e-9 * r.energy_final);
     EXPECT_LE(r.energy_final, blowup * model.energy_scale());
     EXPECT_DOUBLE_EQ(r.energy_initial, 0.5);
+  }
+}
+
+// The driver proves most states good from one pass over x and v (an upper
+// bound of the spring energy from a reference state; simulation.cc) and
+// evaluates the energy only when that bound cannot: the decision must be the
+// rule's at every step. Against a loop that evaluates the rule itself after
+// every step, on runs that diverge slowly (many steps under the bound, the
+// reference moving) and fast, in 2-D and 3-D, with several blow-up factors.
+TEST(SimulationDivergence, CheapCertificateDecidesAsTheEnergyRuleAtEveryStep) {
+  struct Case {
+    Scene scene;
+    std::string integrator;
+    double dt, t_end, blowup;
+  };
+  Scene chain = make_builtin_scene("chain", {{"n", "12"}, {"horizontal", "1"}});
+  Scene cloth = make_builtin_scene("cloth", {{"n", "6"}});
+  const std::vector<Case> cases = {
+      {linear_oscillator(), "explicit-euler", 0.05, 10.0, 1000.0},
+      {linear_oscillator(), "explicit-euler", 0.002, 200.0, 3.0},
+      {chain, "symplectic-euler", 0.0105, 20.0, 1000.0},   // just above 2 / w_max
+      {chain, "explicit-euler", 0.001, 20.0, 50.0},
+      {cloth, "explicit-euler", 0.002, 10.0, 1000.0},
+      {cloth, "rk4", 0.02, 10.0, 100.0},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.scene.name + " " + c.integrator + " dt " + std::to_string(c.dt));
+    const MassSpringModel model(c.scene);
+    RunSettings s = settings(c.integrator, c.dt, c.t_end);
+    s.blowup = c.blowup;
+    const RunResult r = simulate(model, s);
+    // The rule, evaluated after every step.
+    auto integrator = make_integrator(c.integrator);
+    ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
+                                       model.initial_velocities(), s.options).ok);
+    const TimeGrid grid = make_time_grid(c.dt, c.t_end);
+    std::optional<double> diverged_at;
+    Vector x_good = model.initial_positions(), v_good = model.initial_velocities();
+    for (long k = 1; k <= grid.steps; ++k) {
+      ASSERT_TRUE(integrator->advance_to(grid.at(k)).ok);
+      const Vector& x = integrator->x();
+      const Vector& v = integrator->v();
+      bool blown = !x.allFinite() || !v.allFinite();
+      if (!blown) {
+        const Energies e = model.energies(x, v);
+        blown = e.kinetic + e.spring > c.blowup * model.energy_scale() ||
+                !std::isfinite(e.total());
+      }
+      if (blown) {
+        diverged_at = grid.at(k);
+        break;
+      }
+      x_good = x;
+      v_good = v;
+    }
+    ASSERT_TRUE(diverged_at.has_value()) << "each case must diverge";
+    EXPECT_EQ(r.status, RunStatus::kDiverged);
+    ASSERT_TRUE(r.diverged_at.has_value());
+    EXPECT_EQ(*r.diverged_at, *diverged_at);
+    EXPECT_EQ(r.x_final, x_good);
+    EXPECT_EQ(r.v_final, v_good);
   }
 }
 

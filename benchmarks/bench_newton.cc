@@ -1,0 +1,188 @@
+// The implicit methods on the cloth at an animation step, h = 1/60 s, for
+// 2 s of motion from rest: what a whole run costs and how accurately Newton
+// solves each step. Long (cloth 128: about 10 minutes per family), so
+// registered only when SPRINGLAB_BENCH_LONG=1 (or SPRINGLAB_BENCH_ALL=1) is
+// set; one iteration each.
+//
+// BM_Run/<integrator>/cloth/<n>: simulate() (the driver `springlab run`
+// uses: no output files) from t = 0 to 2 s at dt = 1/60 s with the default
+// options. Counters: status (1 completed, 0 diverged or failed), t_final,
+// cpu_ms_per_step and wall_ms_per_step (process CPU time and wall time over
+// the steps taken), newton_per_step, factorizations_per_step,
+// cg_per_step (linear_iterations), energy_final - energy_initial.
+//
+// BM_NewtonAccuracy/<integrator>/cloth/<n>: the same run stepped here, with
+// every step's Newton iterations recorded (newton_mean, newton_p95,
+// newton_max: what the iteration cap is set from), and at every tenth step,
+// from the same start state (t_n, x_n, v_n), three fresh solves:
+//   a. one step at the default tolerance,
+//   b. one step at the tolerance / 1000,
+//   c. two steps of h/2 at the default tolerance;
+// solver_mm = max over samples of ||x_a - x_b||_inf (the solver error of a
+// step), run_solver_mm = the same for the run's own step (its kept
+// preconditioner takes another path to the root, sometimes to another root
+// of a buckling cloth), disc_mm_min / disc_mm_median = ||x_a - x_c||_inf
+// (h against h/2: the size of the step's discretization error), and
+// ratio_max = max of solver_mm / disc_mm over the samples.
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <ctime>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "benchmarks/bench_support.h"
+#include "experiments/simulation.h"
+#include "integrators/registry.h"
+
+namespace springlab::bench {
+namespace {
+
+constexpr double kFrame = 1.0 / 60.0;
+constexpr double kDuration = 2.0;
+constexpr long kSampleEvery = 10;
+
+double cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+const MassSpringModel& cloth(int n) {
+  // Sizes beyond bench_support's cases (48, 96) are built here once.
+  return model_for({"cloth", n});
+}
+
+void run_benchmark(benchmark::State& state, const std::string& integrator, int n) {
+  const MassSpringModel& model = cloth(n);
+  RunSettings settings;
+  settings.integrator = integrator;
+  settings.dt = kFrame;
+  settings.t_end = kDuration;
+  RunResult r;
+  double cpu = 0.0;
+  for (auto _ : state) {
+    const double start = cpu_seconds();
+    r = simulate(model, settings);
+    cpu = cpu_seconds() - start;
+  }
+  const double steps = std::max(1.0, static_cast<double>(r.stats.steps));
+  state.counters["status"] = r.status == RunStatus::kCompleted ? 1.0 : 0.0;
+  state.counters["t_final"] = r.t_final;
+  state.counters["cpu_ms_per_step"] = 1e3 * cpu / steps;
+  state.counters["wall_ms_per_step"] = 1e3 * r.wall_seconds / steps;
+  state.counters["newton_per_step"] = static_cast<double>(r.stats.newton_iterations) / steps;
+  state.counters["factorizations_per_step"] = static_cast<double>(r.stats.factorizations) / steps;
+  state.counters["cg_per_step"] = static_cast<double>(r.stats.linear_iterations) / steps;
+  state.counters["energy_change"] = r.energy_final - r.energy_initial;
+  state.counters["energy_scale"] = model.energy_scale();
+  add_size_counters(state, model);
+  state.SetLabel(r.status == RunStatus::kCompleted ? "dt=1/60 s, 2 s, default options"
+                                                   : "did not complete: " + r.failure);
+}
+
+// One step of a fresh integrator from (t, x, v), in `steps` equal parts.
+bool fresh_step(const std::string& name, const MassSpringModel& model, double t, const Vector& x,
+                const Vector& v, double tol, int steps, Vector& x_out) {
+  auto integrator = make_integrator(name);
+  IntegratorOptions options;
+  options.newton_tol = tol;
+  if (!integrator->initialize(model, t, x, v, options).ok) return false;
+  for (int k = 1; k <= steps; ++k) {
+    if (!integrator->advance_to(t + kFrame * k / steps).ok) return false;
+  }
+  x_out = integrator->x();
+  return true;
+}
+
+void accuracy_benchmark(benchmark::State& state, const std::string& name, int n) {
+  const MassSpringModel& model = cloth(n);
+  const double tol = IntegratorOptions{}.newton_tol;
+  std::vector<double> newton, disc;
+  double solver_max = 0.0, run_solver_max = 0.0, ratio_max = 0.0;
+  long failures = 0;
+  double t_final = 0.0;
+  for (auto _ : state) {
+    auto integrator = make_integrator(name);
+    integrator->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(), {});
+    const long steps = std::lround(kDuration / kFrame);
+    for (long k = 1; k <= steps; ++k) {
+      const double t = integrator->t();
+      const Vector x = integrator->x(), v = integrator->v();
+      const long before = integrator->stats().newton_iterations;
+      if (!integrator->advance_to(k * kFrame).ok) break;
+      t_final = integrator->t();
+      newton.push_back(static_cast<double>(integrator->stats().newton_iterations - before));
+      if (k % kSampleEvery != 0) continue;
+      Vector xa, xb, xc;
+      if (!fresh_step(name, model, t, x, v, tol, 1, xa) ||
+          !fresh_step(name, model, t, x, v, tol / 1000.0, 1, xb) ||
+          !fresh_step(name, model, t, x, v, tol, 2, xc)) {
+        ++failures;
+        continue;
+      }
+      const double solver = (xa - xb).lpNorm<Eigen::Infinity>();
+      const double d = (xa - xc).lpNorm<Eigen::Infinity>();
+      solver_max = std::max(solver_max, solver);
+      run_solver_max = std::max(run_solver_max, (integrator->x() - xb).lpNorm<Eigen::Infinity>());
+      disc.push_back(d);
+      if (d > 0.0) ratio_max = std::max(ratio_max, solver / d);
+    }
+  }
+  auto percentile = [](std::vector<double> v, double p) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
+  };
+  double sum = 0.0;
+  for (double k : newton) sum += k;
+  state.counters["t_final"] = t_final;
+  state.counters["newton_mean"] = newton.empty() ? 0.0 : sum / static_cast<double>(newton.size());
+  state.counters["newton_p95"] = percentile(newton, 0.95);
+  state.counters["newton_max"] = percentile(newton, 1.0);
+  state.counters["solver_mm"] = 1e3 * solver_max;
+  state.counters["run_solver_mm"] = 1e3 * run_solver_max;
+  state.counters["disc_mm_min"] = 1e3 * percentile(disc, 0.0);
+  state.counters["disc_mm_median"] = 1e3 * percentile(disc, 0.5);
+  state.counters["ratio_max"] = ratio_max;
+  state.counters["sample_failures"] = static_cast<double>(failures);
+  state.counters["newton_tol"] = tol;
+  add_size_counters(state, model);
+  state.SetLabel("dt=1/60 s, 2 s; samples every " + std::to_string(kSampleEvery) + " steps");
+}
+
+}  // namespace
+
+void register_newton_benchmarks() {
+  if (std::getenv("SPRINGLAB_BENCH_LONG") == nullptr &&
+      std::getenv("SPRINGLAB_BENCH_ALL") == nullptr) {
+    return;
+  }
+  struct Case {
+    const char* integrator;
+    std::vector<int> sizes;
+  };
+  const std::vector<Case> runs = {{"implicit-euler", {16, 32, 48, 64, 96, 128}},
+                                  {"linear-implicit-euler", {16, 32, 64, 128}},
+                                  {"implicit-midpoint", {16}},
+                                  {"discrete-gradient", {16, 32}}};
+  for (const Case& c : runs) {
+    for (int n : c.sizes) {
+      const std::string name = c.integrator;
+      benchmark::RegisterBenchmark(("BM_Run/" + name + "/cloth/" + std::to_string(n)).c_str(),
+                                   [name, n](benchmark::State& s) { run_benchmark(s, name, n); })
+          ->Unit(benchmark::kSecond)
+          ->Iterations(1);
+    }
+  }
+  for (int n : {16, 32, 64, 128}) {
+    benchmark::RegisterBenchmark(
+        ("BM_NewtonAccuracy/implicit-euler/cloth/" + std::to_string(n)).c_str(),
+        [n](benchmark::State& s) { accuracy_benchmark(s, "implicit-euler", n); })
+        ->Unit(benchmark::kSecond)
+        ->Iterations(1);
+  }
+}
+
+}  // namespace springlab::bench
