@@ -134,13 +134,15 @@ Json stats_json(const IntegratorStats& s) {
 // lists in Integrator::options_read().
 const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
                                       "max-newton", "max-steps",    "max-order",
-                                      "linear-solver", "dq-jacobian", "stald"};
+                                      "linear-solver", "dq-jacobian", "stald",
+                                      "stiffness"};
 
 // Options shared by `run` and `stability`.
 struct CommonOptions {
   std::string scene;
   std::vector<std::string> parameters;
   RunSettings run;
+  std::string stiffness = "exact";
   bool json = false;
   CLI::App* command = nullptr;
 
@@ -158,6 +160,9 @@ struct CommonOptions {
                    "implicit methods: Newton stops when ||M^-1 r||_inf <= tol max(1, ||v||_inf)");
     cmd.add_option("--max-newton", run.options.max_newton,
                    "implicit methods: Newton iterations per step before the run fails");
+    cmd.add_option("--stiffness", stiffness,
+                   "linear-implicit-euler: exact dF/dx, or definite (compressed springs' negative "
+                   "transverse stiffness dropped, Choi and Ko 2002)");
     cmd.add_option("--max-steps", run.options.max_steps,
                    "adaptive methods: internal steps per output interval before failing "
                    "(default: 5e6 / unknowns, between 500 and 100000)")
@@ -177,8 +182,11 @@ struct CommonOptions {
     cmd.add_flag("--json", json, "print one JSON object on stdout");
   }
 
-  void validate() const {
+  void validate() {
     require_integrator(run.integrator);
+    if (!parse_stiffness(stiffness, run.options.stiffness)) {
+      throw UsageError("--stiffness: unknown '" + stiffness + "' (exact, definite)");
+    }
     require_positive("--t-end", run.t_end);
     require_positive("--rtol", run.options.rtol);
     require_positive("--atol", run.options.atol);

@@ -37,6 +37,10 @@ struct IntegratorStats {
 // definite part (each compressed spring's negative transverse stiffness
 // dropped, Choi and Ko 2002), which keeps M - h^2 dF/dx positive definite.
 enum class Stiffness { kExact, kDefinite };
+// "exact" / "definite" (the command line's and definitions' names); false
+// for another name.
+bool parse_stiffness(const std::string& name, Stiffness& stiffness);
+const char* to_string(Stiffness stiffness);
 
 // Every knob any method reads; each method uses only the ones it needs.
 struct IntegratorOptions {

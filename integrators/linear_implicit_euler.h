@@ -18,6 +18,7 @@ namespace springlab {
 class LinearImplicitEuler final : public ImplicitIntegrator {
  public:
   LinearImplicitEuler();
+  std::vector<std::string> options_read() const override { return {"stiffness"}; }
 
  protected:
   StepResult do_step(double h) override;

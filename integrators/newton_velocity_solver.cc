@@ -8,14 +8,18 @@
 namespace springlab {
 namespace {
 
-// A CG solve that needed more products than this has the preconditioner
-// refreshed before the next solve; one not converged after kCgHardLimit is
-// redone at once with a fresh one. A factorization costs about 15-30
-// preconditioned CG iterations on cloth 64 and 128 (benchmarks/README.md):
-// of the pairs (6, 20), (10, 30), (15, 40), (25, 60) measured on cloth 64
-// at 1/60 s, (10, 30) cost least.
-constexpr int kCgSoftLimit = 10;
-constexpr int kCgHardLimit = 30;
+// ImplicitIntegrator::kCgSoftLimit, kCgHardLimit: a CG solve that needed
+// more products than the first has the preconditioner refreshed before the
+// next solve; one not converged after the second is redone at once with a
+// fresh one. A factorization costs about 15-30 preconditioned CG iterations
+// on cloth 64 and 128 (benchmarks/README.md): of the pairs (6, 20),
+// (10, 30), (15, 40), (25, 60) measured on cloth 64 at 1/60 s, (10, 30)
+// cost least. A linearized step has one solve: a kept factor gets
+// kCgSoftLimit products there, and after it failed the next kFreshSteps
+// steps start with a fresh factor (on cloth 64 at 1/60 s the factor of the
+// step before needs 20-30 products; a new factorization and one or two
+// products cost less).
+constexpr int kFreshSteps = 4;
 // Forcing term of the inexact Newton method: CG stops once its estimated
 // error is below eta ||dv||_inf, eta = min(kForcing, ||r|| / ||r_0||) (so
 // tighter as Newton converges), or below kForcingTolerance x the Newton
@@ -29,7 +33,7 @@ constexpr double kAccurateForcing = 1e-3;
 // this (near 0 it makes the matrix nearly singular).
 constexpr double kMinShermanMorrison = 0.5;
 // Relative residual of the one linear solve of a linearized step.
-constexpr double kLinearRtol = 1e-8;
+constexpr double kLinearRtol = 1e-6;
 // Armijo's sufficient-decrease fraction.
 constexpr double kArmijo = 1e-4;
 // Updates below this many units of round-off of ||v||_inf are noise.
@@ -44,6 +48,7 @@ StepResult ImplicitIntegrator::do_initialize() {
   preconditioner_.reset();
   preconditioner_valid_ = false;
   direct_current_ = false;
+  fresh_steps_ = 0;
   cg_slow_ = 0;
   jacobian_ = SparseMatrix();
   preconditioner_matrix_ = SparseMatrix();
@@ -144,7 +149,8 @@ bool ImplicitIntegrator::refresh_preconditioner(double t, const Vector& x, const
 
 ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
     double t, const Vector& x, const Vector& v, double h, double b, double c, bool definite,
-    const Vector& rhs, double rtol, double atol, bool truncate, Vector& d, std::string& error) {
+    const Vector& rhs, double rtol, double atol, bool truncate, Vector& d, std::string& error,
+    int max_iterations) {
   LinearSolve out;
   ++mutable_stats().linear_solves;
   auto direct = [&](MatrixKind kind) {
@@ -177,15 +183,24 @@ ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
     // say, cannot happen; round-off in a nearly singular one can).
     return direct(MatrixKind::kSymmetric);
   }
-  CgResult cg = preconditioned_cg(jacobian_, preconditioner_, rhs, rtol, atol, kCgHardLimit, d, cg_);
-  mutable_stats().linear_iterations += cg.iterations;
+  // CG where the matrix is positive definite or truncation is wanted (Newton
+  // on a potential); MINRES where a true solve of an indefinite one is.
+  const bool minres = !definite && !truncate;
+  auto krylov = [&](int limit) {
+    CgResult k = minres ? preconditioned_minres(jacobian_, preconditioner_, rhs, rtol, limit, d,
+                                                minres_)
+                        : preconditioned_cg(jacobian_, preconditioner_, rhs, rtol, atol, limit,
+                                            d, cg_);
+    mutable_stats().linear_iterations += k.iterations;
+    return k;
+  };
+  CgResult cg = krylov(max_iterations);
   if (cg.finite && !cg.converged && !cg.negative_curvature) {
     // The kept factor is too far from this matrix: a fresh one, at once.
     if (!refresh_preconditioner(t, x, v, h, b, c, definite, error)) {
       return direct(MatrixKind::kSymmetric);
     }
-    cg = preconditioned_cg(jacobian_, preconditioner_, rhs, rtol, atol, kCgHardLimit, d, cg_);
-    mutable_stats().linear_iterations += cg.iterations;
+    cg = krylov(std::max(max_iterations, kCgHardLimit));
   }
   cg_slow_ = cg.iterations > kCgSoftLimit ? 1 : 0;
   if (!cg.finite) {
@@ -208,9 +223,36 @@ bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vecto
   assemble(t, x, v, h, b, c, definite, jacobian_);
   jd_.noalias() = dfdx_ * v;
   jd_ = h * (f + h * jd_);  // the right-hand side, before dfdx_ is reused
-  return solve_linear(t, x, v, h, b, c, definite, jd_, kLinearRtol, 0.0, /*truncate=*/false, dv,
-                      error)
-      .ok;
+  if (!definite) {
+    // The exact stiffness: the matrix may be indefinite (compressed springs),
+    // so LDL^T (LU without symmetry), as a direct solve of it always was;
+    // MINRES with the definite factor needs tens of products on cloth 64.
+    ++mutable_stats().linear_solves;
+    ++mutable_stats().factorizations;
+    direct_current_ = false;
+    if (!direct_.factorize(jacobian_, system().jacobian_symmetric() ? MatrixKind::kSymmetric
+                                                                    : MatrixKind::kGeneral)) {
+      error = "the step's matrix is singular (" + direct_.error() + ")";
+      return false;
+    }
+    if (!direct_.solve(jd_, dv)) {
+      error = "the linear solve gave a non-finite update";
+      return false;
+    }
+    return true;
+  }
+  const bool probe = fresh_steps_ == 0 && cg_slow_ == 0 && preconditioner_valid_;
+  if (fresh_steps_ > 0) {
+    --fresh_steps_;
+    cg_slow_ = 1;  // refresh first
+  }
+  const long before = stats().factorizations;
+  const bool ok = solve_linear(t, x, v, h, b, c, definite, jd_, kLinearRtol, 0.0,
+                               /*truncate=*/false, dv, error, kCgSoftLimit)
+                      .ok;
+  // The kept factor failed: fresh ones for the next steps.
+  if (probe && stats().factorizations > before) fresh_steps_ = kFreshSteps;
+  return ok;
 }
 
 StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitScheme& s,

@@ -71,6 +71,7 @@
 
 #include "integrators/integrator.h"
 #include "integrators/preconditioned_cg.h"
+#include "integrators/preconditioned_minres.h"
 #include "integrators/sparse_direct_solver.h"
 
 namespace springlab {
@@ -135,15 +136,22 @@ class ImplicitIntegrator : public Integrator {
   };
   LinearSolve solve_linear(double t, const Vector& x, const Vector& v, double h, double b,
                            double c, bool definite, const Vector& rhs, double rtol,
-                           double atol, bool truncate, Vector& d, std::string& error);
+                           double atol, bool truncate, Vector& d, std::string& error,
+                           int max_iterations = kCgHardLimit);
+  // See newton_velocity_solver.cc.
+  static constexpr int kCgSoftLimit = 10;
+  static constexpr int kCgHardLimit = 30;
 
   SparseMatrix dfdx_, dfdv_, jacobian_, preconditioner_matrix_;
   SparseDirectSolver direct_;          // factorizations of jacobian_ itself
   SparseDirectSolver preconditioner_;  // the kept Cholesky factor
   bool preconditioner_valid_ = false;
+  // Linearized steps (one solve each) left to start with a fresh factor.
+  int fresh_steps_ = 0;
   bool direct_current_ = false;  // direct_ holds a factorization of jacobian_ as it is
   int cg_slow_ = 0;  // the last CG solve needed more than the soft limit
   CgScratch cg_;
+  MinresScratch minres_;
   Vector xs_, vs_, f_, r_, r_try_, dv_, v_try_, jd_;
   // The discrete gradient's: D = y - x_n, y = x_n + D, the correction's
   // coefficient c (0: left out), F at y, the rank-one term's vectors.
