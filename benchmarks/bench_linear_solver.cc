@@ -53,7 +53,11 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include "benchmarks/bench_support.h"
+#include "integrators/preconditioned_cg.h"
+#include "integrators/sparse_direct_solver.h"
 #include "integrators/sundials_support.h"
+
+extern "C" void openblas_set_num_threads(int threads);
 
 namespace springlab::bench {
 namespace {
@@ -67,7 +71,20 @@ struct LinearSystem {
   SparseMatrix a;
   Vector b;       // at t1
   Vector x_prev;  // solution of the t0 system (warm start)
+  // The same matrix from the definite Jacobians (positive definite), at this
+  // state and at the state one step before: what springlab factors.
+  SparseMatrix a_definite, a_definite_prev;
 };
+
+SparseMatrix definite_matrix(const MassSpringModel& model, double t, const Vector& x,
+                             const Vector& v) {
+  SparseMatrix dfdx = model.jacobian_pattern();
+  model.definite_jacobians(t, x, v, &dfdx, nullptr);
+  SparseMatrix a = -kH * kH * dfdx;
+  a.diagonal() += model.mass();
+  a.makeCompressed();
+  return a;
+}
 
 // A and b at a state (see the header comment).
 void assemble(const MassSpringModel& model, double t, const Vector& x, const Vector& v,
@@ -92,7 +109,11 @@ const LinearSystem& system_for(const SceneCase& c) {
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;
   for (int k = 0; k <= kSteps; ++k) {
     assemble(model, k * kH, x, v, sys.a, sys.b);
-    if (k == kSteps) break;
+    if (k == kSteps - 1) sys.a_definite_prev = definite_matrix(model, k * kH, x, v);
+    if (k == kSteps) {
+      sys.a_definite = definite_matrix(model, k * kH, x, v);
+      break;
+    }
     if (k == 0) ldlt.analyzePattern(sys.a);
     ldlt.factorize(sys.a);
     dv = ldlt.solve(sys.b);
@@ -217,6 +238,86 @@ void cholmod_benchmark(benchmark::State& state, const SceneCase& c) {
   finish(state, c, sys, t, x, 0.0);
 }
 
+// springlab's own solver (integrators/sparse_direct_solver.h: CHOLMOD
+// supernodal LL^T, one BLAS thread) on the definite matrix.
+void springlab_cholesky_benchmark(benchmark::State& state, const SceneCase& c) {
+  const LinearSystem& sys = system_for(c);
+  SparseDirectSolver solver;
+  Vector x;
+  Timings t;
+  for (auto _ : state) {
+    auto start = Clock::now();
+    const bool ok = solver.factorize(sys.a_definite, MatrixKind::kPositiveDefinite) &&
+                    solver.positive_definite();
+    t.factorize_ms += ms_since(start);
+    if (!ok) {
+      state.SkipWithError("LL^T of the definite matrix failed");
+      return;
+    }
+    start = Clock::now();
+    solver.solve(sys.b, x);
+    t.solve_ms += ms_since(start);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["factor_flops"] = solver.factor_flops();
+  finish(state, c, sys, t, x, solver.factor_nonzeros());
+  state.counters["residual"] = (sys.a_definite * x - sys.b).norm() / sys.b.norm();
+}
+
+// CG on the definite matrix preconditioned by the factor of the one a step
+// earlier (what a kept factor does across steps), to a relative error
+// estimate of 1e-6 (the linearized step's) and 1e-2.
+void kept_factor_benchmark(benchmark::State& state, const SceneCase& c, double rtol) {
+  const LinearSystem& sys = system_for(c);
+  SparseDirectSolver kept;
+  if (!kept.factorize(sys.a_definite_prev, MatrixKind::kPositiveDefinite)) {
+    state.SkipWithError("LL^T of the definite matrix failed");
+    return;
+  }
+  Vector x;
+  CgScratch scratch;
+  Timings t;
+  for (auto _ : state) {
+    const auto start = Clock::now();
+    const CgResult r = preconditioned_cg(sys.a_definite, kept, sys.b, rtol, 0.0, 1000, x, scratch);
+    t.solve_ms += ms_since(start);
+    t.cg_iterations += r.iterations;
+    if (!r.converged) {
+      state.SkipWithError("CG did not converge in 1000 iterations");
+      return;
+    }
+  }
+  finish(state, c, sys, t, x, kept.factor_nonzeros());
+  state.counters["residual"] = (sys.a_definite * x - sys.b).norm() / sys.b.norm();
+}
+
+// The definite matrix factored with one and with two OpenBLAS threads in
+// alternation (the thread count is process-wide), each timed by the wall
+// clock: on a busy 2-core machine the pair sees the same load.
+void threads_benchmark(benchmark::State& state, const SceneCase& c) {
+  const LinearSystem& sys = system_for(c);
+  SparseDirectSolver solver;
+  double ms[2] = {0.0, 0.0};
+  bool one_first = true;
+  for (auto _ : state) {
+    for (int k = 0; k < 2; ++k) {
+      const int threads = (k == 0) == one_first ? 1 : 2;
+      openblas_set_num_threads(threads);
+      const auto start = Clock::now();
+      solver.factorize(sys.a_definite, MatrixKind::kPositiveDefinite);
+      ms[threads - 1] += ms_since(start);
+    }
+    one_first = !one_first;
+  }
+  openblas_set_num_threads(1);
+  const double n = static_cast<double>(state.iterations());
+  state.counters["one_thread_ms"] = ms[0] / n;
+  state.counters["two_threads_ms"] = ms[1] / n;
+  state.counters["ratio"] = ms[1] / ms[0];
+  add_size_counters(state, model_for(c));
+  state.SetLabel("definite matrix, h=1/60 s, state after 30 linear-implicit Euler steps");
+}
+
 // SUNDIALS' KLU on a copy of A in a SUNDIALS sparse (CSC) matrix.
 void klu_benchmark(benchmark::State& state, const SceneCase& c, int ordering) {
   namespace sd = springlab::sundials;
@@ -277,13 +378,21 @@ void register_linear_solver_benchmarks() {
   using Ldlt = Eigen::SimplicialLDLT<SparseMatrix>;
   using Lu = Eigen::SparseLU<SparseMatrix>;
   for (const SceneCase& c : all_cases()) {
-    if (c.scene != "cloth" || c.n > 64) continue;
+    if (c.scene != "cloth") continue;
     const std::string path = "/" + c.path();
     auto reg = [&](const std::string& solver, auto fn) {
       benchmark::RegisterBenchmark(("BM_LinearSolver/" + solver + path).c_str(), fn)
           ->Unit(benchmark::kMillisecond)
           ->MinTime(0.3);
     };
+    reg("springlab-cholesky", [c](benchmark::State& s) { springlab_cholesky_benchmark(s, c); });
+    reg("kept-factor-cg-1e-6", [c](benchmark::State& s) { kept_factor_benchmark(s, c, 1e-6); });
+    reg("kept-factor-cg-1e-2", [c](benchmark::State& s) { kept_factor_benchmark(s, c, 1e-2); });
+    benchmark::RegisterBenchmark(("BM_CholeskyThreads" + path).c_str(),
+                                 [c](benchmark::State& s) { threads_benchmark(s, c); })
+        ->Unit(benchmark::kMillisecond)
+        ->MinTime(1.0);
+    if (c.n > 64) continue;  // the simplicial and KLU solvers take seconds on cloth 128
     reg("ldlt", [c](benchmark::State& s) { direct_benchmark<Ldlt>(s, c, true); });
     reg("ldlt-scratch", [c](benchmark::State& s) { direct_benchmark<Ldlt>(s, c, false); });
     reg("sparselu", [c](benchmark::State& s) { direct_benchmark<Lu>(s, c, true); });

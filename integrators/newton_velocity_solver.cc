@@ -14,11 +14,12 @@ namespace {
 // fresh one. A factorization costs about 15-30 preconditioned CG iterations
 // on cloth 64 and 128 (benchmarks/README.md): of the pairs (6, 20),
 // (10, 30), (15, 40), (25, 60) measured on cloth 64 at 1/60 s, (10, 30)
-// cost least. A linearized step has one solve: a kept factor gets
-// kCgSoftLimit products there, and after it failed the next kFreshSteps
-// steps start with a fresh factor (on cloth 64 at 1/60 s the factor of the
-// step before needs 20-30 products; a new factorization and one or two
-// products cost less).
+// cost least. At a step's first solve the kept factor (made in an earlier
+// step) gets kCgSoftLimit products, and after it failed there the next
+// kFreshSteps steps start with a fresh factor: at 1/60 s a factor of the
+// step before preconditions poorly (BM_LinearSolver/kept-factor-cg: 34
+// products to 1e-2 on cloth 64, 444 on cloth 128), a new factorization
+// costs less.
 constexpr int kFreshSteps = 4;
 // Forcing term of the inexact Newton method: CG stops once its estimated
 // error is below eta ||dv||_inf, eta = min(kForcing, ||r|| / ||r_0||) (so
@@ -217,6 +218,22 @@ ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
   return direct(definite ? MatrixKind::kPositiveDefinite : MatrixKind::kSymmetric);
 }
 
+ImplicitIntegrator::StepStart ImplicitIntegrator::begin_step() {
+  StepStart start;
+  start.probe = fresh_steps_ == 0 && cg_slow_ == 0 && preconditioner_valid_;
+  if (fresh_steps_ > 0) {
+    --fresh_steps_;
+    cg_slow_ = 1;  // refresh before the first solve
+  }
+  start.factorizations = stats().factorizations;
+  return start;
+}
+
+void ImplicitIntegrator::end_first_solve(const StepStart& start) {
+  // The kept factor failed at a step's start: fresh ones for the next steps.
+  if (start.probe && stats().factorizations > start.factorizations) fresh_steps_ = kFreshSteps;
+}
+
 bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vector& v,
                                           const Vector& f, double h, double b, double c,
                                           bool definite, Vector& dv, std::string& error) {
@@ -241,17 +258,11 @@ bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vecto
     }
     return true;
   }
-  const bool probe = fresh_steps_ == 0 && cg_slow_ == 0 && preconditioner_valid_;
-  if (fresh_steps_ > 0) {
-    --fresh_steps_;
-    cg_slow_ = 1;  // refresh first
-  }
-  const long before = stats().factorizations;
+  const StepStart start = begin_step();
   const bool ok = solve_linear(t, x, v, h, b, c, definite, jd_, kLinearRtol, 0.0,
                                /*truncate=*/false, dv, error, kCgSoftLimit)
                       .ok;
-  // The kept factor failed: fresh ones for the next steps.
-  if (probe && stats().factorizations > before) fresh_steps_ = kFreshSteps;
+  end_first_solve(start);
   return ok;
 }
 
@@ -295,6 +306,7 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   double rate = 0.0;             // its ratio to the one before (0: not known)
   double last_update = 0.0;
   bool careful = false;
+  bool started = false;  // the step's first linear solve is behind
   for (int iteration = 0;;) {
     if (!r_.allFinite()) return fail("the residual is not finite");
     if (iteration == options().max_newton) {
@@ -337,8 +349,14 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       direct_current_ = false;
     }
     r_try_ = -r_;
+    const bool first = iteration == 0 && !started;
+    StepStart start;
+    if (first) start = begin_step();
+    started = true;
     const LinearSolve ls =
-        solve_linear(t, xs_, vs_, h, s.b, s.c, definite, r_try_, eta, atol, minimize, dv_, error);
+        solve_linear(t, xs_, vs_, h, s.b, s.c, definite, r_try_, eta, atol, minimize, dv_, error,
+                     first ? kCgSoftLimit : kCgHardLimit);
+    if (first) end_first_solve(start);
     if (!ls.ok) return fail(error);
     if (rank_one) {
       const LinearSolve lq = solve_linear(t, xs_, vs_, h, s.b, s.c, definite, delta_, eta, 0.0,

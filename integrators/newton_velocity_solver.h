@@ -142,6 +142,14 @@ class ImplicitIntegrator : public Integrator {
   static constexpr int kCgSoftLimit = 10;
   static constexpr int kCgHardLimit = 30;
 
+  // The kept factor at a step's start (see newton_velocity_solver.cc).
+  struct StepStart {
+    bool probe = false;
+    long factorizations = 0;
+  };
+  StepStart begin_step();
+  void end_first_solve(const StepStart& start);
+
   SparseMatrix dfdx_, dfdv_, jacobian_, preconditioner_matrix_;
   SparseDirectSolver direct_;          // factorizations of jacobian_ itself
   SparseDirectSolver preconditioner_;  // the kept Cholesky factor
