@@ -6,18 +6,19 @@
 //
 // BM_Run/<integrator>/cloth/<n>: simulate() (the driver `springlab run`
 // uses: no output files) from t = 0 to 2 s at dt = 1/60 s with the default
-// options. Counters: status (1 completed, 0 diverged or failed), t_final,
+// options (linear-implicit-euler:definite: with --stiffness definite). Counters: status (1 completed, 0 diverged or failed), t_final,
 // cpu_ms_per_step and wall_ms_per_step (process CPU time and wall time over
 // the steps taken), newton_per_step, factorizations_per_step,
 // cg_per_step (linear_iterations), energy_final - energy_initial.
 //
-// BM_NewtonAccuracy/<integrator>/cloth/<n>: the same run stepped here, with
+// BM_NewtonAccuracy/<integrator>/cloth/<n>[/tol:T]: the same run (at the
+// default tolerance, or at T) stepped here, with
 // every step's Newton iterations recorded (newton_mean, newton_p95,
 // newton_max: what the iteration cap is set from), and at every tenth step,
 // from the same start state (t_n, x_n, v_n), three fresh solves:
-//   a. one step at the default tolerance,
+//   a. one step at the tolerance,
 //   b. one step at the tolerance / 1000,
-//   c. two steps of h/2 at the default tolerance;
+//   c. two steps of h/2 at the tolerance;
 // solver_mm = max over samples of ||x_a - x_b||_inf (the solver error of a
 // step), run_solver_mm = the same for the run's own step (its kept
 // preconditioner takes another path to the root, sometimes to another root
@@ -30,6 +31,7 @@
 #include <ctime>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "benchmarks/bench_support.h"
@@ -54,10 +56,12 @@ const MassSpringModel& cloth(int n) {
   return model_for({"cloth", n});
 }
 
-void run_benchmark(benchmark::State& state, const std::string& integrator, int n) {
+void run_benchmark(benchmark::State& state, const std::string& integrator, int n,
+                   Stiffness stiffness) {
   const MassSpringModel& model = cloth(n);
   RunSettings settings;
   settings.integrator = integrator;
+  settings.options.stiffness = stiffness;
   settings.dt = kFrame;
   settings.t_end = kDuration;
   RunResult r;
@@ -96,16 +100,18 @@ bool fresh_step(const std::string& name, const MassSpringModel& model, double t,
   return true;
 }
 
-void accuracy_benchmark(benchmark::State& state, const std::string& name, int n) {
+void accuracy_benchmark(benchmark::State& state, const std::string& name, int n, double tol) {
   const MassSpringModel& model = cloth(n);
-  const double tol = IntegratorOptions{}.newton_tol;
   std::vector<double> newton, disc;
   double solver_max = 0.0, run_solver_max = 0.0, ratio_max = 0.0;
   long failures = 0;
   double t_final = 0.0;
   for (auto _ : state) {
     auto integrator = make_integrator(name);
-    integrator->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(), {});
+    IntegratorOptions options;
+    options.newton_tol = tol;
+    integrator->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(),
+                           options);
     const long steps = std::lround(kDuration / kFrame);
     for (long k = 1; k <= steps; ++k) {
       const double t = integrator->t();
@@ -170,16 +176,33 @@ void register_newton_benchmarks() {
   for (const Case& c : runs) {
     for (int n : c.sizes) {
       const std::string name = c.integrator;
-      benchmark::RegisterBenchmark(("BM_Run/" + name + "/cloth/" + std::to_string(n)).c_str(),
-                                   [name, n](benchmark::State& s) { run_benchmark(s, name, n); })
+      benchmark::RegisterBenchmark(
+          ("BM_Run/" + name + "/cloth/" + std::to_string(n)).c_str(),
+          [name, n](benchmark::State& s) { run_benchmark(s, name, n, Stiffness::kExact); })
           ->Unit(benchmark::kSecond)
           ->Iterations(1);
     }
   }
   for (int n : {16, 32, 64, 128}) {
     benchmark::RegisterBenchmark(
-        ("BM_NewtonAccuracy/implicit-euler/cloth/" + std::to_string(n)).c_str(),
-        [n](benchmark::State& s) { accuracy_benchmark(s, "implicit-euler", n); })
+        ("BM_Run/linear-implicit-euler:definite/cloth/" + std::to_string(n)).c_str(),
+        [n](benchmark::State& s) {
+          run_benchmark(s, "linear-implicit-euler", n, Stiffness::kDefinite);
+        })
+        ->Unit(benchmark::kSecond)
+        ->Iterations(1);
+  }
+  // The default tolerance on every size; 10 and 100 times it on two, to show
+  // how the solver error scales with it.
+  const double tol = IntegratorOptions{}.newton_tol;
+  for (const auto& [n, factor] : std::vector<std::pair<int, double>>{
+           {16, 1}, {32, 1}, {64, 1}, {128, 1}, {32, 10}, {64, 10}, {32, 100}, {64, 100}}) {
+    const std::string name = "BM_NewtonAccuracy/implicit-euler/cloth/" + std::to_string(n) +
+                             (factor == 1 ? "" : "/tol:" + short_number(factor * tol));
+    benchmark::RegisterBenchmark(name.c_str(),
+                                 [n, t = factor * tol](benchmark::State& s) {
+                                   accuracy_benchmark(s, "implicit-euler", n, t);
+                                 })
         ->Unit(benchmark::kSecond)
         ->Iterations(1);
   }

@@ -9,7 +9,7 @@
 //     but explicit Euler (unstable at every dt; it is restarted when it
 //     diverges);
 //   - implicit fixed-step methods: advance_to(t + 1/60 s), the issue's
-//     animation step (Newton to its default tolerance, 1e-10);
+//     animation step (Newton to its default tolerance, 1e-4 m/s);
 //   - adaptive (SUNDIALS) methods: advance_to(t + 1/60 s) at rtol 1e-6,
 //     atol 1e-8 (the defaults), as many internal steps as the error control
 //     needs. Their time per iteration is therefore the cost of 1/60 s of
@@ -126,7 +126,7 @@ void step_benchmark(benchmark::State& state, const std::string& name, const Scen
   const MassSpringModel& model = model_for(c);
   std::unique_ptr<Integrator> integrator = make_integrator(name);
   const StepPlan plan = plan_for(integrator->info(), c);
-  const IntegratorOptions options;  // defaults: newton_tol 1e-10, rtol 1e-6, atol 1e-8
+  const IntegratorOptions options;  // defaults: newton_tol 1e-4 m/s, rtol 1e-6, atol 1e-8
   std::string init_error;
   auto initialize = [&]() {
     const StepResult r = integrator->initialize(model, 0.0, model.initial_positions(),

@@ -157,7 +157,7 @@ struct CommonOptions {
     cmd.add_option("--rtol", run.options.rtol, "adaptive methods: relative tolerance");
     cmd.add_option("--atol", run.options.atol, "adaptive methods: absolute tolerance");
     cmd.add_option("--newton-tol", run.options.newton_tol,
-                   "implicit methods: Newton stops when ||M^-1 r||_inf <= tol max(1, ||v||_inf)");
+                   "implicit methods: Newton stops when its update ||dv||_inf <= tol [m/s]");
     cmd.add_option("--max-newton", run.options.max_newton,
                    "implicit methods: Newton iterations per step before the run fails");
     cmd.add_option("--stiffness", stiffness,

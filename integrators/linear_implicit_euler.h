@@ -9,6 +9,18 @@
 // One force evaluation, one Jacobian, one sparse solve per step; no
 // iteration, so no convergence to fail. Order 1; identical to backward Euler
 // on linear forces (R(z) = 1/(1 - z), A-stable), it damps the same way.
+//
+// --stiffness (IntegratorOptions::stiffness): K exact (the default, as
+// Baraff and Witkin), or its definite part (Choi and Ko, "Stable but
+// responsive cloth", 2002: each compressed spring's negative transverse
+// stiffness k (1 - L/l) dropped), used in the matrix and the right-hand side
+// alike. A compressed spring's negative stiffness makes M - h^2 K smaller
+// than M along its sideways direction, and the linear step amplifies that
+// motion: on a folding cloth at a frame step the energy grows until the run
+// blows up (the step-energy experiment). The definite matrix is at least M:
+// nothing is amplified. Solved by LDL^T (exact: the matrix may be
+// indefinite) or by CG preconditioned by a kept Cholesky factor (definite;
+// newton_velocity_solver.h).
 #pragma once
 
 #include "integrators/newton_velocity_solver.h"
