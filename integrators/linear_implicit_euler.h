@@ -15,10 +15,11 @@
 // responsive cloth", 2002: each compressed spring's negative transverse
 // stiffness k (1 - L/l) dropped), used in the matrix and the right-hand side
 // alike. A compressed spring's negative stiffness makes M - h^2 K smaller
-// than M along its sideways direction, and the linear step amplifies that
-// motion: on a folding cloth at a frame step the energy grows until the run
-// blows up (the step-energy experiment). The definite matrix is at least M:
-// nothing is amplified. Solved by LDL^T (exact: the matrix may be
+// than M along its sideways direction (indefinite where it outweighs the
+// mass over the step), and the linear step can amplify such a motion from
+// step to step: on a folding cloth at a frame step the energy starts to
+// alternate with growing amplitude until the run blows up (the step-energy
+// experiment). The definite matrix is at least M. Solved by LDL^T (exact: the matrix may be
 // indefinite) or by CG preconditioned by a kept Cholesky factor (definite;
 // newton_velocity_solver.h).
 #pragma once

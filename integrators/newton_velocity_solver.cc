@@ -377,13 +377,6 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     // The slope of the potential along dv (negative: CG's iterates descend
     // but for round-off).
     const double slope = minimize ? r_.dot(dv_) : 0.0;
-    if (minimize && !(slope < 0.0) && update > 0.0) {
-      if (!definite) {
-        definite = true;
-        continue;
-      }
-      return fail("the Newton update does not descend the incremental potential");
-    }
 
     // Line search: on the potential, Armijo (below the potential's
     // round-off, ||r|| must decrease); on the residual, ||r|| must decrease.
@@ -451,6 +444,14 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
         }
         accepted = true;
       }
+    }
+
+    if (!accepted && minimize && !(slope < 0.0)) {
+      if (!definite) {
+        definite = true;
+        continue;
+      }
+      return fail("the Newton update does not descend the incremental potential");
     }
 
     // With a descent direction of the potential the search cannot fail but

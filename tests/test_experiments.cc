@@ -559,6 +559,7 @@ TEST(ExperimentKinds, StepEnergyShowsTheLinearizedStepsGain) {
     for (std::size_t k = 0; k < rows.size(); ++k) {
       EXPECT_EQ(number(rows[k].at("step")), static_cast<double>(k));
       EXPECT_LE(number(rows[k].at("compressed")), springs);
+      EXPECT_LE(number(rows[k].at("indefinite_springs")), number(rows[k].at("compressed")));
       if (k == 0) {
         EXPECT_EQ(rows[k].at("change"), "");
         continue;

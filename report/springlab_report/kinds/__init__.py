@@ -4,7 +4,7 @@ look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
 from . import (cloth_showcase, convergence, damping_budget, energy, stability, stability_region,
-               work_precision)
+               step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
     energy,
@@ -14,4 +14,5 @@ KINDS = {m.KIND: m for m in (
     work_precision,
     damping_budget,
     cloth_showcase,
+    step_energy,
 )}
