@@ -307,9 +307,13 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   double last_update = 0.0;
   bool careful = false;
   bool started = false;  // the step's first linear solve is behind
+  // Updates computed: iterations, plus the retries from the same iterate
+  // (another matrix, a true Newton update); bounded so no cycle of retries
+  // runs on.
+  int attempts = 0;
   for (int iteration = 0;;) {
     if (!r_.allFinite()) return fail("the residual is not finite");
-    if (iteration == options().max_newton) {
+    if (iteration == options().max_newton || ++attempts > 3 * options().max_newton) {
       std::ostringstream why;
       why << "no convergence in " << options().max_newton << " iterations (last update "
           << last_update << " m/s, tolerance " << tol
@@ -345,7 +349,9 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       z_.noalias() = dfdx_ * delta_;
       z_ = 0.5 * z_ - (f_end_ - f_) - 2.0 * correction_ * delta_;
       z_ *= 0.5 * h * h / delta_.squaredNorm();
-      jacobian_.diagonal().array() += 0.5 * h * h * correction_;
+      // (The definite matrix keeps only a positive shift.)
+      jacobian_.diagonal().array() +=
+          0.5 * h * h * (definite ? std::max(0.0, correction_) : correction_);
       direct_current_ = false;
     }
     r_try_ = -r_;
@@ -449,6 +455,10 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     if (!accepted && minimize && !(slope < 0.0)) {
       if (!definite) {
         definite = true;
+        continue;
+      }
+      if (frozen_) {  // the frozen potential is only a guide: Newton on r
+        dg_newton = true;
         continue;
       }
       return fail("the Newton update does not descend the incremental potential");
