@@ -45,7 +45,7 @@ const char* to_string(Stiffness stiffness);
 // Every knob any method reads; each method uses only the ones it needs.
 struct IntegratorOptions {
   double newton_tol = 1e-4;   // m/s: converged when the Newton update ||dv||_inf is below it
-  int max_newton = 100;       // Newton iterations per step before giving up
+  int max_newton = 200;       // Newton iterations per step before giving up (measured: benchmarks/README.md)
   Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
   double rtol = 1e-6;         // adaptive methods
   double atol = 1e-8;
