@@ -213,7 +213,8 @@ void paired_benchmark(benchmark::State& state, const SceneCase& c) {
   const double dt = explicit_dt(c);
   Stepper peer(model, dt);
   std::unique_ptr<Integrator> mine = make_integrator(Stepper::kName);
-  auto init_mine = [&]() {
+  auto init_mine = [&]() {  // a new integrator per run (Integrator::initialize)
+    mine = make_integrator(Stepper::kName);
     return mine->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(),
                             {}).ok;
   };
