@@ -50,7 +50,7 @@ bool diverged(const MassSpringModel& model, const Vector& x, const Vector& v) {
   const double scale = model.energy_scale();
   if (!(scale > 0.0)) return false;
   const Energies e = model.energies(x, v);
-  return !(e.kinetic + e.spring <= kBlowup * scale);
+  return !(e.kinetic_and_spring() <= kBlowup * scale);
 }
 
 void finish(benchmark::State& state, const MassSpringModel& model, double dt, long force_evals,

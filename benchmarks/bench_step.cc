@@ -107,7 +107,7 @@ bool diverged(const MassSpringModel& model, const Integrator& integrator) {
   const double scale = model.energy_scale();
   if (!(scale > 0.0)) return false;
   const Energies e = model.energies(integrator.x(), integrator.v());
-  return !(e.kinetic + e.spring <= kBlowup * scale);
+  return !(e.kinetic_and_spring() <= kBlowup * scale);
 }
 
 void add(IntegratorStats& sum, const IntegratorStats& s) {

@@ -10,6 +10,7 @@
 
 #include "models/builtin_scenes.h"
 #include "models/modal_analysis.h"
+#include "models/springs.h"
 
 namespace springlab::bench {
 
@@ -47,7 +48,7 @@ double max_frequency_for(const SceneCase& c) {
 }
 
 long spring_count(const MassSpringModel& model) {
-  return static_cast<long>(model.scene().springs.size());
+  return static_cast<long>(model.scene().get<Springs>().size());
 }
 
 void add_size_counters(benchmark::State& state, const MassSpringModel& model) {
@@ -58,7 +59,7 @@ void add_size_counters(benchmark::State& state, const MassSpringModel& model) {
 
 double shortest_rest_length(const MassSpringModel& model) {
   double shortest = std::numeric_limits<double>::infinity();
-  for (const Spring& s : model.scene().springs) {
+  for (const Spring& s : model.scene().get<Springs>()) {
     if (s.rest > 0.0) shortest = std::min(shortest, s.rest);
   }
   return std::isfinite(shortest) ? shortest : 1.0;

@@ -357,12 +357,14 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["energy_initial"] = r.energy_initial;
     j["energy_final"] = r.energy_final;
     j["energy_scale"] = model.energy_scale();
+    j["energy_columns"] = model.energy_columns();  // of --energy, after t
     j["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
                             {"v", rows(model.scene_velocities(r.v_final))}};
     out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
   } else {
-    out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles, "
-        << scene.springs.size() << " springs\n"
+    out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles";
+    for (const ElementCount& c : element_counts(scene)) out << ", " << c.count << ' ' << c.key;
+    out << '\n'
         << "integrator " << r.integrator << ", dt " << r.dt << ", t_end " << r.t_end << '\n'
         << "status " << to_string(r.status);
     if (r.diverged_at) out << " at t = " << *r.diverged_at;

@@ -78,6 +78,7 @@ std::vector<double> time_grid(double dt, double t_end);
 
 // Runs to t_end or until the run diverges or fails (both are results, not
 // exceptions). Divergence: a non-finite state, or kinetic + spring energy
+// (+ every potential that counts with it: Energies::kinetic_and_spring)
 // above blowup * E_s (E_s = model.energy_scale(); with E_s = 0 only a
 // non-finite state counts). Throws std::invalid_argument for bad settings.
 // A run that starts from a state whose energy does not fit in a double

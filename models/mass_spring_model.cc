@@ -58,8 +58,17 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
     }
   }
 
-  for (const ForceKind& kind : force_kinds()) {
-    if (auto term = kind.make(scene_, order_)) terms_.push_back(std::move(term));
+  energy_layout_ = std::make_shared<const EnergyLayout>(springlab::energy_layout(scene_));
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->make == nullptr) continue;
+    if (auto term = kind->make(scene_, order_)) {
+      terms_.push_back(std::move(term));
+      const std::size_t column =
+          kind->energy.name.empty() ? energy_layout_->columns.size()
+                                    : energy_layout_->find(kind->energy.name);
+      term_column_.push_back(column < energy_layout_->columns.size() ? static_cast<long>(column)
+                                                                     : -1);
+    }
   }
 
   // One pattern for dF/dx and dF/dv: the full diagonal plus every block a
@@ -95,7 +104,8 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
   }
 
   // SPEC §6: E_s = T(0) + U_spring(0) + sum_free m_i (|g| d + |w_max|^2 / 2),
-  // d the diameter of the initial positions' bounding box.
+  // d the diameter of the initial positions' bounding box; each kind gives
+  // its term per unit of free mass (gravity |g| d, wind |w_max|^2 / 2).
   double diameter2 = 0.0;
   for (int r = 0; r < dim; ++r) {
     double lo = INFINITY, hi = -INFINITY;
@@ -106,12 +116,15 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
     diameter2 += (hi - lo) * (hi - lo);
   }
   const double diameter = std::sqrt(diameter2);
-  double w_max = 0.0;
-  if (scene_.wind) w_max = scene_.wind->velocity.norm() * (1.0 + std::abs(scene_.wind->gust));
+  double per_mass = 0.0;
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->energy_scale_per_mass != nullptr) {
+      per_mass += kind->energy_scale_per_mass(scene_, diameter);
+    }
+  }
   const Energies e0 = energies(x0_, v0_);
   const double free_mass = mass_.sum() / dim;
-  energy_scale_ = e0.kinetic + e0.spring +
-                  free_mass * (scene_.gravity.norm() * diameter + 0.5 * w_max * w_max);
+  energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
 }
 
 Configuration MassSpringModel::stored_configuration(double t) const {
@@ -196,17 +209,21 @@ void MassSpringModel::assemble_jacobians(ForcePart part, bool definite, double t
 }
 
 Energies MassSpringModel::energies(const Vector& x, const Vector& v) const {
+  Energies e(energy_layout_);
+  energies(x, v, e);
+  return e;
+}
+
+void MassSpringModel::energies(const Vector& x, const Vector& v, Energies& e) const {
   const Configuration c = configure(0.0, x, v);
-  Energies e;
-  e.kinetic = 0.5 * mass_.dot(v.cwiseProduct(v));
-  for (const auto& term : terms_) {
-    switch (term->energy_kind()) {
-      case EnergyKind::kSpring: e.spring += term->potential_energy(c); break;
-      case EnergyKind::kGravity: e.gravity += term->potential_energy(c); break;
-      case EnergyKind::kNone: break;
+  e.clear();
+  e.set_kinetic(0.5 * mass_.dot(v.cwiseProduct(v)));
+  for (std::size_t k = 0; k < terms_.size(); ++k) {
+    if (term_column_[k] >= 0) {
+      e.add(static_cast<std::size_t>(term_column_[k]), terms_[k]->potential_energy(c));
     }
   }
-  return e;
+  e.finish();
 }
 
 double MassSpringModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {

@@ -137,9 +137,10 @@ TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
 TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
   // Rest length 1, placed where the spring balances the weight m g / k.
   Scene s = oscillator(100.0, 2.0, 1.0, 0.0);
-  s.gravity = Eigen::Vector3d(-9.81, 0, 0);  // pulls along -x, toward the anchor
+  // Pulls along -x, toward the anchor.
+  s.block<Gravity>().acceleration = Eigen::Vector3d(-9.81, 0, 0);
   s.particles[1].x.x() = 1.0 - 2.0 * 9.81 / 100.0;
-  s.drag = 0.5;
+  s.block<Drag>().gamma = 0.5;
   const MassSpringModel model(s);
   const RunResult r = simulate(model, settings(0.01, 1.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -288,7 +289,7 @@ Scene chain_in_order(const std::vector<int>& order, double rest, double damping)
   Scene s;
   s.name = "chain-in-order";
   s.dimension = 2;
-  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.block<Gravity>().acceleration = Eigen::Vector3d(0, -9.81, 0);
   s.particles.resize(order.size());
   for (std::size_t k = 0; k < order.size(); ++k) {
     Particle& p = s.particles[static_cast<std::size_t>(order[k])];
@@ -296,7 +297,7 @@ Scene chain_in_order(const std::vector<int>& order, double rest, double damping)
     p.fixed = order[k] == 0;
   }
   for (std::size_t k = 0; k + 1 < order.size(); ++k) {
-    s.springs.push_back({order[k], order[k + 1], 100.0, rest, damping});
+    s.block<Springs>().push_back({order[k], order[k + 1], 100.0, rest, damping});
   }
   return s;
 }

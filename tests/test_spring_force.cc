@@ -7,6 +7,7 @@
 
 #include "models/mass_spring_model.h"
 #include "models/spring_force.h"
+#include "models/springs.h"
 
 namespace springlab {
 namespace {
@@ -32,9 +33,9 @@ Scene disjoint_springs(int dim, unsigned seed) {
     const double L = n % 5 == 0 ? 0.0 : rest(rng);
     // Both orders of the ends: the fast loop swaps them to sort by particle.
     if (n % 2 == 0) {
-      s.springs.push_back({i, i + 1, stiffness(rng), L, 0.0});
+      s.block<Springs>().push_back({i, i + 1, stiffness(rng), L, 0.0});
     } else {
-      s.springs.push_back({i + 1, i, stiffness(rng), L, 0.0});
+      s.block<Springs>().push_back({i + 1, i, stiffness(rng), L, 0.0});
     }
   }
   return s;
@@ -52,7 +53,7 @@ Eigen::MatrixXd model_forces(const MassSpringModel& model) {
 Eigen::MatrixXd reference_forces(const Scene& s) {
   Eigen::MatrixXd f = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(s.particles.size()),
                                             s.dimension);
-  for (const Spring& spring : s.springs) {
+  for (const Spring& spring : s.get<Springs>()) {
     const Eigen::Vector3d fi = hooke_force(s.particles[spring.i].x, s.particles[spring.j].x,
                                            spring.k, spring.rest, s.dimension);
     for (int r = 0; r < s.dimension; ++r) {
@@ -105,9 +106,9 @@ TEST(SpringForce, SharedParticlesAgreeToRounding) {
   for (int a = 0; a < n; ++a) {
     for (int b = 0; b < n; ++b) {
       const int i = a * n + b;
-      if (b + 1 < n) s.springs.push_back({i, i + 1, 1000.0, 0.1, 0.0});
-      if (a + 1 < n) s.springs.push_back({i + n, i, 1000.0, 0.1, 0.0});
-      if (a + 1 < n && b + 1 < n) s.springs.push_back({i, i + n + 1, 1000.0, 0.1414, 0.0});
+      if (b + 1 < n) s.block<Springs>().push_back({i, i + 1, 1000.0, 0.1, 0.0});
+      if (a + 1 < n) s.block<Springs>().push_back({i + n, i, 1000.0, 0.1, 0.0});
+      if (a + 1 < n && b + 1 < n) s.block<Springs>().push_back({i, i + n + 1, 1000.0, 0.1414, 0.0});
     }
   }
   const MassSpringModel model(s);

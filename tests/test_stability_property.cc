@@ -45,7 +45,7 @@ constexpr double kFastRate = 9999.0;
 Scene overdamped_stiff_spring() {
   Scene s = oscillator(1e4, 1.0);
   s.name = "overdamped-stiff-spring";
-  s.drag = 1e4;
+  s.block<Drag>().gamma = 1e4;
   return s;
 }
 
