@@ -211,9 +211,10 @@ Json parse_document(const std::string& text, const Reporter& r) {
 
 Particle read_particle(const Reporter& r, const std::string& where, const Json& j, int dimension) {
   require_object(r, where, j);
-  check_keys(r, where, j, {"x", "v", "mass", "fixed"}, {"x"});
+  check_keys(r, where, j, {"x", "X", "v", "mass", "fixed"}, {"x"});
   Particle p;
   p.x = read_vector(r, field(where, "x"), j.at("x"), dimension);
+  if (j.contains("X")) p.X = read_vector(r, field(where, "X"), j.at("X"), dimension);
   if (j.contains("v")) p.v = read_vector(r, field(where, "v"), j.at("v"), dimension);
   if (j.contains("mass")) {
     p.mass = read_number(r, field(where, "mass"), j.at("mass"));
@@ -226,12 +227,14 @@ Particle read_particle(const Reporter& r, const std::string& where, const Json& 
 void check_particle(const Reporter& r, const std::string& where, const Particle& particle,
                     int dimension) {
   check_vector(r, field(where, "x"), particle.x, dimension);
+  if (particle.X) check_vector(r, field(where, "X"), *particle.X, dimension);
   check_vector(r, field(where, "v"), particle.v, dimension);
   check_positive(r, field(where, "mass"), particle.mass);
 }
 
 std::string particle_json(const Particle& particle, int d) {
   std::string out = "{\"x\": " + json_vector(particle.x, d);
+  if (particle.X) out += ", \"X\": " + json_vector(*particle.X, d);
   if ((particle.v.head(d).array() != 0).any()) out += ", \"v\": " + json_vector(particle.v, d);
   out += ", \"mass\": " + json_number(particle.mass);
   if (particle.fixed) out += ", \"fixed\": true";

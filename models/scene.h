@@ -33,6 +33,11 @@ struct Particle {
   Eigen::Vector3d v = Eigen::Vector3d::Zero();
   double mass = 1.0;
   bool fixed = false;
+  // The rest (material) position X (SPEC §7): where the particle sits in the
+  // undeformed object. Absent: x. Springs take their default rest length
+  // from it, elements their rest shape.
+  std::optional<Eigen::Vector3d> X;
+  const Eigen::Vector3d& rest_position() const { return X ? *X : x; }
 };
 
 class Scene {

@@ -22,8 +22,10 @@ void check_not_self(const Reporter& r, const std::string& where, const Spring& s
   if (s.i == s.j) r.fail(where, "joins particle " + std::to_string(s.i) + " to itself");
 }
 
-// Coinciding ends have no spring direction; only a zero-rest-length spring
-// (a linear force, SPEC §2) is defined there. Returns the initial distance.
+// Coinciding ends (at x) have no spring direction; only a zero-rest-length
+// spring (a linear force, SPEC §2) is defined there. Returns the distance of
+// the ends' rest positions X (SPEC §7; X = x when not given): the rest length
+// of a spring that gives none.
 double check_spring_ends(const Reporter& r, const std::string& where, const Spring& s,
                          const std::vector<Particle>& particles, bool rest_given) {
   const double distance = (particles[s.i].x - particles[s.j].x).norm();
@@ -33,10 +35,12 @@ double check_spring_ends(const Reporter& r, const std::string& where, const Spri
            "particles " + ends + " coincide " +
                (rest_given ? "but the rest length is positive" : "and no rest length is given"));
   }
-  if (!rest_given && !std::isfinite(distance)) {
+  const double rest_distance =
+      (particles[s.i].rest_position() - particles[s.j].rest_position()).norm();
+  if (!rest_given && !std::isfinite(rest_distance)) {
     r.fail(where, "particles " + ends + " are too far apart to take their distance as rest length");
   }
-  return distance;
+  return rest_distance;
 }
 
 // The first spring (in order) among springs[0, count) that joins the same
@@ -123,8 +127,8 @@ Spring read_spring(const Reporter& r, const std::string& where, const Json& j,
     s.damping = read_number(r, field(where, "damping"), j.at("damping"));
     check_nonnegative(r, field(where, "damping"), s.damping);
   }
-  const double distance = check_spring_ends(r, where, s, particles, rest_given);
-  if (!rest_given) s.rest = distance;
+  const double rest_distance = check_spring_ends(r, where, s, particles, rest_given);
+  if (!rest_given) s.rest = rest_distance;
   return s;
 }
 

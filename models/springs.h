@@ -12,7 +12,8 @@ struct Spring {
   int i = 0;
   int j = 0;
   double k = 0.0;
-  double rest = 0.0;     // resolved: the initial distance when the file omits it
+  double rest = 0.0;     // resolved: the distance of the ends' rest positions X
+                         // (their initial distance without X) when the file omits it
   double damping = 0.0;  // c in F_i = -c ((v_i - v_j).d) d
 };
 

@@ -36,6 +36,7 @@ inline void expect_same_scene(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.particles[p].v, b.particles[p].v);
     EXPECT_EQ(a.particles[p].mass, b.particles[p].mass);
     EXPECT_EQ(a.particles[p].fixed, b.particles[p].fixed);
+    EXPECT_EQ(a.particles[p].X, b.particles[p].X);
   }
   ASSERT_EQ(a.get<Springs>().size(), b.get<Springs>().size());
   for (std::size_t s = 0; s < a.get<Springs>().size(); ++s) {

@@ -213,7 +213,7 @@ TEST_F(MalformedGenerated, ObjectWithManyKeysIsFast) {
   write_text(work() / "keys.json",
              "{\"dimension\": 2, \"particles\": [{\"x\": [0, 0]" + keys + "}], \"springs\": []}\n");
   expect_scene_refused("keys.json",
-                       "particles[0]: unknown key 'k0' (allowed keys: x, v, mass, fixed)");
+                       "particles[0]: unknown key 'k0' (allowed keys: x, X, v, mass, fixed)");
 }
 
 // 10^6 levels of nesting: refused at the cap, without building a path per

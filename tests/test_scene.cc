@@ -104,7 +104,7 @@ std::vector<BadScene> bad_scenes() {
        "particles, "
        "springs)"},
       {"UnknownParticleKey", two_particles(R"({"x": [0, -1], "vel": [0, 0]})"),
-       "scene.json: particles[1]: unknown key 'vel' (allowed keys: x, v, mass, fixed)"},
+       "scene.json: particles[1]: unknown key 'vel' (allowed keys: x, X, v, mass, fixed)"},
       {"UnknownSpringKey", two_particles(p, R"([{"i": 0, "j": 1, "k": 1, "length": 1}])"),
        "scene.json: springs[0]: unknown key 'length' (allowed keys: i, j, k, rest, damping)"},
       {"UnknownWindKey", two_particles(p, s, R"("wind": {"velocity": [1, 0], "speed": 2}, )"),
@@ -148,6 +148,8 @@ std::vector<BadScene> bad_scenes() {
        "scene.json: particles[1].x: expected 2 numbers (dimension is 2), got 3"},
       {"VTooShort", two_particles(R"({"x": [0, -1], "v": [1]})"),
        "scene.json: particles[1].v: expected 2 numbers (dimension is 2), got 1"},
+      {"RestPositionTooLong", two_particles(R"({"x": [0, -1], "X": [0, -1, 0]})"),
+       "scene.json: particles[1].X: expected 2 numbers (dimension is 2), got 3"},
       {"GravityTooLong", two_particles(p, s, R"("gravity": [0, -9.81, 0], )"),
        "scene.json: gravity: expected 2 numbers (dimension is 2), got 3"},
       {"WindVelocityTooLong", two_particles(p, s, R"("wind": {"velocity": [1, 0, 0]}, )"),
@@ -155,6 +157,18 @@ std::vector<BadScene> bad_scenes() {
       // Non-finite numbers (JSON has no inf, but 1e999 overflows a double).
       {"PositionOverflow", two_particles(R"({"x": [1e999, -1]})"),
        "scene.json: particles[1].x[0]: must be a finite number"},
+      {"RestPositionString", two_particles(R"({"x": [0, -1], "X": [0, "-1"]})"),
+       "scene.json: particles[1].X[1]: expected a number, got string"},
+      {"RestPositionsTooFarApart",
+       R"({"dimension": 2, "particles": [{"x": [0, 0], "X": [-1e308, 0], "fixed": true},
+                                         {"x": [0, -1], "X": [1e308, 0]}],
+           "springs": [{"i": 0, "j": 1, "k": 1}]})",
+       "scene.json: springs[0]: particles 0 and 1 are too far apart to take their distance as "
+       "rest length"},
+      // Coinciding ends at x have no direction, whatever their rest positions.
+      {"CoincideWithRestPositionsApart",
+       two_particles(R"({"x": [0, 0], "X": [0, -1]})", R"([{"i": 0, "j": 1, "k": 1}])"),
+       "scene.json: springs[0]: particles 0 and 1 coincide and no rest length is given"},
       {"StiffnessOverflow", two_particles(p, R"([{"i": 0, "j": 1, "k": 1e999}])"),
        "scene.json: springs[0].k: must be a finite number"},
       {"GravityOverflow", two_particles(p, s, R"("gravity": [0, -1e999], )"),
@@ -248,6 +262,32 @@ TEST(SceneTest, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(scene.get<Springs>()[0].damping, 0.0);
 }
 
+// SPEC §7: a particle's rest position X defaults to x; a spring without
+// "rest" takes the distance of its ends' rest positions.
+TEST(SceneTest, RestPositionsDefaultToXAndGiveTheSpringsRestLength) {
+  const Scene scene = parse_scene(
+      R"({"dimension": 2, "particles": [{"x": [0, 0], "fixed": true},
+                                        {"x": [0, -1], "X": [0, -2.5]}, {"x": [3, 4]}],
+          "springs": [{"i": 0, "j": 1, "k": 10}, {"i": 0, "j": 2, "k": 10},
+                      {"i": 1, "j": 2, "k": 10, "rest": 0.5}]})",
+      "scene.json");
+  EXPECT_FALSE(scene.particles[0].X.has_value());
+  EXPECT_EQ(scene.particles[0].rest_position(), scene.particles[0].x);
+  ASSERT_TRUE(scene.particles[1].X.has_value());
+  EXPECT_EQ(*scene.particles[1].X, Eigen::Vector3d(0, -2.5, 0));
+  EXPECT_EQ(scene.particles[1].rest_position(), Eigen::Vector3d(0, -2.5, 0));
+  EXPECT_EQ(scene.particles[1].x, Eigen::Vector3d(0, -1, 0));
+  const Springs& springs = scene.get<Springs>();
+  EXPECT_EQ(springs[0].rest, 2.5);  // |X_1 - X_0|, not |x_1 - x_0| = 1
+  EXPECT_EQ(springs[1].rest, 5.0);  // no X: |x_2 - x_0|
+  EXPECT_EQ(springs[2].rest, 0.5);  // given
+  // Rest positions that coincide give a zero rest length (ends apart at x).
+  const Scene zero = parse_scene(
+      two_particles(R"({"x": [0, -1], "X": [0, 0]})", R"([{"i": 0, "j": 1, "k": 1}])"),
+      "scene.json");
+  EXPECT_EQ(zero.get<Springs>()[0].rest, 0.0);
+}
+
 TEST(SceneTest, WindDefaultsToSteadyWithZeroCoefficient) {
   const Scene scene = parse_scene(
       two_particles(R"({"x": [0, -1]})", "[]", R"("wind": {"velocity": [2, 1]}, )"), "scene.json");
@@ -301,6 +341,7 @@ Scene awkward_3d_scene() {
   moving.mass = 7;
   scene.particles = {fixed, moving, moving};
   scene.particles[2].x.x() = 17.0;
+  scene.particles[2].X = Eigen::Vector3d(16.5, -0.0, 1e-300);
   scene.block<Springs>() = {{0, 1, 100.0, 0.1 + 0.2, 0.0}, {2, 1, 0.0, 0.0, 3.25}};
   return scene;
 }
@@ -414,6 +455,13 @@ TEST(SceneTest, ValidateRefusesNonFiniteAndStrayZComponents) {
   flat.particles[1].x.z() = 1;
   EXPECT_EQ(error_of([&] { validate_scene(flat, "s"); }),
             "s: particles[1].x[2]: must be 0 in a 2-D scene");
+  flat.particles[1].x.z() = 0;
+  flat.particles[1].X = Eigen::Vector3d(0, -1, 2);
+  EXPECT_EQ(error_of([&] { validate_scene(flat, "s"); }),
+            "s: particles[1].X[2]: must be 0 in a 2-D scene");
+  flat.particles[1].X = Eigen::Vector3d(0, INFINITY, 0);
+  EXPECT_EQ(error_of([&] { validate_scene(flat, "s"); }),
+            "s: particles[1].X[1]: must be a finite number");
 }
 
 TEST(SceneTest, DuplicateCheckScalesToLargeScenes) {
