@@ -29,6 +29,7 @@
 #include "experiments/stability.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
+#include "models/element_kind.h"
 #include "models/mass_spring_model.h"
 #include "models/modal_analysis.h"
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "experiments/output_files.h"
+#include "models/element_kind.h"
 #include "models/springs.h"
 
 namespace springlab {

@@ -33,14 +33,6 @@
 
 namespace springlab {
 
-// How scene particle indices map to the model's internal order (free first).
-struct ParticleOrder {
-  int dim = 2;
-  int free_particles = 0;
-  std::vector<int> internal_of_scene;  // scene index -> internal index
-  std::vector<int> scene_of_internal;  // internal index -> scene index
-};
-
 // Builds the kind's term from the scene, or returns nullptr when the scene
 // has nothing of this kind (an absent force costs nothing).
 using ForceFactory = std::unique_ptr<ForceTerm> (*)(const Scene&, const ParticleOrder&);

@@ -21,6 +21,14 @@
 
 namespace springlab {
 
+// How scene particle indices map to the model's internal order (free first).
+struct ParticleOrder {
+  int dim = 2;
+  int free_particles = 0;
+  std::vector<int> internal_of_scene;  // scene index -> internal index
+  std::vector<int> scene_of_internal;  // internal index -> scene index
+};
+
 // A read-only view of the configuration at which forces are evaluated.
 struct Configuration {
   double t = 0.0;

@@ -6,6 +6,8 @@
 
 #include <Eigen/SparseCore>
 
+#include "models/element_kind.h"
+
 namespace springlab {
 namespace {
 

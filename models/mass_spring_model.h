@@ -11,7 +11,6 @@
 #include <memory>
 #include <vector>
 
-#include "models/element_kind.h"
 #include "models/energies.h"
 #include "models/force_term.h"
 #include "models/mechanical_system.h"

@@ -36,7 +36,7 @@ struct Particle {
   // The rest (material) position X (SPEC §7): where the particle sits in the
   // undeformed object. Absent: x. Springs take their default rest length
   // from it, elements their rest shape.
-  std::optional<Eigen::Vector3d> X;
+  std::optional<Eigen::Vector3d> X = std::nullopt;
   const Eigen::Vector3d& rest_position() const { return X ? *X : x; }
 };
 
