@@ -244,7 +244,7 @@ TEST_F(MalformedGenerated, HugeUnknownKeyIsShortenedInTheMessage) {
   write_text(work() / "key.json", "{\"dimension\": 2, \"particles\": [{\"x\": [0, 0], \"" + key +
                                       "\": 1}], \"springs\": []}\n");
   expect_scene_refused("key.json", "particles[0]: unknown key '" + std::string(100, 'k') +
-                                       "... (1048576 bytes)' (allowed keys: x, v, mass, fixed)");
+                                       "... (1048576 bytes)' (allowed keys: x, X, v, mass, fixed)");
 }
 
 // The JSON reader keeps every character between two tokens: a long run of
