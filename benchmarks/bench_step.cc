@@ -102,7 +102,7 @@ StepPlan plan_for(const IntegratorInfo& info, const SceneCase& c) {
   return plan;
 }
 
-bool diverged(const MassSpringModel& model, const Integrator& integrator) {
+bool diverged(const ElasticModel& model, const Integrator& integrator) {
   if (!integrator.x().allFinite() || !integrator.v().allFinite()) return true;
   const double scale = model.energy_scale();
   if (!(scale > 0.0)) return false;
@@ -122,7 +122,7 @@ void add(IntegratorStats& sum, const IntegratorStats& s) {
 }
 
 void step_benchmark(benchmark::State& state, const std::string& name, const SceneCase& c) {
-  const MassSpringModel& model = model_for(c);
+  const ElasticModel& model = model_for(c);
   std::unique_ptr<Integrator> integrator = make_integrator(name);
   const StepPlan plan = plan_for(integrator->info(), c);
   const IntegratorOptions options;  // defaults: newton_tol 1e-10, rtol 1e-6, atol 1e-8

@@ -84,7 +84,7 @@ nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, co
 // The reference positions of the free unknowns at t_end. Throws
 // std::runtime_error, its message starting with `where` (the definition's
 // element), when the reference run does not complete.
-Vector accuracy_reference_positions(const nlohmann::json& reference, const MassSpringModel& model,
+Vector accuracy_reference_positions(const nlohmann::json& reference, const ElasticModel& model,
                                     const Scene& scene, double t_end,
                                     const IntegratorOptions& options, const std::string& where) {
   if (reference.is_string()) {
@@ -136,7 +136,7 @@ std::vector<double> accuracy_sweep_values(const DefinitionObject& d, const Integ
 
 // One point of a sweep: a fixed-step run at dt = value, or an adaptive run at
 // rtol = value, atol = value * atol_factor (output only at t_end).
-RunResult accuracy_run(const MassSpringModel& model, const std::string& integrator, bool adaptive,
+RunResult accuracy_run(const ElasticModel& model, const std::string& integrator, bool adaptive,
                        double value, double t_end, const IntegratorOptions& options,
                        double atol_factor) {
   RunSettings s;
@@ -157,7 +157,7 @@ std::optional<Vector> exact_oscillator_positions(const Scene& s, double t) {
   // Two particles, and of all the element kinds only one spring acts.
   const Springs& springs = s.get<Springs>();
   if (s.particles.size() != 2 || springs.size() != 1) return std::nullopt;
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   for (const auto& term : model.terms()) {
     if (term->name() != "spring") return std::nullopt;
   }

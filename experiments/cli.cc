@@ -30,7 +30,7 @@
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
 #include "models/element_kind.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "models/modal_analysis.h"
 
 namespace springlab {
@@ -201,7 +201,7 @@ struct CommonOptions {
 
   // Option values the method cannot take are refused (exit 1, before any
   // file is touched); options it does not read are named on stderr.
-  void check_against_method(const MassSpringModel& model) const {
+  void check_against_method(const ElasticModel& model) const {
     const auto integrator = make_integrator(run.integrator);
     if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
       throw UsageError(why);
@@ -221,7 +221,7 @@ struct CommonOptions {
 };
 
 // A scene whose energy does not fit in a double has nothing to simulate.
-void check_initial_energy(const MassSpringModel& model, const std::string& scene_arg) {
+void check_initial_energy(const ElasticModel& model, const std::string& scene_arg) {
   const double e0 = model.energies(model.initial_positions(), model.initial_velocities()).total();
   if (!std::isfinite(e0) || !std::isfinite(model.energy_scale())) {
     throw SceneError(printable(scene_arg) +
@@ -302,7 +302,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
                std::to_string(scene.particles.size()) + " particles x " +
                    std::to_string(static_cast<long long>(times)) + " output times");
   }
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
 
@@ -401,7 +401,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     }
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
   s.run = common.run;

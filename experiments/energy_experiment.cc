@@ -13,7 +13,7 @@ namespace {
 // over the experiment's scenes; a column this scene lacks is 0).
 class EnergyRows final : public Observer {
  public:
-  EnergyRows(const MassSpringModel& model, const EnergyLayout& table, std::string prefix,
+  EnergyRows(const ElasticModel& model, const EnergyLayout& table, std::string prefix,
              std::vector<std::string>& rows)
       : model_(model), energies_(model.energies(model.initial_positions(),
                                                 model.initial_velocities())),
@@ -32,7 +32,7 @@ class EnergyRows final : public Observer {
   }
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   Energies energies_;
   std::vector<std::size_t> position_;  // of each table column in the model's layout
   std::string prefix_;
@@ -57,7 +57,7 @@ class EnergyExperiment final : public TimedCasesExperiment {
 
   TaskOutput run_task(std::size_t index) const override {
     const Task t = task(index);
-    const MassSpringModel model(t.c.scene);
+    const ElasticModel model(t.c.scene);
     TaskOutput out;
     out.rows.resize(2);
     EnergyRows rows(model, energy_columns_, t.prefix, out.rows[0]);

@@ -12,7 +12,7 @@
 #include "experiments/experiment.h"
 #include "experiments/simulation.h"
 #include "integrators/integrator.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 

@@ -303,7 +303,7 @@ bool same_file(const std::string& a, const std::string& b) {
   return resolved(a) == resolved(b);
 }
 
-EnergyCsv::EnergyCsv(const MassSpringModel& model, OutputFile& file)
+EnergyCsv::EnergyCsv(const ElasticModel& model, OutputFile& file)
     : model_(model), file_(file), energies_(model.energies(model.initial_positions(),
                                                           model.initial_velocities())) {
   std::string header = "t";
@@ -318,7 +318,7 @@ void EnergyCsv::observe(double t, const Vector& x, const Vector& v) {
   file_.write(row + '\n');
 }
 
-TrajectoryCsv::TrajectoryCsv(const MassSpringModel& model, OutputFile& file)
+TrajectoryCsv::TrajectoryCsv(const ElasticModel& model, OutputFile& file)
     : model_(model), file_(file) {
   static const char* axes[] = {"x", "y", "z"};
   std::string header = "t,i";

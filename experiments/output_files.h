@@ -76,11 +76,11 @@ std::string format_number(double value);
 // then elastic, contact when the scene has them: models/energies.h).
 class EnergyCsv final : public Observer {
  public:
-  EnergyCsv(const MassSpringModel& model, OutputFile& file);
+  EnergyCsv(const ElasticModel& model, OutputFile& file);
   void observe(double t, const Vector& x, const Vector& v) override;
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   OutputFile& file_;
   Energies energies_;
 };
@@ -88,11 +88,11 @@ class EnergyCsv final : public Observer {
 // --trajectory: t,i,x,y[,z],vx,vy[,vz], one row per particle in scene order.
 class TrajectoryCsv final : public Observer {
  public:
-  TrajectoryCsv(const MassSpringModel& model, OutputFile& file);
+  TrajectoryCsv(const ElasticModel& model, OutputFile& file);
   void observe(double t, const Vector& x, const Vector& v) override;
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   OutputFile& file_;
 };
 

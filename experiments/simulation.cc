@@ -72,7 +72,7 @@ std::vector<double> time_grid(double dt, double t_end) {
   return times;
 }
 
-RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
+RunResult simulate(const ElasticModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers) {
   if (settings.every < 1) throw std::invalid_argument("every must be >= 1");
   const TimeGrid grid = make_time_grid(settings.dt, settings.t_end);

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "integrators/integrator.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 
@@ -84,7 +84,7 @@ std::vector<double> time_grid(double dt, double t_end);
 // A run that starts from a state whose energy does not fit in a double
 // (coordinates near 1e300) diverges at t = 0. When settings.options.stop is
 // set and becomes true, simulate throws StopRequested at the next step.
-RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
+RunResult simulate(const ElasticModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers = {});
 
 class StopRequested : public std::runtime_error {

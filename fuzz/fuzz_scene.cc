@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "models/scene.h"
 
 namespace {
@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       springlab::scene_to_json(again) != springlab::scene_to_json(scene)) {
     std::abort();
   }
-  const springlab::MassSpringModel model(scene);
+  const springlab::ElasticModel model(scene);
   const springlab::Energies e =
       model.energies(model.initial_positions(), model.initial_velocities());
   sink = e.total() + model.energy_scale();

@@ -1,6 +1,6 @@
 // The scene: what a scene file (SPEC §3) or a built-in scene (SPEC §4)
 // describes, before any physics is assembled from it. Plain data; the model
-// (mass_spring_model.h) turns it into forces and a state.
+// (elastic_model.h) turns it into forces and a state.
 //
 // A scene is its particles plus one block of data per element kind it holds
 // (models/element_kind.h): the springs, the gravity, the drag, the wind, and

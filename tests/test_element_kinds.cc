@@ -15,7 +15,7 @@
 #include <ostream>
 #include <string>
 
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "random_scenes.h"
 
 namespace springlab {
@@ -61,7 +61,7 @@ class EveryKind : public ::testing::TestWithParam<KindCase> {
   Scene potential_scene(unsigned seed, RandomStates states = RandomStates::kAny) const {
     std::vector<const ElementKind*> kinds;
     for (const ElementKind* kind : kinds_of(GetParam())) {
-      if (MassSpringModel(random_scene({kind}, GetParam().dim, seed)).derives_from_potentials()) {
+      if (ElasticModel(random_scene({kind}, GetParam().dim, seed)).derives_from_potentials()) {
         kinds.push_back(kind);
       }
     }
@@ -83,7 +83,7 @@ TEST_P(EveryKind, RandomInstanceIsAValidSceneThatReadsBack) {
     const std::string text = scene_to_json(s);
     const Scene again = parse_scene(text, "random.json");
     EXPECT_EQ(scene_to_json(again), text);
-    const MassSpringModel model(s), reread(again);
+    const ElasticModel model(s), reread(again);
     Vector f, g;
     model.force(0.3, model.initial_positions(), model.initial_velocities(), f);
     reread.force(0.3, reread.initial_positions(), reread.initial_velocities(), g);
@@ -96,7 +96,7 @@ TEST_P(EveryKind, RandomInstanceIsAValidSceneThatReadsBack) {
 // has no such form (spring damping) is never asked for one.
 TEST_P(EveryKind, ForceIsMinusGradientOfItsReportedPotentials) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    const MassSpringModel model(potential_scene(seed));
+    const ElasticModel model(potential_scene(seed));
     if (!model.derives_from_potentials()) GTEST_SKIP() << "no potential";
     const double t = 0.7;
     const Vector x = model.initial_positions();
@@ -125,7 +125,7 @@ TEST_P(EveryKind, ForceIsMinusGradientOfItsReportedPotentials) {
 
 TEST_P(EveryKind, JacobiansMatchCentralDifferences) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    const MassSpringModel model(scene(seed));
+    const ElasticModel model(scene(seed));
     const double t = 0.37 * seed;
     const Vector x = model.initial_positions();
     const Vector v = model.initial_velocities();
@@ -162,7 +162,7 @@ TEST_P(EveryKind, JacobiansMatchCentralDifferences) {
 TEST_P(EveryKind, DefinitePartIsSemidefiniteAndExactWhereItCanBe) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
     for (RandomStates states : {RandomStates::kAny, RandomStates::kDefinite}) {
-      const MassSpringModel model(potential_scene(seed, states));
+      const ElasticModel model(potential_scene(seed, states));
       if (!model.derives_from_potentials()) GTEST_SKIP() << "no potential: no definite part";
       const Vector x = model.initial_positions();
       const Vector v = model.initial_velocities();
@@ -185,7 +185,7 @@ TEST_P(EveryKind, DefinitePartIsSemidefiniteAndExactWhereItCanBe) {
 TEST_P(EveryKind, StoredEnergyIsInTheKindsColumn) {
   const KindCase& c = GetParam();
   if (c.kind == nullptr) GTEST_SKIP() << "per kind";
-  const MassSpringModel model(scene(4));
+  const ElasticModel model(scene(4));
   const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   const double potential = e.total() - e.kinetic();
   if (c.kind->energy.name.empty()) {

@@ -11,7 +11,7 @@
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
@@ -24,7 +24,7 @@ using testing::swinging_spring;
 
 class EveryIntegrator : public testing::RegistryTest {};
 
-double mechanical_energy(const MassSpringModel& m, const Vector& x, const Vector& v) {
+double mechanical_energy(const ElasticModel& m, const Vector& x, const Vector& v) {
   return m.energies(x, v).total();
 }
 
@@ -33,7 +33,7 @@ double mechanical_energy(const MassSpringModel& m, const Vector& x, const Vector
 TEST_P(EveryIntegrator, OscillatorEnergyFactorPerStepIsExact) {
   const IntegratorInfo i = info();
   if (!i.stability_function || i.adaptive) GTEST_SKIP() << "no scalar stability function";
-  const MassSpringModel model(oscillator(100.0, 1.0));
+  const ElasticModel model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double wh : {0.1, 0.7, 2.5}) {
     auto integrator = make_integrator(GetParam());
@@ -57,7 +57,7 @@ TEST_P(EveryIntegrator, OscillatorEnergyFactorPerStepIsExact) {
 // observed order log2(e(h) / e(h/2)) must be within 0.2 of the declared one.
 double observed_order(const std::string& name, int order, const Scene& scene, double t_end,
                       const Vector& x_ref, const Vector& v_ref, double w) {
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   const double h = order == 1 ? 1e-3 : (order == 2 ? 1e-2 : 1e-2);
   double error[2];
   for (int k = 0; k < 2; ++k) {
@@ -86,7 +86,7 @@ TEST_P(EveryIntegrator, ConvergenceOrderOnOscillatorMatchesTheory) {
 }
 
 RunResult reference_run(const Scene& scene, double t_end) {
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   RunSettings s;
   s.integrator = "rk4";
   s.dt = 2.5e-5;
@@ -110,7 +110,7 @@ TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
   const IntegratorInfo i = info();
   if (!i.symplectic) GTEST_SKIP() << "not symplectic";
   for (const Scene& scene : {oscillator(), swinging_spring()}) {
-    const MassSpringModel model(scene);
+    const ElasticModel model(scene);
     auto integrator = make_integrator(GetParam());
     ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
                                        model.initial_velocities(), IntegratorOptions{}).ok);
@@ -141,7 +141,7 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
   s.block<Gravity>().acceleration = Eigen::Vector3d(-9.81, 0, 0);
   s.particles[1].x.x() = 1.0 - 2.0 * 9.81 / 100.0;
   s.block<Drag>().gamma = 0.5;
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   const RunResult r = simulate(model, settings(0.01, 1.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT((r.x_final - model.initial_positions()).norm(), 1e-12);
@@ -154,7 +154,7 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
 TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
   const IntegratorInfo i = info();
   if (!i.iterates_to_tolerance) GTEST_SKIP() << "does not iterate Newton to a tolerance";
-  const MassSpringModel model(testing::compressed_chain());
+  const ElasticModel model(testing::compressed_chain());
   const double h = 0.2;
   SparseMatrix dfdx;
   model.jacobians(0.0, model.initial_positions(), model.initial_velocities(), &dfdx, nullptr);
@@ -180,7 +180,7 @@ TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
 // convergence); minimizing the incremental potential with definite matrices
 // where needed converges at every step.
 TEST(ImplicitEuler, ConvergesOnAFoldingClothAtLargeSteps) {
-  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
   ASSERT_TRUE(model.derives_from_potentials());
   RunSettings s;
   s.integrator = "implicit-euler";
@@ -199,7 +199,7 @@ TEST(ImplicitEuler, ConvergesOnAFoldingClothAtLargeSteps) {
 
 // A Newton that cannot converge is a result naming the reason, not a crash.
 TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
-  const MassSpringModel model(testing::compressed_chain());
+  const ElasticModel model(testing::compressed_chain());
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.2;
@@ -216,7 +216,7 @@ TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
 
 TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
   const IntegratorInfo i = info();
-  const MassSpringModel model(damped_windy_chain());
+  const ElasticModel model(damped_windy_chain());
   const RunResult r = simulate(model, settings(0.001, 0.01));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const IntegratorStats& s = r.stats;
@@ -261,9 +261,9 @@ TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
 }
 
 TEST_P(EveryIntegrator, SameInputsGiveBitIdenticalResults) {
-  const MassSpringModel model(damped_windy_chain());
+  const ElasticModel model(damped_windy_chain());
   const RunResult a = simulate(model, settings(0.002, 0.1));
-  const RunResult b = simulate(MassSpringModel(damped_windy_chain()), settings(0.002, 0.1));
+  const RunResult b = simulate(ElasticModel(damped_windy_chain()), settings(0.002, 0.1));
   ASSERT_EQ(a.x_final.size(), b.x_final.size());
   for (Eigen::Index k = 0; k < a.x_final.size(); ++k) {
     EXPECT_EQ(a.x_final[k], b.x_final[k]);
@@ -305,8 +305,8 @@ Scene chain_in_order(const std::vector<int>& order, double rest, double damping)
 // An integrator serves one system once: a second initialize() is refused and
 // leaves the first run untouched, for every method.
 TEST(Integrator, SecondInitializeIsRefusedAndChangesNothing) {
-  const MassSpringModel first(testing::swinging_spring());
-  const MassSpringModel second(testing::compressed_chain());
+  const ElasticModel first(testing::swinging_spring());
+  const ElasticModel second(testing::compressed_chain());
   for (const std::string& name : integrator_names()) {
     auto integrator = make_integrator(name);
     ASSERT_TRUE(integrator->initialize(first, 0.0, first.initial_positions(),
@@ -333,7 +333,7 @@ TEST(Integrator, SecondInitializeIsRefusedAndChangesNothing) {
 // ran `a` (its caches built for a's pattern), else with a new one, as every
 // caller now does. Returns the final positions.
 Vector run_after_another_system(const std::string& name, const MechanicalSystem& a,
-                                const MassSpringModel& b, const Vector& xa, const Vector& va) {
+                                const ElasticModel& b, const Vector& xa, const Vector& va) {
   IntegratorOptions options;
   options.newton_tol = 1e-13;
   auto integrator = make_integrator(name);
@@ -357,8 +357,8 @@ Vector run_after_another_system(const std::string& name, const MechanicalSystem&
 // springs (linear forces) its one Newton step is exact, so it must agree
 // with implicit Euler solved to 1e-13.
 TEST(Integrator, LinearImplicitEulerOnSameCountsOtherTopologyIsRight) {
-  const MassSpringModel a(chain_in_order({0, 1, 2, 3, 4, 5}, 0.0, 0.0));
-  const MassSpringModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.0, 0.0));
+  const ElasticModel a(chain_in_order({0, 1, 2, 3, 4, 5}, 0.0, 0.0));
+  const ElasticModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.0, 0.0));
   ASSERT_EQ(a.jacobian_pattern().nonZeros(), b.jacobian_pattern().nonZeros());
   const Vector x = run_after_another_system("linear-implicit-euler", a, b, a.initial_positions(),
                                             a.initial_velocities());
@@ -378,8 +378,8 @@ TEST(Integrator, LinearImplicitEulerOnSameCountsOtherTopologyIsRight) {
 // (glibc: "malloc(): unaligned tcache chunk detected"). It must end exactly
 // where a new verlet on that scene ends.
 TEST(Integrator, VerletOnASecondSpringDampedSceneIsRight) {
-  const MassSpringModel a(testing::damped_windy_chain());
-  const MassSpringModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.25, 0.5));
+  const ElasticModel a(testing::damped_windy_chain());
+  const ElasticModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.25, 0.5));
   ASSERT_EQ(b.velocity_dependence(), VelocityDependence::kCoupled);
   const Vector x =
       run_after_another_system("verlet", a, b, a.initial_positions(), a.initial_velocities());

@@ -12,7 +12,7 @@
 
 #include "models/drag.h"
 #include "models/gravity.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "models/springs.h"
 #include "models/wind.h"
 #include "random_scenes.h"
@@ -36,7 +36,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
   Scene s = random_scene(dim, 3);
   s.remove<Wind>();
   s.remove<Gravity>();
-  const MassSpringModel damped(s);
+  const ElasticModel damped(s);
   EXPECT_FALSE(damped.jacobian_symmetric());  // spring damping's dF/dx is not symmetric
   EXPECT_EQ(damped.velocity_dependence(), VelocityDependence::kCoupled);
   EXPECT_FALSE(damped.derives_from_potentials());
@@ -44,7 +44,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
   EXPECT_LT(damped.nonconservative_power(0.0, damped.initial_positions(),
                                          damped.initial_velocities()), 0.0);
   for (Spring& spring : s.block<Springs>()) spring.damping = 0.0;
-  const MassSpringModel undamped(s);
+  const ElasticModel undamped(s);
   EXPECT_TRUE(undamped.jacobian_symmetric());
   EXPECT_EQ(undamped.velocity_dependence(), VelocityDependence::kDiagonal);
   EXPECT_TRUE(undamped.derives_from_potentials());
@@ -61,7 +61,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
 TEST_P(ModelDimensions, SpringDefinitePartDropsOnlyTheIndefinitePart) {
   const int dim = GetParam();
   Scene s = random_scene({&kind_named("spring")}, dim, 2);
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   const Vector x = model.initial_positions();
   const Vector v = model.initial_velocities();
   SparseMatrix dfdx, definite_dfdx;
@@ -75,7 +75,7 @@ TEST_P(ModelDimensions, SpringDefinitePartDropsOnlyTheIndefinitePart) {
     const double l = (s.particles[spring.i].x - s.particles[spring.j].x).norm();
     spring.rest = std::min(spring.rest, 0.9 * l);  // none compressed
   }
-  const MassSpringModel stretched(s);
+  const ElasticModel stretched(s);
   stretched.jacobians(0.0, x, v, &dfdx, nullptr);
   stretched.definite_jacobians(0.0, x, v, &definite_dfdx, nullptr);
   EXPECT_EQ(Eigen::MatrixXd(definite_dfdx), Eigen::MatrixXd(dfdx));
@@ -86,7 +86,7 @@ INSTANTIATE_TEST_SUITE_P(Dimensions, ModelDimensions, ::testing::Values(2, 3),
 
 TEST(Model, FixedParticlesAreNotUnknownsAndStayPut) {
   Scene s = random_scene(3, 11);
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   EXPECT_EQ(model.dofs(), 5 * 3);  // 6 particles, one fixed
   EXPECT_EQ(model.jacobian_pattern().rows(), 15);
   Vector x = model.initial_positions();
@@ -107,7 +107,7 @@ Scene hanging_spring() {
 }
 
 TEST(Model, EnergiesFollowSpecFormulas) {
-  const MassSpringModel model(hanging_spring());
+  const ElasticModel model(hanging_spring());
   const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   EXPECT_DOUBLE_EQ(e.kinetic(), 0.5 * 2.0 * 4.0);
   EXPECT_DOUBLE_EQ(e["spring"], 0.5 * 100.0 * 1.0);
@@ -123,11 +123,11 @@ TEST(Model, EnergiesFollowSpecFormulas) {
 TEST(Model, EnergyColumnsAreTheSpecsAndAbsentPotentialsAreZero) {
   const std::vector<std::string> spec = {"kinetic", "spring", "gravity", "total"};
   Scene s = hanging_spring();
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   EXPECT_EQ(model.energy_columns(), spec);
   s.remove<Gravity>();
   s.block<Springs>().clear();
-  const MassSpringModel bare(s);
+  const ElasticModel bare(s);
   EXPECT_EQ(bare.energy_columns(), spec);
   const Energies e = bare.energies(bare.initial_positions(), bare.initial_velocities());
   ASSERT_EQ(e.values().size(), 4u);
@@ -142,7 +142,7 @@ TEST(Model, EnergyColumnsAreTheSpecsAndAbsentPotentialsAreZero) {
 
 // The energies of a state, filled in place, match the ones returned.
 TEST(Model, EnergiesIntoAnExistingObjectMatch) {
-  const MassSpringModel model(random_scene(3, 6));
+  const ElasticModel model(random_scene(3, 6));
   Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   const Vector x = model.initial_positions() * 1.1;
   const Vector v = model.initial_velocities() * 0.5;
@@ -157,7 +157,7 @@ TEST(Model, AbsentForcesAreNotAssembled) {
                  {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
   s.block<Springs>() = {{0, 1, 10.0, 1.0, 0.0}};
   s.block<Drag>().gamma = 0.0;  // present but zero: no term
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   ASSERT_EQ(model.terms().size(), 1u);
   EXPECT_EQ(model.terms()[0]->name(), "spring");
   EXPECT_EQ(model.velocity_dependence(), VelocityDependence::kNone);
@@ -167,7 +167,7 @@ TEST(Model, AbsentForcesAreNotAssembled) {
 // must be exactly the whole, forces and Jacobians alike.
 TEST(Model, StiffAndNonstiffPartsAddUpToTheWhole) {
   const Scene s = random_scene(3, 5);
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   const Vector& x = model.initial_positions();
   const Vector& v = model.initial_velocities();
   Vector all, stiff, nonstiff;

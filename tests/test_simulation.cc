@@ -14,7 +14,7 @@
 
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "models/drag.h"
 #include "models/gravity.h"
 #include "models/scene.h"
@@ -162,7 +162,7 @@ TEST(SimulationTimeGrid, BadStepOrEndTimeThrows) {
 }
 
 TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   EXPECT_THROW(simulate(model, settings("rk4", 0.0, 1.0)), std::invalid_argument);
   EXPECT_THROW(simulate(model, settings("rk4", -0.1, 1.0)), std::invalid_argument);
   EXPECT_THROW(simulate(model, settings("rk4", 0.1, 0.0)), std::invalid_argument);
@@ -174,7 +174,7 @@ TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
 // ----------------------------------------------------------------- observer
 
 TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   RecordingObserver a, b;
   const RunResult r = simulate(model, settings("verlet", 0.1, 1.0), {&a, &b});
   EXPECT_FALSE(r.diverged());
@@ -198,7 +198,7 @@ TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
 }
 
 TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   {
     RecordingObserver o;
     RunSettings s = settings("rk4", 0.1, 1.0);
@@ -224,14 +224,14 @@ TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
     RecordingObserver o;  // shortened last step (w h = 0.3: stable)
     RunSettings s = settings("symplectic-euler", 0.3, 1.0);
     s.every = 2;
-    const RunResult r = simulate(MassSpringModel(linear_oscillator(1.0)), s, {&o});
+    const RunResult r = simulate(ElasticModel(linear_oscillator(1.0)), s, {&o});
     EXPECT_FALSE(r.diverged());
     EXPECT_EQ(o.times, (std::vector<double>{0.0, 2 * 0.3, 1.0}));
   }
 }
 
 TEST(SimulationObserver, NotCalledForTheDivergedStep) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   RecordingObserver o;
   const RunResult r = simulate(model, settings("explicit-euler", 0.05, 10.0), {&o});
   ASSERT_TRUE(r.diverged());
@@ -248,7 +248,7 @@ TEST(SimulationObserver, NotCalledForTheDivergedStep) {
 // 1 + w^2 h^2 per step. Here E(0) = E_s, so with blowup B the run diverges at
 // the first step n with (1 + w^2 h^2)^n > B.
 TEST(SimulationDivergence, ExplicitEulerDivergesAtThePredictedStep) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   ASSERT_DOUBLE_EQ(model.energy_scale(), 0.5);
   const double h = 0.05, w = 10.0;
   const double growth = 1.0 + w * w * h * h;  // 1.25
@@ -282,7 +282,7 @@ TEST(SimulationDivergence, ThresholdIsOnKineticPlusSpringEnergy) {
   s.block<Gravity>().acceleration = Eigen::Vector3d(0, -10, 0);
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   ASSERT_DOUBLE_EQ(model.energy_scale(), 10.0);
   // v_n = -10 n h: kinetic 50 (n h)^2 > 1e4 first at n h = 14.2 (h = 0.1).
   const RunResult r = simulate(model, settings("explicit-euler", 0.1, 20.0));
@@ -305,7 +305,7 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
   s.block<Springs>() = {{0, 1, 100.0, 0.0, 0.0}};
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   ASSERT_EQ(model.energy_scale(), 0.0);
 
   // Stable integrators: finite motion, never a divergence.
@@ -339,7 +339,7 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
 // rule (kinetic + spring > B E_s, E_s = E0 here) therefore calls it diverged
 // above w h = 2 (1 - 1/B), 0.1% below the limit for B = 1000 -- inside the
 // stability bisection's tolerance -- and a larger --blowup sees closer.
-double peak_energy_ratio(const MassSpringModel& model, const RunSettings& s, RunResult& r) {
+double peak_energy_ratio(const ElasticModel& model, const RunSettings& s, RunResult& r) {
   RecordingObserver o;
   r = simulate(model, s, {&o});
   double peak = 0.0;
@@ -351,7 +351,7 @@ double peak_energy_ratio(const MassSpringModel& model, const RunSettings& s, Run
 }
 
 TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalfWh) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   RunResult r;
   for (const double wh : {1.9, 1.99, 1.997}) {
@@ -374,7 +374,7 @@ TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalf
 // diverges at t = 0 (it used to complete, with inf energies in every row).
 TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
   Scene s = linear_oscillator(100.0, 1.0, 1e200);  // k x^2 / 2 = 5e401
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   ASSERT_FALSE(std::isfinite(model.energies(model.initial_positions(), model.initial_velocities()).total()));
   const RunResult r = simulate(model, settings("rk4", 0.1, 1.0));
   EXPECT_EQ(r.status, RunStatus::kDiverged);
@@ -387,7 +387,7 @@ TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
 // A stop request ends a run at its next step, as an exception the
 // experiment runner turns into "not done".
 TEST(SimulationStop, StopRequestThrowsAtTheNextStep) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   std::atomic<bool> stop{true};
   RunSettings s = settings("rk4", 0.01, 1.0);
   s.options.stop = &stop;
@@ -426,7 +426,7 @@ void expect_limit(const StabilityResult& r, double limit, double rel_tol) {
 }
 
 TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   for (const char* integrator : {"symplectic-euler", "verlet"}) {
     SCOPED_TRACE(integrator);
@@ -440,7 +440,7 @@ TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
 // Just past its limit RK4 amplifies by only |R(i w h)| - 1 ~ 2.5 (w h - 2
 // sqrt 2) per step, so a long run (~3500 steps) is needed to see it.
 TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   const StabilitySettings s = stability_settings("rk4", 1e4 / w);
   const StabilityResult r = find_max_stable_dt(model, s);
@@ -451,7 +451,7 @@ TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
 // doubles can meet (1e-16, or 0 + the smallest positive) it stops when the
 // bracket's ends are neighbours, after about 60 runs.
 TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   for (const double rel_tol : {1e-16, 4.9e-324}) {
     SCOPED_TRACE(rel_tol);
     StabilitySettings s = stability_settings("symplectic-euler", 10.0);
@@ -466,7 +466,7 @@ TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
 
 // A range with no valid grid is refused before the first run.
 TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   StabilitySettings s = stability_settings("rk4", 1000.0);
   s.dt_min = 1e-12;
   try {
@@ -478,7 +478,7 @@ TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
 }
 
 TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   const StabilityResult r = find_max_stable_dt(model, stability_settings("implicit-euler", 10.0));
   EXPECT_EQ(r.max_stable_dt, 1.0);
   EXPECT_EQ(r.runs, 1);
@@ -489,7 +489,7 @@ TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
 // blowup factor for small enough h: the search finds that finite-time limit,
 // near h with (T / h) ln(1 + w^2 h^2) = ln(1000), i.e. h ~ ln(1000) / (T w^2).
 TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   const StabilitySettings s = stability_settings("explicit-euler", 10.0);
   const StabilityResult r = find_max_stable_dt(model, s);
   ASSERT_GT(r.lo, 0.0);
@@ -506,7 +506,7 @@ TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
 }
 
 TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   StabilitySettings s = stability_settings("explicit-euler", 10.0);
   s.dt_min = 0.1;
   const StabilityResult r = find_max_stable_dt(model, s);
@@ -515,7 +515,7 @@ TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
 }
 
 TEST(SimulationStability, BadRangeThrows) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   StabilitySettings s = stability_settings("rk4", 1.0);
   s.dt_min = 0.0;
   EXPECT_THROW(find_max_stable_dt(model, s), std::invalid_argument);

@@ -5,7 +5,7 @@
 
 #include <random>
 
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "models/spring_force.h"
 #include "models/springs.h"
 
@@ -42,7 +42,7 @@ Scene disjoint_springs(int dim, unsigned seed) {
 }
 
 // The forces on every particle, in scene order, from the model.
-Eigen::MatrixXd model_forces(const MassSpringModel& model) {
+Eigen::MatrixXd model_forces(const ElasticModel& model) {
   Vector f;
   model.force(0.0, model.initial_positions(), model.initial_velocities(), f);
   // No fixed particle: the unknowns are the particles in scene order, which
@@ -67,7 +67,7 @@ Eigen::MatrixXd reference_forces(const Scene& s) {
 TEST(SpringForce, FastLoopEqualsHookesLawBitForBit) {
   for (int dim : {2, 3}) {
     const Scene s = disjoint_springs(dim, 17u + static_cast<unsigned>(dim));
-    const MassSpringModel model(s);
+    const ElasticModel model(s);
     const Eigen::MatrixXd x = model.scene_positions(model.initial_positions());
     for (std::size_t p = 0; p < s.particles.size(); ++p) {
       for (int r = 0; r < dim; ++r) {
@@ -111,7 +111,7 @@ TEST(SpringForce, SharedParticlesAgreeToRounding) {
       if (a + 1 < n && b + 1 < n) s.block<Springs>().push_back({i, i + n + 1, 1000.0, 0.1414, 0.0});
     }
   }
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   const Eigen::MatrixXd fast = model_forces(model);
   const Eigen::MatrixXd reference = reference_forces(s);
   const double scale = reference.cwiseAbs().maxCoeff();

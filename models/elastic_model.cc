@@ -1,4 +1,4 @@
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -37,7 +37,7 @@ bool in_part(const ForceTerm& term, ForcePart part) {
 
 }  // namespace
 
-MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
+ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   const int dim = order_.dim;
   const int all = particle_count();
   const Eigen::Index n = static_cast<Eigen::Index>(order_.free_particles) * dim;
@@ -129,7 +129,7 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
   energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
 }
 
-Configuration MassSpringModel::stored_configuration(double t) const {
+Configuration ElasticModel::stored_configuration(double t) const {
   Configuration c;
   c.t = t;
   c.x = x_all_.data();
@@ -139,14 +139,14 @@ Configuration MassSpringModel::stored_configuration(double t) const {
   return c;
 }
 
-Configuration MassSpringModel::configure(double t, const Vector& x, const Vector& v) const {
+Configuration ElasticModel::configure(double t, const Vector& x, const Vector& v) const {
   const Eigen::Index n = dofs();
   x_all_.head(n) = x;
   if (reads_velocity_) v_all_.head(n) = v;
   return stored_configuration(t);
 }
 
-void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
+void ElasticModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
                             Vector& f) const {
   const Configuration c = configure(t, x, v);
   // One pass initializes f with the constant forces (instead of zero-fill,
@@ -158,19 +158,19 @@ void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vec
   f = f_all_.head(dofs());
 }
 
-void MassSpringModel::jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
+void ElasticModel::jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
                                 SparseMatrix* dfdx, SparseMatrix* dfdv) const {
   assemble_jacobians(part, /*definite=*/false, t, x, v, dfdx, dfdv);
 }
 
-void MassSpringModel::definite_jacobians(double t, const Vector& x, const Vector& v,
+void ElasticModel::definite_jacobians(double t, const Vector& x, const Vector& v,
                                          SparseMatrix* dfdx, SparseMatrix* dfdv) const {
   assemble_jacobians(ForcePart::kAll, /*definite=*/true, t, x, v, dfdx, dfdv);
 }
 
 // The potentials read only the half of the configuration they depend on:
 // each sets that half, the other holds whatever was stored last.
-double MassSpringModel::position_potential(double t, const Vector& x) const {
+double ElasticModel::position_potential(double t, const Vector& x) const {
   if (!derives_from_potentials_) return 0.0;
   x_all_.head(dofs()) = x;
   const Configuration c = stored_configuration(t);
@@ -179,7 +179,7 @@ double MassSpringModel::position_potential(double t, const Vector& x) const {
   return sum;
 }
 
-double MassSpringModel::velocity_potential(double t, const Vector& v) const {
+double ElasticModel::velocity_potential(double t, const Vector& v) const {
   if (!derives_from_potentials_ || !reads_velocity_) return 0.0;  // no term has a W
   v_all_.head(dofs()) = v;
   const Configuration c = stored_configuration(t);
@@ -188,7 +188,7 @@ double MassSpringModel::velocity_potential(double t, const Vector& v) const {
   return sum;
 }
 
-void MassSpringModel::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
+void ElasticModel::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
                                          const Vector& v, SparseMatrix* dfdx,
                                          SparseMatrix* dfdv) const {
   const Configuration c = configure(t, x, v);
@@ -210,13 +210,13 @@ void MassSpringModel::assemble_jacobians(ForcePart part, bool definite, double t
   }
 }
 
-Energies MassSpringModel::energies(const Vector& x, const Vector& v) const {
+Energies ElasticModel::energies(const Vector& x, const Vector& v) const {
   Energies e(energy_layout_);
   energies(x, v, e);
   return e;
 }
 
-void MassSpringModel::energies(const Vector& x, const Vector& v, Energies& e) const {
+void ElasticModel::energies(const Vector& x, const Vector& v, Energies& e) const {
   const Configuration c = configure(0.0, x, v);
   e.clear();
   e.set_kinetic(0.5 * mass_.dot(v.cwiseProduct(v)));
@@ -228,7 +228,7 @@ void MassSpringModel::energies(const Vector& x, const Vector& v, Energies& e) co
   e.finish();
 }
 
-double MassSpringModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {
+double ElasticModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {
   const Configuration c = configure(t, x, v);
   f_all_.setZero();
   for (const auto& term : terms_) {
@@ -237,7 +237,7 @@ double MassSpringModel::nonconservative_power(double t, const Vector& x, const V
   return f_all_.head(dofs()).dot(v);
 }
 
-Eigen::MatrixXd MassSpringModel::scene_positions(const Vector& x) const {
+Eigen::MatrixXd ElasticModel::scene_positions(const Vector& x) const {
   const int dim = order_.dim;
   Eigen::MatrixXd out(particle_count(), dim);
   for (int s = 0; s < particle_count(); ++s) {
@@ -249,7 +249,7 @@ Eigen::MatrixXd MassSpringModel::scene_positions(const Vector& x) const {
   return out;
 }
 
-Eigen::MatrixXd MassSpringModel::scene_velocities(const Vector& v) const {
+Eigen::MatrixXd ElasticModel::scene_velocities(const Vector& v) const {
   const int dim = order_.dim;
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(particle_count(), dim);
   for (int s = 0; s < particle_count(); ++s) {

@@ -1,4 +1,5 @@
-// The mechanical system of SPEC §2 assembled from a Scene: the state holds
+// The elastic model: the mechanical system of SPEC §2 (springs today, finite
+// elements and contact as they are registered) assembled from a Scene: the state holds
 // only free particles, forces come from the terms of the registered element
 // kinds (element_kind.h) the scene has, and both Jacobians share one sparsity
 // pattern built here once.
@@ -18,9 +19,9 @@
 
 namespace springlab {
 
-class MassSpringModel final : public MechanicalSystem {
+class ElasticModel final : public MechanicalSystem {
  public:
-  explicit MassSpringModel(const Scene& scene);
+  explicit ElasticModel(const Scene& scene);
 
   // MechanicalSystem
   using MechanicalSystem::force;
