@@ -1,4 +1,4 @@
-// BM_Force/<scene>/<n>: one MassSpringModel::force evaluation (all forces).
+// BM_Force/<scene>/<n>: one ElasticModel::force evaluation (all forces).
 // BM_ForceJacobian/<scene>/<n>: force plus both Jacobians (dF/dx, dF/dv) on
 // the model's fixed pattern: what an implicit method assembles per Newton
 // iteration.
@@ -11,7 +11,7 @@
 namespace springlab::bench {
 namespace {
 
-void set_rate_counters(benchmark::State& state, const MassSpringModel& model) {
+void set_rate_counters(benchmark::State& state, const ElasticModel& model) {
   const double iterations = static_cast<double>(state.iterations());
   // kIsRate | kInvert: CPU seconds per (iteration x springs); scaled to ns.
   state.counters["ns_per_spring"] = benchmark::Counter(
@@ -23,7 +23,7 @@ void set_rate_counters(benchmark::State& state, const MassSpringModel& model) {
 }
 
 void force_benchmark(benchmark::State& state, const SceneCase& c) {
-  const MassSpringModel& model = model_for(c);
+  const ElasticModel& model = model_for(c);
   Vector x, v, f;
   perturbed_state(model, x, v);
   model.force(0.0, x, v, f);  // sizes f, warms the caches
@@ -36,7 +36,7 @@ void force_benchmark(benchmark::State& state, const SceneCase& c) {
 }
 
 void force_jacobian_benchmark(benchmark::State& state, const SceneCase& c) {
-  const MassSpringModel& model = model_for(c);
+  const ElasticModel& model = model_for(c);
   Vector x, v, f;
   perturbed_state(model, x, v);
   SparseMatrix dfdx = model.jacobian_pattern();

@@ -76,7 +76,7 @@ struct LinearSystem {
   SparseMatrix a_definite, a_definite_prev;
 };
 
-SparseMatrix definite_matrix(const MassSpringModel& model, double t, const Vector& x,
+SparseMatrix definite_matrix(const ElasticModel& model, double t, const Vector& x,
                              const Vector& v) {
   SparseMatrix dfdx = model.jacobian_pattern();
   model.definite_jacobians(t, x, v, &dfdx, nullptr);
@@ -87,7 +87,7 @@ SparseMatrix definite_matrix(const MassSpringModel& model, double t, const Vecto
 }
 
 // A and b at a state (see the header comment).
-void assemble(const MassSpringModel& model, double t, const Vector& x, const Vector& v,
+void assemble(const ElasticModel& model, double t, const Vector& x, const Vector& v,
               SparseMatrix& a, Vector& b) {
   SparseMatrix dfdx = model.jacobian_pattern(), dfdv = model.jacobian_pattern();
   model.jacobians(t, x, v, &dfdx, &dfdv);
@@ -103,7 +103,7 @@ const LinearSystem& system_for(const SceneCase& c) {
   static std::map<std::string, LinearSystem> cache;
   auto found = cache.find(c.path());
   if (found != cache.end()) return found->second;
-  const MassSpringModel& model = model_for(c);
+  const ElasticModel& model = model_for(c);
   Vector x = model.initial_positions(), v = model.initial_velocities(), dv;
   LinearSystem sys;
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;

@@ -15,7 +15,7 @@
 // kernel side continues from where it stopped. dt = 0.5 / w_max (as
 // BM_Step's explicit methods); kBatch steps of it never diverge from rest.
 // Counters: run_us and kernel_us per step, ratio, force_us (one
-// MassSpringModel::force at the initial state, timed in the same loop: the
+// ElasticModel::force at the initial state, timed in the same loop: the
 // floor of a symplectic Euler step).
 #include <chrono>
 #include <memory>
@@ -44,7 +44,7 @@ double seconds_since(Clock::time_point start) {
 // runge_kutta4 on y = (x, v).
 class Kernel {
  public:
-  Kernel(const MassSpringModel& model, const std::string& method, double dt)
+  Kernel(const ElasticModel& model, const std::string& method, double dt)
       : model_(model), dt_(dt), odeint_(method == "rk4"), n_(model.dofs()) {
     if (odeint_) {
       y_.resize(2 * n_);
@@ -76,7 +76,7 @@ class Kernel {
   }
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   double dt_;
   bool odeint_;
   Eigen::Index n_;
@@ -87,7 +87,7 @@ class Kernel {
 };
 
 void run_pair(benchmark::State& state, const std::string& method, const SceneCase& c) {
-  const MassSpringModel& model = model_for(c);
+  const ElasticModel& model = model_for(c);
   const double w_max = max_frequency_for(c);
   const double dt = w_max > 0.0 ? 0.5 / w_max : 1.0 / 60.0;
   RunSettings settings;

@@ -10,6 +10,7 @@
 
 #include "models/builtin_scenes.h"
 #include "models/modal_analysis.h"
+#include "models/springs.h"
 
 namespace springlab::bench {
 
@@ -22,7 +23,7 @@ const std::vector<SceneCase>& all_cases() {
 namespace {
 
 struct Cached {
-  std::unique_ptr<MassSpringModel> model;
+  std::unique_ptr<ElasticModel> model;
   double w_max = -1.0;
 };
 
@@ -30,7 +31,7 @@ Cached& cached(const SceneCase& c) {
   static std::map<std::pair<std::string, int>, Cached> cache;
   Cached& entry = cache[{c.scene, c.n}];
   if (!entry.model) {
-    entry.model = std::make_unique<MassSpringModel>(
+    entry.model = std::make_unique<ElasticModel>(
         make_builtin_scene(c.scene, {{"n", std::to_string(c.n)}}));
   }
   return entry;
@@ -38,7 +39,7 @@ Cached& cached(const SceneCase& c) {
 
 }  // namespace
 
-const MassSpringModel& model_for(const SceneCase& c) { return *cached(c).model; }
+const ElasticModel& model_for(const SceneCase& c) { return *cached(c).model; }
 
 double max_frequency_for(const SceneCase& c) {
   Cached& entry = cached(c);
@@ -46,25 +47,25 @@ double max_frequency_for(const SceneCase& c) {
   return entry.w_max;
 }
 
-long spring_count(const MassSpringModel& model) {
-  return static_cast<long>(model.scene().springs.size());
+long spring_count(const ElasticModel& model) {
+  return static_cast<long>(model.scene().get<Springs>().size());
 }
 
-void add_size_counters(benchmark::State& state, const MassSpringModel& model) {
+void add_size_counters(benchmark::State& state, const ElasticModel& model) {
   state.counters["unknowns"] = static_cast<double>(model.dofs());
   state.counters["particles"] = static_cast<double>(model.free_particle_count());
   state.counters["springs"] = static_cast<double>(spring_count(model));
 }
 
-double shortest_rest_length(const MassSpringModel& model) {
+double shortest_rest_length(const ElasticModel& model) {
   double shortest = std::numeric_limits<double>::infinity();
-  for (const Spring& s : model.scene().springs) {
+  for (const Spring& s : model.scene().get<Springs>()) {
     if (s.rest > 0.0) shortest = std::min(shortest, s.rest);
   }
   return std::isfinite(shortest) ? shortest : 1.0;
 }
 
-void perturbed_state(const MassSpringModel& model, Vector& x, Vector& v) {
+void perturbed_state(const ElasticModel& model, Vector& x, Vector& v) {
   x = model.initial_positions();
   v = model.initial_velocities();
   const double amplitude = 1e-3 * shortest_rest_length(model);

@@ -7,6 +7,7 @@
 
 #include "experiments/output_files.h"
 #include "integrators/registry.h"
+#include "models/springs.h"
 
 namespace springlab {
 
@@ -53,7 +54,7 @@ nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, co
     bool exact = exact_oscillator_positions(scene, 0.0).has_value();
     if (exact) {
       // With rest > 0 the formula holds only while the spring keeps a positive length.
-      const Spring& spring = scene.springs[0];
+      const Spring& spring = scene.get<Springs>()[0];
       const double l0 = (scene.particles[0].x - scene.particles[1].x).norm();
       exact = spring.rest == 0.0 || std::abs(l0 - spring.rest) < spring.rest;
     }
@@ -83,7 +84,7 @@ nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, co
 // The reference positions of the free unknowns at t_end. Throws
 // std::runtime_error, its message starting with `where` (the definition's
 // element), when the reference run does not complete.
-Vector accuracy_reference_positions(const nlohmann::json& reference, const MassSpringModel& model,
+Vector accuracy_reference_positions(const nlohmann::json& reference, const ElasticModel& model,
                                     const Scene& scene, double t_end,
                                     const IntegratorOptions& options, const std::string& where) {
   if (reference.is_string()) {
@@ -135,7 +136,7 @@ std::vector<double> accuracy_sweep_values(const DefinitionObject& d, const Integ
 
 // One point of a sweep: a fixed-step run at dt = value, or an adaptive run at
 // rtol = value, atol = value * atol_factor (output only at t_end).
-RunResult accuracy_run(const MassSpringModel& model, const std::string& integrator, bool adaptive,
+RunResult accuracy_run(const ElasticModel& model, const std::string& integrator, bool adaptive,
                        double value, double t_end, const IntegratorOptions& options,
                        double atol_factor) {
   RunSettings s;
@@ -153,9 +154,12 @@ RunResult accuracy_run(const MassSpringModel& model, const std::string& integrat
 }
 
 std::optional<Vector> exact_oscillator_positions(const Scene& s, double t) {
-  if (s.particles.size() != 2 || s.springs.size() != 1 || !s.gravity.isZero() || s.drag != 0.0 ||
-      (s.wind && s.wind->coefficient != 0.0) || s.springs[0].damping != 0.0) {
-    return std::nullopt;
+  // Two particles, and of all the element kinds only one spring acts.
+  const Springs& springs = s.get<Springs>();
+  if (s.particles.size() != 2 || springs.size() != 1) return std::nullopt;
+  const ElasticModel model(s);
+  for (const auto& term : model.terms()) {
+    if (term->name() != "spring") return std::nullopt;
   }
   const int fixed = s.particles[0].fixed ? 0 : 1;
   const Particle& anchor = s.particles[static_cast<std::size_t>(fixed)];
@@ -163,8 +167,8 @@ std::optional<Vector> exact_oscillator_positions(const Scene& s, double t) {
   if (!anchor.fixed || mass.fixed || !mass.v.isZero()) return std::nullopt;
   const Eigen::Vector3d d = mass.x - anchor.x;
   const double l = d.norm();
-  const double rest = s.springs[0].rest;
-  const double w = std::sqrt(s.springs[0].k / mass.mass);
+  const double rest = springs[0].rest;
+  const double w = std::sqrt(springs[0].k / mass.mass);
   // Along the spring axis u: l(t) = rest + (l0 - rest) cos(w t) (linear while l > 0).
   const Eigen::Vector3d x = anchor.x + d / l * (rest + (l - rest) * std::cos(w * t));
   return Vector(x.head(s.dimension));

@@ -13,7 +13,7 @@
 #include "experiments/definition.h"
 #include "experiments/simulation.h"
 #include "integrators/integrator.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 
@@ -45,11 +45,11 @@ double base_dt_for_order(const DefinitionObject& o, const char* key, int order);
 // The reference (see accuracy_sweep.cc), the sweep of one method, one point.
 nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, const Scene& scene,
                                   double finest_dt);
-Vector accuracy_reference_positions(const nlohmann::json& reference, const MassSpringModel& model,
+Vector accuracy_reference_positions(const nlohmann::json& reference, const ElasticModel& model,
                                     const Scene& scene, double t_end,
                                     const IntegratorOptions& options, const std::string& where);
 std::vector<double> accuracy_sweep_values(const DefinitionObject& d, const IntegratorInfo& info);
-RunResult accuracy_run(const MassSpringModel& model, const std::string& integrator, bool adaptive,
+RunResult accuracy_run(const ElasticModel& model, const std::string& integrator, bool adaptive,
                        double value, double t_end, const IntegratorOptions& options,
                        double atol_factor);
 

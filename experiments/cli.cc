@@ -29,7 +29,8 @@
 #include "experiments/stability.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
-#include "models/mass_spring_model.h"
+#include "models/element_kind.h"
+#include "models/elastic_model.h"
 #include "models/modal_analysis.h"
 
 namespace springlab {
@@ -209,7 +210,7 @@ struct CommonOptions {
 
   // Option values the method cannot take are refused (exit 1, before any
   // file is touched); options it does not read are named on stderr.
-  void check_against_method(const MassSpringModel& model) const {
+  void check_against_method(const ElasticModel& model) const {
     const auto integrator = make_integrator(run.integrator);
     if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
       throw UsageError(why);
@@ -229,7 +230,7 @@ struct CommonOptions {
 };
 
 // A scene whose energy does not fit in a double has nothing to simulate.
-void check_initial_energy(const MassSpringModel& model, const std::string& scene_arg) {
+void check_initial_energy(const ElasticModel& model, const std::string& scene_arg) {
   const double e0 = model.energies(model.initial_positions(), model.initial_velocities()).total();
   if (!std::isfinite(e0) || !std::isfinite(model.energy_scale())) {
     throw SceneError(printable(scene_arg) +
@@ -310,7 +311,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
                std::to_string(scene.particles.size()) + " particles x " +
                    std::to_string(static_cast<long long>(times)) + " output times");
   }
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
 
@@ -366,12 +367,14 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["energy_initial"] = r.energy_initial;
     j["energy_final"] = r.energy_final;
     j["energy_scale"] = model.energy_scale();
+    j["energy_columns"] = model.energy_columns();  // of --energy, after t
     j["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
                             {"v", rows(model.scene_velocities(r.v_final))}};
     out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
   } else {
-    out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles, "
-        << scene.springs.size() << " springs\n"
+    out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles";
+    for (const ElementCount& c : element_counts(scene)) out << ", " << c.count << ' ' << c.key;
+    out << '\n'
         << "integrator " << r.integrator << ", dt " << r.dt << ", t_end " << r.t_end << '\n'
         << "status " << to_string(r.status);
     if (r.diverged_at) out << " at t = " << *r.diverged_at;
@@ -407,7 +410,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     }
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
   s.run = common.run;

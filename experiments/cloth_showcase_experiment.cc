@@ -24,7 +24,7 @@ constexpr int kPastBlowupFrames = 2;
 
 class FrameRows final : public Observer {
  public:
-  FrameRows(const MassSpringModel& model, std::string prefix, const std::vector<double>& frames,
+  FrameRows(const ElasticModel& model, std::string prefix, const std::vector<double>& frames,
             std::vector<std::string>& rows)
       : model_(model), prefix_(std::move(prefix)), frames_(frames), rows_(rows) {}
 
@@ -64,7 +64,7 @@ class FrameRows final : public Observer {
     }
   }
 
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   std::string prefix_;
   const std::vector<double>& frames_;
   std::vector<std::string>& rows_;
@@ -122,7 +122,7 @@ class ClothShowcaseExperiment final : public Experiment {
 
   TaskOutput run_task(std::size_t index) const override {
     const std::string& name = integrators_[index];
-    const MassSpringModel model(scene_);
+    const ElasticModel model(scene_);
     RunSettings s;
     s.integrator = name;
     s.dt = dt_;

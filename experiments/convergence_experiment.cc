@@ -73,7 +73,7 @@ class ConvergenceExperiment final : public Experiment {
   TaskOutput run_task(std::size_t index) const override {
     const ConvergenceCase& c = cases_[index / methods_.size()];
     const SweepMethod& m = methods_[index % methods_.size()];
-    const MassSpringModel model(c.scene);
+    const ElasticModel model(c.scene);
     const Vector x_ref =
         accuracy_reference_positions(c.reference, model, c.scene, c.t_end, options_, c.where);
     const bool adaptive = m.info.adaptive;

@@ -16,7 +16,7 @@ namespace {
 
 class BudgetRows final : public Observer {
  public:
-  BudgetRows(const MassSpringModel& model, std::string prefix, int every,
+  BudgetRows(const ElasticModel& model, std::string prefix, int every,
              std::vector<std::string>& rows)
       : model_(model), prefix_(std::move(prefix)), every_(every), rows_(rows) {}
 
@@ -42,7 +42,7 @@ class BudgetRows final : public Observer {
   }
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   std::string prefix_;
   int every_;
   std::vector<std::string>& rows_;
@@ -63,7 +63,7 @@ class DampingBudgetExperiment final : public TimedCasesExperiment {
 
   TaskOutput run_task(std::size_t index) const override {
     Task t = task(index);
-    const MassSpringModel model(t.c.scene);
+    const ElasticModel model(t.c.scene);
     t.run.every = 1;  // every step observed: the work needs each one
     TaskOutput out;
     out.rows.resize(1);

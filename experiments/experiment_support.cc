@@ -4,6 +4,8 @@
 #include <string>
 
 #include "experiments/output_files.h"
+#include "models/element_kind.h"
+#include "models/springs.h"
 
 namespace springlab {
 
@@ -36,16 +38,20 @@ void check_output_rows(const DefinitionObject& o, const std::string& key, double
 }
 
 void SceneTotals::add(const DefinitionObject& o, const std::string& key, const Scene& scene) {
-  particles_ += scene.particles.size();
-  springs_ += scene.springs.size();
-  auto check = [&](std::size_t total, std::size_t cap, const char* what) {
+  auto check = [&](std::size_t total, std::size_t cap, const std::string& what) {
     if (total > cap) {
       o.fail(key, "the experiment's scenes would hold " + std::to_string(total) + " " + what +
                       " in all, over the cap of " + std::to_string(cap));
     }
   };
+  particles_ += scene.particles.size();
   check(particles_, kMaxSceneParticles, "particles");
-  check(springs_, kMaxSceneSprings, "springs");
+  const std::vector<ElementCount> counts = element_counts(scene);
+  elements_.resize(counts.size(), 0);
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    elements_[k] += counts[k].count;
+    check(elements_[k], counts[k].cap, std::string(counts[k].key));
+  }
 }
 
 std::vector<TimedCase> read_timed_cases(const DefinitionObject& d) {

@@ -12,7 +12,7 @@
 #include "experiments/experiment.h"
 #include "experiments/simulation.h"
 #include "integrators/integrator.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 
@@ -44,6 +44,7 @@ class TimedCasesExperiment : public Experiment {
     std::string prefix;  // "scene,integrator,dt": the first fields of its rows
   };
   Task task(std::size_t index) const;
+  const std::vector<TimedCase>& cases() const { return cases_; }
 
  private:
   IntegratorOptions options_;
@@ -55,8 +56,8 @@ class TimedCasesExperiment : public Experiment {
 // while the definition is read, before any task runs: the tasks it makes, the
 // output rows it holds in memory until they are written in task order, and
 // the scenes it holds, all together (at most what one scene may have:
-// kMaxSceneParticles, kMaxSceneSprings). Each run has at most 1e9 steps
-// (make_time_grid).
+// kMaxSceneParticles, and each element array's cap, e.g. kMaxSceneSprings).
+// Each run has at most 1e9 steps (make_time_grid).
 inline constexpr std::size_t kMaxExperimentTasks = 1'000'000;
 inline constexpr std::size_t kMaxExperimentRows = 10'000'000;  // about 1.5 GB of text
 
@@ -69,7 +70,8 @@ class SceneTotals {
   void add(const DefinitionObject& o, const std::string& key, const Scene& scene);
 
  private:
-  std::size_t particles_ = 0, springs_ = 0;
+  std::size_t particles_ = 0;
+  std::vector<std::size_t> elements_;  // per element array (element_counts), summed
 };
 // Rows the energy and damping-budget experiments hold for these cases, each
 // run by `integrators` methods: refused over kMaxExperimentRows.

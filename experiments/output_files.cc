@@ -303,17 +303,22 @@ bool same_file(const std::string& a, const std::string& b) {
   return resolved(a) == resolved(b);
 }
 
-EnergyCsv::EnergyCsv(const MassSpringModel& model, OutputFile& file) : model_(model), file_(file) {
-  file_.write("t,kinetic,spring,gravity,total\n");
+EnergyCsv::EnergyCsv(const ElasticModel& model, OutputFile& file)
+    : model_(model), file_(file), energies_(model.energies(model.initial_positions(),
+                                                          model.initial_velocities())) {
+  std::string header = "t";
+  for (const std::string& column : model.energy_columns()) header += ',' + column;
+  file_.write(header + '\n');
 }
 
 void EnergyCsv::observe(double t, const Vector& x, const Vector& v) {
-  const Energies e = model_.energies(x, v);
-  file_.write(format_number(t) + ',' + format_number(e.kinetic) + ',' + format_number(e.spring) +
-              ',' + format_number(e.gravity) + ',' + format_number(e.total()) + '\n');
+  model_.energies(x, v, energies_);
+  std::string row = format_number(t);
+  for (double value : energies_.values()) row += ',' + format_number(value);
+  file_.write(row + '\n');
 }
 
-TrajectoryCsv::TrajectoryCsv(const MassSpringModel& model, OutputFile& file)
+TrajectoryCsv::TrajectoryCsv(const ElasticModel& model, OutputFile& file)
     : model_(model), file_(file) {
   static const char* axes[] = {"x", "y", "z"};
   std::string header = "t,i";

@@ -72,25 +72,27 @@ bool same_file(const std::string& a, const std::string& b);
 // Shortest decimal text that reads back to the same double (deterministic).
 std::string format_number(double value);
 
-// --energy: t,kinetic,spring,gravity,total
+// --energy: t and the model's energy columns (t,kinetic,spring,gravity,total,
+// then elastic, contact when the scene has them: models/energies.h).
 class EnergyCsv final : public Observer {
  public:
-  EnergyCsv(const MassSpringModel& model, OutputFile& file);
+  EnergyCsv(const ElasticModel& model, OutputFile& file);
   void observe(double t, const Vector& x, const Vector& v) override;
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   OutputFile& file_;
+  Energies energies_;
 };
 
 // --trajectory: t,i,x,y[,z],vx,vy[,vz], one row per particle in scene order.
 class TrajectoryCsv final : public Observer {
  public:
-  TrajectoryCsv(const MassSpringModel& model, OutputFile& file);
+  TrajectoryCsv(const ElasticModel& model, OutputFile& file);
   void observe(double t, const Vector& x, const Vector& v) override;
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   OutputFile& file_;
 };
 

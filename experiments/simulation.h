@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "integrators/integrator.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 
@@ -78,12 +78,13 @@ std::vector<double> time_grid(double dt, double t_end);
 
 // Runs to t_end or until the run diverges or fails (both are results, not
 // exceptions). Divergence: a non-finite state, or kinetic + spring energy
+// (+ every potential that counts with it: Energies::kinetic_and_spring)
 // above blowup * E_s (E_s = model.energy_scale(); with E_s = 0 only a
 // non-finite state counts). Throws std::invalid_argument for bad settings.
 // A run that starts from a state whose energy does not fit in a double
 // (coordinates near 1e300) diverges at t = 0. When settings.options.stop is
 // set and becomes true, simulate throws StopRequested at the next step.
-RunResult simulate(const MassSpringModel& model, const RunSettings& settings,
+RunResult simulate(const ElasticModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers = {});
 
 class StopRequested : public std::runtime_error {

@@ -23,7 +23,7 @@ void check_grid(const char* option, double dt, double t_end) {
 
 }  // namespace
 
-StabilityResult find_max_stable_dt(const MassSpringModel& model, const StabilitySettings& s) {
+StabilityResult find_max_stable_dt(const ElasticModel& model, const StabilitySettings& s) {
   if (!(s.dt_min > 0.0) || !(s.dt_max > s.dt_min) || !std::isfinite(s.dt_max)) {
     throw std::invalid_argument("need 0 < dt-min < dt-max");
   }

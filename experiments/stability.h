@@ -39,7 +39,7 @@ struct StabilityResult {
 
 // Throws std::invalid_argument, before any run, when the range is empty or
 // a run at dt_min (or dt_max) would have no valid time grid (over 1e9 steps).
-StabilityResult find_max_stable_dt(const MassSpringModel& model, const StabilitySettings& s);
+StabilityResult find_max_stable_dt(const ElasticModel& model, const StabilitySettings& s);
 
 // What theory says the limit is, for the fastest mode w (rad/s) of a run of
 // t_end with blow-up factor `blowup`:

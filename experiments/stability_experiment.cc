@@ -163,7 +163,7 @@ class StabilityExperiment final : public Experiment {
   std::string run_limit(const LimitTask& task) const {
     const StiffnessCase& c = cases_[task.case_index];
     const Scene& scene = c.scenes[task.k_index];
-    const MassSpringModel model(scene);
+    const ElasticModel model(scene);
     const double w = max_angular_frequency(model);
     const double t_end = periods_ * 2.0 * std::numbers::pi / std::max(w, 1e-300);
     StabilitySettings s;
@@ -190,7 +190,7 @@ class StabilityExperiment final : public Experiment {
 
   std::string run_map(const MapTask& task) const {
     const Scene& scene = map_->scenes[task.k_index];
-    const MassSpringModel model(scene);
+    const ElasticModel model(scene);
     RunSettings s;
     s.integrator = task.integrator;
     s.dt = task.dt;

@@ -95,7 +95,7 @@ class StabilityRegionExperiment final : public Experiment {
     max_scaled_step_ = d.positive("max_scaled_step", 10.0);
     grid_ = d.count("grid", 81, 11, 1001);
     blowup_ = d.positive("blowup", 1000.0);
-    const MassSpringModel model(scene_);
+    const ElasticModel model(scene_);
     if (2 * model.dofs() > kMaxFirstOrderUnknowns) {
       d.fail("scene", "has " + std::to_string(model.dofs()) + " unknowns; the eigenvalues need " +
                           "at most " + std::to_string(kMaxFirstOrderUnknowns / 2));
@@ -122,7 +122,7 @@ class StabilityRegionExperiment final : public Experiment {
   TaskOutput run_task(std::size_t index) const override {
     const std::string& name = integrators_[index];
     const IntegratorInfo info = make_integrator(name)->info();
-    const MassSpringModel model(scene_);
+    const ElasticModel model(scene_);
     const Limit limit = find_limit(model, info);
     TaskOutput out;
     out.rows.resize(3);
@@ -241,7 +241,7 @@ class StabilityRegionExperiment final : public Experiment {
     }
   }
 
-  Limit find_limit(const MassSpringModel& model, const IntegratorInfo& info) const {
+  Limit find_limit(const ElasticModel& model, const IntegratorInfo& info) const {
     const double lambda_max = std::abs(lambda_.back());
     const double no_limit_dt = max_scaled_step_ / lambda_max;
     if (info.stability_function) {

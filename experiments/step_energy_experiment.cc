@@ -29,6 +29,7 @@
 #include "experiments/experiment.h"
 #include "experiments/experiment_support.h"
 #include "integrators/registry.h"
+#include "models/springs.h"
 
 namespace springlab {
 namespace {
@@ -43,7 +44,7 @@ struct RunVariant {
 // stiffness makes the exact step matrix indefinite by itself.
 class StepRows final : public Observer {
  public:
-  StepRows(const MassSpringModel& model, double dt, std::string prefix,
+  StepRows(const ElasticModel& model, double dt, std::string prefix,
            std::vector<std::string>& rows)
       : model_(model), dt_(dt), prefix_(std::move(prefix)), rows_(rows) {}
   void observe(double t, const Vector& x, const Vector& v) override {
@@ -51,7 +52,7 @@ class StepRows final : public Observer {
     const Eigen::MatrixXd p = model_.scene_positions(x);
     const std::vector<Particle>& particles = model_.scene().particles;
     long compressed = 0, indefinite = 0;
-    for (const Spring& s : model_.scene().springs) {
+    for (const Spring& s : model_.scene().get<Springs>()) {
       const double l = (p.row(s.i) - p.row(s.j)).norm();
       if (!(s.k > 0.0 && l < s.rest)) continue;
       ++compressed;
@@ -81,7 +82,7 @@ class StepRows final : public Observer {
   long gaining_steps() const { return gaining_; }
 
  private:
-  const MassSpringModel& model_;
+  const ElasticModel& model_;
   double dt_;
   std::string prefix_;
   std::vector<std::string>& rows_;
@@ -126,7 +127,7 @@ class StepEnergyExperiment final : public Experiment {
   TaskOutput run_task(std::size_t index) const override {
     const TimedCase& c = cases_[index / runs_.size()];
     const RunVariant& variant = runs_[index % runs_.size()];
-    const MassSpringModel model(c.scene);
+    const ElasticModel model(c.scene);
     RunSettings s;
     s.integrator = variant.integrator;
     s.dt = c.dt;
@@ -144,7 +145,7 @@ class StepEnergyExperiment final : public Experiment {
     StepRows rows(model, c.dt, prefix, out.rows[0]);
     const RunResult r = simulate(model, s, {&rows});
     long springs = 0;
-    for (const Spring& spring : c.scene.springs) springs += spring.k > 0.0 ? 1 : 0;
+    for (const Spring& spring : c.scene.get<Springs>()) springs += spring.k > 0.0 ? 1 : 0;
     Row run;
     run.raw(prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps).add(springs)
         .add(rows.gaining_steps()).add(r.wall_seconds).add(r.energy_initial).add(r.energy_final)

@@ -45,7 +45,7 @@ class WorkPrecisionExperiment final : public Experiment {
 
   TaskOutput run_task(std::size_t index) const override {
     const SweepMethod& m = methods_[index];
-    const MassSpringModel model(scene_);
+    const ElasticModel model(scene_);
     const Vector x_ref =
         accuracy_reference_positions(reference_, model, scene_, t_end_, options_, where_);
     const bool adaptive = m.info.adaptive;

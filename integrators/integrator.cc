@@ -71,6 +71,11 @@ const char* to_string(Stiffness stiffness) {
 
 StepResult Integrator::initialize(const MechanicalSystem& system, double t0, const Vector& x0,
                                   const Vector& v0, const IntegratorOptions& options) {
+  if (system_ != nullptr) {
+    return StepResult::failure(name() +
+                               ": already initialized: an integrator runs one system once (its "
+                               "caches belong to that system); make a new one for the next run");
+  }
   system_ = &system;
   options_ = options;
   stats_ = {};

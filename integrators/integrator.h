@@ -136,7 +136,11 @@ class Integrator {
   // can say which of the given ones it ignores.
   virtual std::vector<std::string> options_read() const;
 
-  // Binds the system and initial state; resets statistics.
+  // Binds the integrator to `system` and sets the initial state. An
+  // integrator serves one system for one run: its caches (a symbolic
+  // factorization of the system's Jacobian pattern, a kept Newton matrix, the
+  // last acceleration) belong to that system, so a second call fails (with a
+  // StepResult, nothing changed); make a new integrator for the next run.
   StepResult initialize(const MechanicalSystem& system, double t0, const Vector& x0,
                         const Vector& v0, const IntegratorOptions& options);
 

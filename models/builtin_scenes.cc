@@ -8,6 +8,11 @@
 #include <map>
 #include <optional>
 
+#include "models/drag.h"
+#include "models/gravity.h"
+#include "models/springs.h"
+#include "models/wind.h"
+
 namespace springlab {
 namespace {
 
@@ -84,11 +89,11 @@ Spring spring_between(int i, int j, double k, double rest) {
 Scene build_spring(const Values& p) {
   Scene scene;
   scene.dimension = 2;
-  scene.gravity = {0.0, -p.at("g"), 0.0};
-  scene.drag = p.at("drag");
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Drag>().gamma = p.at("drag");
   scene.particles = {particle_at({0.0, 0.0, 0.0}, p.at("mass"), true),
                      particle_at({0.0, -p.at("rest"), 0.0}, p.at("mass"), false)};
-  scene.springs = {spring_between(0, 1, p.at("k"), p.at("rest"))};
+  scene.block<Springs>() = {spring_between(0, 1, p.at("k"), p.at("rest"))};
   return scene;
 }
 
@@ -105,7 +110,7 @@ Scene build_oscillator(const Values& p) {
   scene.dimension = 2;
   scene.particles = {particle_at({0.0, 0.0, 0.0}, p.at("mass"), true),
                      particle_at({rest + amplitude, 0.0, 0.0}, p.at("mass"), false)};
-  scene.springs = {spring_between(0, 1, p.at("k"), rest)};
+  scene.block<Springs>() = {spring_between(0, 1, p.at("k"), rest)};
   return scene;
 }
 
@@ -119,15 +124,16 @@ Scene build_chain(const Values& p) {
   const bool horizontal = p.at("horizontal") == 1.0;
   Scene scene;
   scene.dimension = 2;
-  scene.gravity = {0.0, -p.at("g"), 0.0};
-  scene.drag = p.at("drag");
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Drag>().gamma = p.at("drag");
+  Springs& springs = scene.block<Springs>();
   scene.particles.reserve(static_cast<std::size_t>(n));
-  scene.springs.reserve(static_cast<std::size_t>(n - 1));
+  springs.reserve(static_cast<std::size_t>(n - 1));
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d x = horizontal ? Eigen::Vector3d(i * placed, 0.0, 0.0)
                                          : Eigen::Vector3d(0.0, -i * placed, 0.0);
     scene.particles.push_back(particle_at(x, p.at("mass"), i == 0));
-    if (i > 0) scene.springs.push_back(spring_between(i - 1, i, p.at("k"), spacing));
+    if (i > 0) springs.push_back(spring_between(i - 1, i, p.at("k"), spacing));
   }
   return scene;
 }
@@ -141,12 +147,13 @@ Scene build_cloth(const Values& p) {
   const double particle_mass = p.at("mass") / (static_cast<double>(n) * n);
   Scene scene;
   scene.dimension = 3;
-  scene.gravity = {0.0, -9.81, 0.0};
-  scene.drag = p.at("drag");
+  scene.block<Gravity>().acceleration = {0.0, -9.81, 0.0};
+  scene.block<Drag>().gamma = p.at("drag");
   if (p.at("wind") != 0.0) {
     // Coefficient = particle mass: each particle relaxes to the wind in 1 s.
-    scene.wind = Wind{{0.0, 0.0, p.at("wind")}, particle_mass, 0.5, 0.5};
+    scene.block<Wind>() = Wind{{0.0, 0.0, p.at("wind")}, particle_mass, 0.5, 0.5};
   }
+  Springs& springs = scene.block<Springs>();
   const auto count = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
   scene.particles.reserve(count);
   for (int r = 0; r < n; ++r) {
@@ -158,9 +165,9 @@ Scene build_cloth(const Values& p) {
   auto index = [n](int r, int c) { return r * n + c; };
   auto join = [&](int a, int b, double k) {
     const double rest = (scene.particles[a].x - scene.particles[b].x).norm();
-    scene.springs.push_back(spring_between(a, b, k, rest));
+    springs.push_back(spring_between(a, b, k, rest));
   };
-  scene.springs.reserve(count * 6);
+  springs.reserve(count * 6);
   const double k = p.at("k"), k_shear = p.at("k_shear"), k_bend = p.at("k_bend");
   for (int r = 0; r < n; ++r)
     for (int c = 0; c + 1 < n; ++c) join(index(r, c), index(r, c + 1), k);

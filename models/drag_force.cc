@@ -1,10 +1,13 @@
-// Drag, the course's F^dp = -gamma v, on every free particle (SPEC §2).
+// The "drag" element kind: the scene key "drag" (SPEC §3) and the course's
+// F^dp = -gamma v on every free particle (SPEC §2).
 // dF/dv = -gamma I (diagonal), dF/dx = 0. Dissipates power gamma |v|^2.
 // Derives from the dissipation potential W(v) = gamma |v|^2 / 2.
 #include <memory>
+#include <random>
 #include <vector>
 
-#include "models/force_registry.h"
+#include "models/drag.h"
+#include "models/element_kind.h"
 
 namespace springlab {
 namespace {
@@ -43,11 +46,45 @@ class DragForce final : public ForceTerm {
   std::vector<int> diagonal_;
 };
 
+std::unique_ptr<ForceTerm> make_drag_force(const Scene& scene, const ParticleOrder& order) {
+  const double gamma = scene.get<Drag>().gamma;
+  if (gamma == 0.0) return nullptr;
+  return std::make_unique<DragForce>(gamma, order.dim, order.free_particles);
+}
+
+void read_drag(const Json& document, const Reporter& r, Scene& scene) {
+  if (!document.contains("drag")) return;
+  const double gamma = read_number(r, "drag", document.at("drag"));
+  check_nonnegative(r, "drag", gamma);
+  scene.block<Drag>().gamma = gamma;
+}
+
+void validate_drag(const Scene& scene, const Reporter& r) {
+  check_nonnegative(r, "drag", scene.get<Drag>().gamma);
+}
+
+// Always written (0 when absent), so a scene file shows that it has none.
+void write_drag(const Scene& scene, std::vector<std::pair<std::string, std::string>>& entries) {
+  entries.emplace_back("drag", json_number(scene.get<Drag>().gamma));
+}
+
+void add_random_drag(Scene& scene, std::mt19937& rng, RandomStates) {
+  scene.block<Drag>().gamma = std::uniform_real_distribution<double>(0.1, 0.6)(rng);
+}
+
 }  // namespace
 
-std::unique_ptr<ForceTerm> make_drag_force(const Scene& scene, const ParticleOrder& order) {
-  if (scene.drag == 0.0) return nullptr;
-  return std::make_unique<DragForce>(scene.drag, order.dim, order.free_particles);
+const ElementKind& drag_kind() {
+  static const ElementKind kind = {
+      .name = "drag",
+      .keys = {{.name = "drag"}},
+      .read = read_drag,
+      .validate = validate_drag,
+      .write = write_drag,
+      .make = make_drag_force,
+      .add_random = add_random_drag,
+  };
+  return kind;
 }
 
 }  // namespace springlab

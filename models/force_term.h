@@ -1,8 +1,9 @@
-// One kind of force: the unit a model is assembled from. A new kind of force
-// (or, later, a finite element as a "generalized spring") is one new file
-// that implements this interface plus one line in force_registry.cc; every
-// integrator then runs it unchanged, and the shared model tests
-// (Jacobian vs finite differences, force = -grad energy) cover it.
+// The force of one element kind (element_kind.h): the unit a model is
+// assembled from. An element kind's file implements this interface (springs,
+// gravity; later finite elements as "generalized springs") and registers a
+// factory for it; every integrator then runs it unchanged, and the shared
+// tests (tests/test_element_kinds.cc: Jacobians vs finite differences,
+// force = -grad energy, the definite part) cover it.
 //
 // Terms work on the arrays of *all* particles in the model's internal order:
 // free particles first (indices < free_particles), fixed ones after. Fixed
@@ -20,6 +21,14 @@
 
 namespace springlab {
 
+// How scene particle indices map to the model's internal order (free first).
+struct ParticleOrder {
+  int dim = 2;
+  int free_particles = 0;
+  std::vector<int> internal_of_scene;  // scene index -> internal index
+  std::vector<int> scene_of_internal;  // internal index -> scene index
+};
+
 // A read-only view of the configuration at which forces are evaluated.
 struct Configuration {
   double t = 0.0;
@@ -31,9 +40,6 @@ struct Configuration {
   int free_particles = 0;
   bool is_free(int p) const { return p < free_particles; }
 };
-
-// Which column of the energy report a term's potential belongs to.
-enum class EnergyKind { kNone, kSpring, kGravity };
 
 // Collects the dim x dim blocks (a, b) of free particles that any term writes.
 class JacobianPatternBuilder {
@@ -102,9 +108,9 @@ class ForceTerm {
   virtual void add_force(const Configuration& c, double* f) const = 0;
 
   // The potential whose negative gradient is this force (0 for dissipative
-  // and driving forces, which store no energy).
+  // and driving forces, which store no energy). The energy report shows it
+  // in its kind's column (ElementKind::energy).
   virtual double potential_energy(const Configuration&) const { return 0.0; }
-  virtual EnergyKind energy_kind() const { return EnergyKind::kNone; }
   // Conservative terms derive entirely from potential_energy; the others'
   // power F.v is the work rate the damping budget accounts for.
   virtual bool conservative() const = 0;

@@ -8,7 +8,7 @@
 
 namespace springlab {
 
-double max_angular_frequency(const MassSpringModel& model, const Vector& x, const Vector& v) {
+double max_angular_frequency(const ElasticModel& model, const Vector& x, const Vector& v) {
   SparseMatrix dfdx;
   model.jacobians(0.0, x, v, &dfdx, nullptr);
   // A = M^-1/2 K M^-1/2 with K the symmetric part of -dF/dx: same spectrum
@@ -44,7 +44,7 @@ double max_angular_frequency(const MassSpringModel& model, const Vector& x, cons
   return lambda > 0.0 ? std::sqrt(lambda) : 0.0;
 }
 
-std::vector<std::complex<double>> first_order_eigenvalues(const MassSpringModel& model,
+std::vector<std::complex<double>> first_order_eigenvalues(const ElasticModel& model,
                                                           const Vector& x, const Vector& v) {
   const Eigen::Index n = model.dofs();
   if (2 * n > kMaxFirstOrderUnknowns) {

@@ -14,15 +14,15 @@
 #include <complex>
 #include <vector>
 
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 
 // w_max in rad/s at (x, v), t = 0. Dense symmetric eigensolver up to 3000
 // unknowns, power iteration on M^-1/2 K M^-1/2 above. 0 when K has no
 // positive eigenvalue.
-double max_angular_frequency(const MassSpringModel& model, const Vector& x, const Vector& v);
-inline double max_angular_frequency(const MassSpringModel& model) {
+double max_angular_frequency(const ElasticModel& model, const Vector& x, const Vector& v);
+inline double max_angular_frequency(const ElasticModel& model) {
   return max_angular_frequency(model, model.initial_positions(), model.initial_velocities());
 }
 
@@ -30,7 +30,7 @@ inline double max_angular_frequency(const MassSpringModel& model) {
 // by imaginary part (a conjugate pair: negative first). Dense eigensolver;
 // throws std::invalid_argument above kMaxFirstOrderUnknowns unknowns (2 n).
 inline constexpr int kMaxFirstOrderUnknowns = 4000;
-std::vector<std::complex<double>> first_order_eigenvalues(const MassSpringModel& model,
+std::vector<std::complex<double>> first_order_eigenvalues(const ElasticModel& model,
                                                           const Vector& x, const Vector& v);
 
 }  // namespace springlab

@@ -1,10 +1,19 @@
 // The scene: what a scene file (SPEC §3) or a built-in scene (SPEC §4)
 // describes, before any physics is assembled from it. Plain data; the model
-// (mass_spring_model.h) turns it into forces and a state.
+// (elastic_model.h) turns it into forces and a state.
+//
+// A scene is its particles plus one block of data per element kind it holds
+// (models/element_kind.h): the springs, the gravity, the drag, the wind, and
+// whatever kinds are registered later. Code that builds a scene reaches a
+// block by its type, e.g. `scene.block<Springs>().push_back(spring)` or
+// `scene.get<Gravity>().acceleration`; the reading, checking and writing of a
+// block live in its kind's file, so adding a kind never edits this file.
 #pragma once
 
 #include <Eigen/Core>
+#include <any>
 #include <cstddef>
+#include <deque>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -24,43 +33,75 @@ struct Particle {
   Eigen::Vector3d v = Eigen::Vector3d::Zero();
   double mass = 1.0;
   bool fixed = false;
+  // The rest (material) position X (SPEC §7): where the particle sits in the
+  // undeformed object. Absent: x. Springs take their default rest length
+  // from it, elements their rest shape.
+  std::optional<Eigen::Vector3d> X = std::nullopt;
+  const Eigen::Vector3d& rest_position() const { return X ? *X : x; }
 };
 
-struct Spring {
-  int i = 0;
-  int j = 0;
-  double k = 0.0;
-  double rest = 0.0;     // resolved: the initial distance when the file omits it
-  double damping = 0.0;  // c in F_i = -c ((v_i - v_j).d) d
-};
-
-// w(t) = w0 (1 + gust sin(2 pi f t)); F_i = coefficient (w(t) - v_i)
-struct Wind {
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-  double coefficient = 0.0;
-  double gust = 0.0;
-  double frequency = 0.0;
-};
-
-struct Scene {
+class Scene {
+ public:
   std::string name;
   int dimension = 2;
-  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
-  double drag = 0.0;
-  std::optional<Wind> wind;
   std::vector<Particle> particles;
-  std::vector<Spring> springs;
+
+  // The block of type B, created empty (default-constructed) when the scene
+  // has none yet: for code that builds a scene. The reference stays valid
+  // while blocks are added (not across remove()).
+  template <typename B>
+  B& block() {
+    for (std::any& b : blocks_) {
+      if (B* found = std::any_cast<B>(&b)) return *found;
+    }
+    return *std::any_cast<B>(&blocks_.emplace_back(B{}));
+  }
+  // The block of type B, or nullptr when the scene has none.
+  template <typename B>
+  const B* find() const {
+    for (const std::any& b : blocks_) {
+      if (const B* found = std::any_cast<B>(&b)) return found;
+    }
+    return nullptr;
+  }
+  // The block of type B, or an empty one (no springs, zero gravity) when the
+  // scene has none.
+  template <typename B>
+  const B& get() const {
+    static const B empty{};
+    const B* found = find<B>();
+    return found != nullptr ? *found : empty;
+  }
+  template <typename B>
+  bool has() const {
+    return find<B>() != nullptr;
+  }
+  template <typename B>
+  void remove() {
+    for (auto it = blocks_.begin(); it != blocks_.end(); ++it) {
+      if (std::any_cast<B>(&*it) != nullptr) {
+        blocks_.erase(it);
+        return;
+      }
+    }
+  }
+
+ private:
+  // One per kind present, in the order they were added (which nothing
+  // depends on: reading, checking and writing follow the kind registry). A
+  // deque: adding a block moves none of the others.
+  std::deque<std::any> blocks_;
 };
 
 // Resource caps (README, "Reliability"): a scene larger than this is refused
 // before it is built, so a typo like n=100000 is a message, not an
-// out-of-memory kill. The largest scene they allow (a 578 x 578 cloth, or a chain of
-// 1e6 particles) needs about 2 GB with an explicit method. A scene
-// file is also refused when it is larger than kMaxSceneFileBytes, nests deeper
-// than kMaxSceneNesting or holds more than kMaxSceneJsonValues values: each is
-// checked while reading, before the document is complete.
+// out-of-memory kill. The largest scene they allow (a 578 x 578 cloth, or a
+// chain of 1e6 particles) needs about 2 GB with an explicit method. Each
+// element kind caps its own arrays (springs.h: kMaxSceneSprings). A scene
+// file is also refused when it is larger than kMaxSceneFileBytes, nests
+// deeper than kMaxSceneNesting or holds more than kMaxSceneJsonValues values:
+// each is checked while reading, before the document is complete.
 inline constexpr std::size_t kMaxSceneParticles = 1'000'000;
-inline constexpr std::size_t kMaxSceneSprings = 2'000'000;
 inline constexpr std::size_t kMaxSceneFileBytes = std::size_t{512} << 20;  // 512 MiB
 inline constexpr std::size_t kMaxSceneNesting = 64;
 inline constexpr std::size_t kMaxSceneJsonValues = 32'000'000;

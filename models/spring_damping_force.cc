@@ -1,4 +1,6 @@
-// Damping along a spring (internal friction), SPEC §2:
+// The "spring-damping" element kind: damping along a spring (internal
+// friction), SPEC §2. It has no scene key of its own: it reads each spring's
+// "damping" (springs.h, read and checked by springs.cc).
 //   d = x_i - x_j, l = |d|, u = d / l, w = v_i - v_j
 //   F_i = -c (w.u) u,  F_j = -F_i            (dissipates: F_i.v_i + F_j.v_j = -c (w.u)^2)
 // Jacobians, with P = I - u u^T:
@@ -7,10 +9,12 @@
 //                                               damping report jacobian_symmetric() = false)
 // and dF_i/d(.)_j = -dF_i/d(.)_i, dF_j = -dF_i.
 #include <cmath>
+#include <random>
 #include <memory>
 #include <vector>
 
-#include "models/force_registry.h"
+#include "models/element_kind.h"
+#include "models/springs.h"
 
 namespace springlab {
 namespace {
@@ -116,18 +120,49 @@ class SpringDampingForce final : public ForceTerm {
   int free_;
 };
 
-}  // namespace
-
 std::unique_ptr<ForceTerm> make_spring_damping_force(const Scene& scene,
                                                      const ParticleOrder& order) {
   std::vector<DamperData> dampers;
-  for (const Spring& s : scene.springs) {
+  for (const Spring& s : scene.get<Springs>()) {
     if (s.damping == 0.0) continue;
     dampers.push_back({order.internal_of_scene[s.i], order.internal_of_scene[s.j], s.damping});
   }
   if (dampers.empty()) return nullptr;
   return std::make_unique<SpringDampingForce>(std::move(dampers), order.dim,
                                               order.free_particles);
+}
+
+// Damps every spring of the scene; without springs, adds pure dampers
+// (k = 0, so only this kind's force acts) between some pairs of particles.
+void add_random_damping(Scene& scene, std::mt19937& rng, RandomStates) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Springs& springs = scene.block<Springs>();
+  if (springs.empty()) {
+    const int n = static_cast<int>(scene.particles.size());
+    for (int i = 0; i < n; ++i) {
+      for (int j = i + 1; j < n; ++j) {
+        if ((i + j) % 2 == 0) continue;
+        Spring s;
+        s.i = i;
+        s.j = j;
+        s.rest = (scene.particles[i].x - scene.particles[j].x).norm();
+        springs.push_back(s);
+      }
+    }
+  }
+  for (Spring& s : springs) s.damping = 0.1 + 0.5 * u(rng);
+}
+
+}  // namespace
+
+const ElementKind& spring_damping_kind() {
+  static const ElementKind kind = {
+      .name = "spring-damping",
+      .refers_to_particles = true,
+      .make = make_spring_damping_force,
+      .add_random = add_random_damping,
+  };
+  return kind;
 }
 
 }  // namespace springlab

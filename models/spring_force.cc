@@ -16,8 +16,9 @@
 #include <immintrin.h>
 #endif
 
-#include "models/force_registry.h"
+#include "models/element_kind.h"
 #include "models/spring_force.h"
+#include "models/springs.h"
 
 namespace springlab {
 
@@ -141,7 +142,6 @@ class SpringForce final : public ForceTerm {
 
   std::string_view name() const override { return "spring"; }
   bool conservative() const override { return true; }
-  EnergyKind energy_kind() const override { return EnergyKind::kSpring; }
 
   void add_force(const Configuration& c, double* f) const override {
     if (dim_ == 2) add_force_d<2>(c, f); else add_force_d<3>(c, f);
@@ -293,8 +293,9 @@ class SpringForce final : public ForceTerm {
 
 std::unique_ptr<ForceTerm> make_spring_force(const Scene& scene, const ParticleOrder& order) {
   std::vector<SpringData> springs;
-  springs.reserve(scene.springs.size());
-  for (const Spring& s : scene.springs) {
+  const Springs& scene_springs = scene.get<Springs>();
+  springs.reserve(scene_springs.size());
+  for (const Spring& s : scene_springs) {
     if (s.k == 0.0) continue;  // a pure damper: spring_damping_force.cc
     springs.push_back({order.internal_of_scene[s.i], order.internal_of_scene[s.j], s.k, s.rest});
   }

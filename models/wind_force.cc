@@ -1,13 +1,17 @@
-// Wind with gusts (SPEC §2): F_i = c_w (w(t) - v_i) on every free particle,
+// The "wind" element kind: the scene key "wind" (SPEC §3) and wind with
+// gusts (SPEC §2): F_i = c_w (w(t) - v_i) on every free particle,
 //   w(t) = w0 (1 + gust sin(2 pi f t)).
 // It depends on t (so integrators must evaluate it at their stage times) and
 // relaxes each particle's velocity toward the wind: dF/dv = -c_w I, dF/dx = 0.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <random>
 #include <vector>
 
-#include "models/force_registry.h"
+#include "models/element_kind.h"
+#include "models/wind.h"
 
 namespace springlab {
 namespace {
@@ -67,11 +71,81 @@ class WindForce final : public ForceTerm {
   std::vector<int> diagonal_;
 };
 
+std::unique_ptr<ForceTerm> make_wind_force(const Scene& scene, const ParticleOrder& order) {
+  const Wind* wind = scene.find<Wind>();
+  if (wind == nullptr || wind->coefficient == 0.0) return nullptr;
+  return std::make_unique<WindForce>(*wind, order.dim, order.free_particles);
+}
+
+void read_wind(const Json& document, const Reporter& r, Scene& scene) {
+  if (!document.contains("wind")) return;
+  const Json& j = document.at("wind");
+  require_object(r, "wind", j);
+  check_keys(r, "wind", j, {"velocity", "coefficient", "gust", "frequency"}, {"velocity"});
+  Wind wind;
+  wind.velocity = read_vector(r, "wind.velocity", j.at("velocity"), scene.dimension);
+  auto optional_rate = [&](const char* key, double& out) {
+    if (!j.contains(key)) return;
+    out = read_number(r, field("wind", key), j.at(key));
+    check_nonnegative(r, field("wind", key), out);
+  };
+  optional_rate("coefficient", wind.coefficient);
+  optional_rate("gust", wind.gust);
+  optional_rate("frequency", wind.frequency);
+  scene.block<Wind>() = wind;
+}
+
+void validate_wind(const Scene& scene, const Reporter& r) {
+  const Wind* wind = scene.find<Wind>();
+  if (wind == nullptr) return;
+  check_vector(r, "wind.velocity", wind->velocity, scene.dimension);
+  check_nonnegative(r, "wind.coefficient", wind->coefficient);
+  check_nonnegative(r, "wind.gust", wind->gust);
+  check_nonnegative(r, "wind.frequency", wind->frequency);
+}
+
+void write_wind(const Scene& scene, std::vector<std::pair<std::string, std::string>>& entries) {
+  const Wind* w = scene.find<Wind>();
+  if (w == nullptr) return;
+  entries.emplace_back("wind", "{\"velocity\": " +
+                                   json_vector(w->velocity, std::clamp(scene.dimension, 0, 3)) +
+                                   ", \"coefficient\": " + json_number(w->coefficient) +
+                                   ", \"gust\": " + json_number(w->gust) +
+                                   ", \"frequency\": " + json_number(w->frequency) + "}");
+}
+
+// SPEC §6: the wind can bring a particle to its largest speed
+// |w_max| = |w0| (1 + gust), a kinetic energy of |w_max|^2 / 2 per kg.
+double wind_energy_scale(const Scene& scene, double) {
+  const Wind* wind = scene.find<Wind>();
+  if (wind == nullptr) return 0.0;
+  const double w_max = wind->velocity.norm() * (1.0 + std::abs(wind->gust));
+  return 0.5 * w_max * w_max;
+}
+
+void add_random_wind(Scene& scene, std::mt19937& rng, RandomStates) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Wind& wind = scene.block<Wind>();
+  for (int r = 0; r < scene.dimension; ++r) wind.velocity[r] = 4.0 * u(rng) - 2.0;
+  wind.coefficient = 0.1 + 0.3 * u(rng);
+  wind.gust = 0.5 * u(rng);
+  wind.frequency = 0.2 + 2.0 * u(rng);
+}
+
 }  // namespace
 
-std::unique_ptr<ForceTerm> make_wind_force(const Scene& scene, const ParticleOrder& order) {
-  if (!scene.wind || scene.wind->coefficient == 0.0) return nullptr;
-  return std::make_unique<WindForce>(*scene.wind, order.dim, order.free_particles);
+const ElementKind& wind_kind() {
+  static const ElementKind kind = {
+      .name = "wind",
+      .keys = {{.name = "wind"}},
+      .read = read_wind,
+      .validate = validate_wind,
+      .write = write_wind,
+      .make = make_wind_force,
+      .energy_scale_per_mass = wind_energy_scale,
+      .add_random = add_random_wind,
+  };
+  return kind;
 }
 
 }  // namespace springlab

@@ -4,7 +4,11 @@
 
 #include <cmath>
 
+#include "models/drag.h"
+#include "models/gravity.h"
 #include "models/scene.h"
+#include "models/springs.h"
+#include "models/wind.h"
 
 namespace springlab::testing {
 
@@ -20,7 +24,7 @@ inline Scene oscillator(double k = 100.0, double mass = 1.0, double rest = 0.0,
   s.dimension = 2;
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(rest + amplitude, 0, 0), Eigen::Vector3d::Zero(), mass, false}};
-  s.springs = {{0, 1, k, rest, 0.0}};
+  s.block<Springs>() = {{0, 1, k, rest, 0.0}};
   return s;
 }
 
@@ -29,10 +33,10 @@ inline Scene swinging_spring() {
   Scene s;
   s.name = "swinging-spring";
   s.dimension = 2;
-  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.block<Gravity>().acceleration = Eigen::Vector3d(0, -9.81, 0);
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(0.9, -0.7, 0), Eigen::Vector3d(0.5, 0.3, 0), 1.0, false}};
-  s.springs = {{0, 1, 50.0, 1.0, 0.0}};
+  s.block<Springs>() = {{0, 1, 50.0, 1.0, 0.0}};
   return s;
 }
 
@@ -41,14 +45,14 @@ inline Scene damped_windy_chain() {
   Scene s;
   s.name = "damped-windy-chain";
   s.dimension = 3;
-  s.gravity = Eigen::Vector3d(0, -9.81, 0);
-  s.drag = 0.2;
-  s.wind = Wind{Eigen::Vector3d(2.0, 0.0, 1.0), 0.3, 0.5, 2.0};
+  s.block<Gravity>().acceleration = Eigen::Vector3d(0, -9.81, 0);
+  s.block<Drag>().gamma = 0.2;
+  s.block<Wind>() = Wind{Eigen::Vector3d(2.0, 0.0, 1.0), 0.3, 0.5, 2.0};
   s.particles.push_back({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true});
   for (int p = 1; p <= 3; ++p) {
     s.particles.push_back({Eigen::Vector3d(0.5 * p, -0.1 * p, 0.05 * p),
                            Eigen::Vector3d(0.1, 0.2 * p, -0.1), 0.5, false});
-    s.springs.push_back({p - 1, p, 40.0, 0.45, 0.8});
+    s.block<Springs>().push_back({p - 1, p, 40.0, 0.45, 0.8});
   }
   return s;
 }
@@ -64,7 +68,7 @@ inline Scene compressed_chain() {
   for (int p = 1; p <= 6; ++p) {
     s.particles.push_back({Eigen::Vector3d(0.3 * p, 0.02 * (p % 2), 0), Eigen::Vector3d::Zero(),
                            1.0, p == 6});
-    s.springs.push_back({p - 1, p, 100.0, 1.0, 0.0});
+    s.block<Springs>().push_back({p - 1, p, 100.0, 1.0, 0.0});
   }
   return s;
 }

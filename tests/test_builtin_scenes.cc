@@ -165,11 +165,11 @@ TEST(BuiltinScenesTest, ExactMessages) {
 }
 
 TEST(BuiltinScenesTest, AcceptsOrdinaryNumberSpellingsAndTheLastValueWins) {
-  EXPECT_EQ(make_builtin_scene("spring", {{"k", "+5"}}).springs[0].k, 5.0);
-  EXPECT_EQ(make_builtin_scene("spring", {{"k", "1e3"}}).springs[0].k, 1000.0);
-  EXPECT_EQ(make_builtin_scene("spring", {{"k", ".5"}}).springs[0].k, 0.5);
+  EXPECT_EQ(make_builtin_scene("spring", {{"k", "+5"}}).get<Springs>()[0].k, 5.0);
+  EXPECT_EQ(make_builtin_scene("spring", {{"k", "1e3"}}).get<Springs>()[0].k, 1000.0);
+  EXPECT_EQ(make_builtin_scene("spring", {{"k", ".5"}}).get<Springs>()[0].k, 0.5);
   EXPECT_EQ(make_builtin_scene("chain", {{"n", "5.0"}}).particles.size(), 5u);
-  EXPECT_EQ(make_builtin_scene("spring", {{"k", "5"}, {"k", "7"}}).springs[0].k, 7.0);
+  EXPECT_EQ(make_builtin_scene("spring", {{"k", "5"}, {"k", "7"}}).get<Springs>()[0].k, 7.0);
   // Each value is checked as given, even if a later one would replace it.
   EXPECT_EQ(build_error("spring", {{"k", "-5"}, {"k", "7"}}),
             "scene 'spring': parameter 'k' must be >= 0 (got -5)");
@@ -187,53 +187,53 @@ TEST(BuiltinScenesTest, SpringIsTheCourseExample) {
   EXPECT_EQ(scene.particles[1].x,
             Eigen::Vector3d(0, -1, 0));  // undeformed: at rest length below x0
   EXPECT_EQ(scene.particles[1].v, Eigen::Vector3d::Zero());
-  ASSERT_EQ(scene.springs.size(), 1u);
-  EXPECT_EQ(scene.springs[0].rest, distance(scene, scene.springs[0]));
-  EXPECT_EQ(scene.springs[0].k, 100.0);
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d(0, -9.81, 0));
-  EXPECT_GT(scene.drag, 0.0);
-  EXPECT_FALSE(scene.wind.has_value());
+  ASSERT_EQ(scene.get<Springs>().size(), 1u);
+  EXPECT_EQ(scene.get<Springs>()[0].rest, distance(scene, scene.get<Springs>()[0]));
+  EXPECT_EQ(scene.get<Springs>()[0].k, 100.0);
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d(0, -9.81, 0));
+  EXPECT_GT(scene.get<Drag>().gamma, 0.0);
+  EXPECT_FALSE(scene.has<Wind>());
 
   const Scene custom = make_builtin_scene(
       "spring", {{"k", "40"}, {"mass", "2"}, {"rest", "0.5"}, {"drag", "0"}, {"g", "-1.5"}});
-  EXPECT_EQ(custom.springs[0].k, 40.0);
+  EXPECT_EQ(custom.get<Springs>()[0].k, 40.0);
   EXPECT_EQ(custom.particles[1].mass, 2.0);
   EXPECT_EQ(custom.particles[1].x, Eigen::Vector3d(0, -0.5, 0));
-  EXPECT_EQ(custom.springs[0].rest, 0.5);
-  EXPECT_EQ(custom.drag, 0.0);
-  EXPECT_EQ(custom.gravity, Eigen::Vector3d(0, 1.5, 0));
+  EXPECT_EQ(custom.get<Springs>()[0].rest, 0.5);
+  EXPECT_EQ(custom.get<Drag>().gamma, 0.0);
+  EXPECT_EQ(custom.get<Gravity>().acceleration, Eigen::Vector3d(0, 1.5, 0));
 }
 
 TEST(BuiltinScenesTest, OscillatorStartsStretchedByTheAmplitude) {
   const Scene scene = make_builtin_scene(
       "oscillator", {{"k", "4"}, {"mass", "2"}, {"rest", "0.5"}, {"amplitude", "0.25"}});
   ASSERT_EQ(scene.particles.size(), 2u);
-  ASSERT_EQ(scene.springs.size(), 1u);
+  ASSERT_EQ(scene.get<Springs>().size(), 1u);
   EXPECT_TRUE(scene.particles[0].fixed);
   EXPECT_EQ(scene.particles[1].mass, 2.0);
-  EXPECT_EQ(scene.springs[0].k, 4.0);
-  EXPECT_EQ(distance(scene, scene.springs[0]) - scene.springs[0].rest, 0.25);
+  EXPECT_EQ(scene.get<Springs>()[0].k, 4.0);
+  EXPECT_EQ(distance(scene, scene.get<Springs>()[0]) - scene.get<Springs>()[0].rest, 0.25);
   EXPECT_EQ(scene.particles[1].x.y(), 0.0);  // stretched along the spring axis
   EXPECT_EQ(scene.particles[1].v, Eigen::Vector3d::Zero());
   // Undamped and unforced: the exact solution holds.
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d::Zero());
-  EXPECT_EQ(scene.drag, 0.0);
-  EXPECT_EQ(scene.springs[0].damping, 0.0);
-  EXPECT_FALSE(scene.wind.has_value());
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d::Zero());
+  EXPECT_EQ(scene.get<Drag>().gamma, 0.0);
+  EXPECT_EQ(scene.get<Springs>()[0].damping, 0.0);
+  EXPECT_FALSE(scene.has<Wind>());
   // A compressed start is allowed while the length stays positive; a zero-rest spring too.
   EXPECT_EQ(make_builtin_scene("oscillator", {{"rest", "1"}, {"amplitude", "-0.5"}}).particles[1].x.x(),
             0.5);
   // The default is the zero-rest (linear in every direction) spring.
-  EXPECT_EQ(make_builtin_scene("oscillator").springs[0].rest, 0.0);
+  EXPECT_EQ(make_builtin_scene("oscillator").get<Springs>()[0].rest, 0.0);
 }
 
 TEST(BuiltinScenesTest, ChainStretchPlacesParticlesBeyondTheRestLength) {
   const Scene scene = make_builtin_scene("chain", {{"n", "5"}, {"stretch", "0.01"}, {"g", "0"}});
-  for (const Spring& s : scene.springs) {
+  for (const Spring& s : scene.get<Springs>()) {
     EXPECT_DOUBLE_EQ(s.rest, 0.25);
     EXPECT_NEAR(distance(scene, s), 0.25 * 1.01, 1e-15);
   }
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d::Zero());
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d::Zero());
 }
 
 TEST(BuiltinScenesTest, ChainHasNParticlesAndSpringsSummingToItsLength) {
@@ -242,13 +242,13 @@ TEST(BuiltinScenesTest, ChainHasNParticlesAndSpringsSummingToItsLength) {
     const Scene scene =
         make_builtin_scene("chain", {{"n", std::to_string(n)}, {"length", "2.5"}, {"mass", "0.3"}});
     ASSERT_EQ(scene.particles.size(), static_cast<std::size_t>(n));
-    ASSERT_EQ(scene.springs.size(), static_cast<std::size_t>(n - 1));
+    ASSERT_EQ(scene.get<Springs>().size(), static_cast<std::size_t>(n - 1));
     double total_rest = 0;
-    for (std::size_t s = 0; s < scene.springs.size(); ++s) {
-      EXPECT_EQ(scene.springs[s].i, static_cast<int>(s));
-      EXPECT_EQ(scene.springs[s].j, static_cast<int>(s) + 1);
-      EXPECT_NEAR(distance(scene, scene.springs[s]), scene.springs[s].rest, 1e-12);
-      total_rest += scene.springs[s].rest;
+    for (std::size_t s = 0; s < scene.get<Springs>().size(); ++s) {
+      EXPECT_EQ(scene.get<Springs>()[s].i, static_cast<int>(s));
+      EXPECT_EQ(scene.get<Springs>()[s].j, static_cast<int>(s) + 1);
+      EXPECT_NEAR(distance(scene, scene.get<Springs>()[s]), scene.get<Springs>()[s].rest, 1e-12);
+      total_rest += scene.get<Springs>()[s].rest;
     }
     EXPECT_NEAR(total_rest, 2.5, 1e-12);
     EXPECT_TRUE(scene.particles[0].fixed);
@@ -265,9 +265,9 @@ TEST(BuiltinScenesTest, ChainParametersChangeTheScene) {
   const Scene scene = make_builtin_scene(
       "chain",
       {{"n", "4"}, {"k", "50"}, {"drag", "0.2"}, {"g", "3"}, {"horizontal", "1"}, {"length", "3"}});
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d(0, -3, 0));
-  EXPECT_EQ(scene.drag, 0.2);
-  for (const Spring& s : scene.springs) EXPECT_EQ(s.k, 50.0);
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d(0, -3, 0));
+  EXPECT_EQ(scene.get<Drag>().gamma, 0.2);
+  for (const Spring& s : scene.get<Springs>()) EXPECT_EQ(s.k, 50.0);
   for (std::size_t p = 0; p < scene.particles.size(); ++p) {
     EXPECT_EQ(scene.particles[p].x,
               Eigen::Vector3d(static_cast<double>(p), 0, 0));  // released from horizontal
@@ -282,7 +282,7 @@ TEST(BuiltinScenesTest, ClothCountsMassAndFixedCorners) {
     EXPECT_EQ(scene.dimension, 3);
     ASSERT_EQ(scene.particles.size(), static_cast<std::size_t>(n * n));
     const std::size_t springs = 2 * n * (n - 1) + 2 * (n - 1) * (n - 1) + 2 * n * (n - 2);
-    EXPECT_EQ(scene.springs.size(), springs);
+    EXPECT_EQ(scene.get<Springs>().size(), springs);
     std::vector<int> fixed;
     double total_mass = 0;
     for (std::size_t p = 0; p < scene.particles.size(); ++p) {
@@ -298,15 +298,15 @@ TEST(BuiltinScenesTest, ClothCountsMassAndFixedCorners) {
     EXPECT_NEAR((scene.particles[n].x - Eigen::Vector3d(0, 0, s)).norm(), 0, 1e-12);
     // Structural first, then shear, then bend: the rest lengths say which is which.
     const std::size_t structural = 2 * n * (n - 1), shear = 2 * (n - 1) * (n - 1);
-    for (std::size_t i = 0; i < scene.springs.size(); ++i) {
+    for (std::size_t i = 0; i < scene.get<Springs>().size(); ++i) {
       const double expected = i < structural           ? s
                               : i < structural + shear ? s * std::sqrt(2.0)
                                                        : 2 * s;
-      EXPECT_NEAR(scene.springs[i].rest, expected, 1e-12) << "spring " << i;
-      EXPECT_EQ(scene.springs[i].rest, distance(scene, scene.springs[i]));
+      EXPECT_NEAR(scene.get<Springs>()[i].rest, expected, 1e-12) << "spring " << i;
+      EXPECT_EQ(scene.get<Springs>()[i].rest, distance(scene, scene.get<Springs>()[i]));
     }
-    EXPECT_EQ(scene.gravity, Eigen::Vector3d(0, -9.81, 0));
-    EXPECT_FALSE(scene.wind.has_value());
+    EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d(0, -9.81, 0));
+    EXPECT_FALSE(scene.has<Wind>());
   }
 }
 
@@ -315,22 +315,22 @@ TEST(BuiltinScenesTest, ClothStiffnessesGoToTheirSpringFamilies) {
   const Scene scene =
       make_builtin_scene("cloth", {{"n", "5"}, {"k", "11"}, {"k_shear", "22"}, {"k_bend", "33"}});
   const std::size_t structural = 2 * n * (n - 1), shear = 2 * (n - 1) * (n - 1);
-  for (std::size_t i = 0; i < scene.springs.size(); ++i) {
+  for (std::size_t i = 0; i < scene.get<Springs>().size(); ++i) {
     const double expected = i < structural ? 11 : i < structural + shear ? 22 : 33;
-    EXPECT_EQ(scene.springs[i].k, expected) << "spring " << i;
+    EXPECT_EQ(scene.get<Springs>()[i].k, expected) << "spring " << i;
   }
 }
 
 TEST(BuiltinScenesTest, ClothWindBlowsAlongZWithAOneSecondRelaxation) {
   const Scene scene =
       make_builtin_scene("cloth", {{"n", "4"}, {"mass", "3.2"}, {"wind", "-2"}, {"drag", "0.1"}});
-  ASSERT_TRUE(scene.wind.has_value());
-  EXPECT_EQ(scene.wind->velocity, Eigen::Vector3d(0, 0, -2));
-  EXPECT_EQ(scene.wind->coefficient, 3.2 / 16);  // = particle mass
-  EXPECT_EQ(scene.wind->coefficient, scene.particles[5].mass);
-  EXPECT_EQ(scene.wind->gust, 0.5);
-  EXPECT_EQ(scene.wind->frequency, 0.5);
-  EXPECT_EQ(scene.drag, 0.1);
+  ASSERT_TRUE(scene.has<Wind>());
+  EXPECT_EQ(scene.find<Wind>()->velocity, Eigen::Vector3d(0, 0, -2));
+  EXPECT_EQ(scene.find<Wind>()->coefficient, 3.2 / 16);  // = particle mass
+  EXPECT_EQ(scene.find<Wind>()->coefficient, scene.particles[5].mass);
+  EXPECT_EQ(scene.find<Wind>()->gust, 0.5);
+  EXPECT_EQ(scene.find<Wind>()->frequency, 0.5);
+  EXPECT_EQ(scene.get<Drag>().gamma, 0.1);
 }
 
 }  // namespace

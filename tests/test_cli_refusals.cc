@@ -167,7 +167,7 @@ TEST(CliHelp, ShowsDefaultsAndNoFlagNoise) {
     ASSERT_TRUE(r.exited && r.status == 0) << describe(args, r);
     EXPECT_EQ(r.out.find('{'), std::string::npos) << r.out;
     if (std::string(command) != "experiment") {
-      for (const char* shown : {"--rtol FLOAT=1e-06", "--atol FLOAT=1e-08", "--newton-tol FLOAT=1e-10",
+      for (const char* shown : {"--rtol FLOAT=1e-06", "--atol FLOAT=1e-08", "--newton-tol FLOAT=0.0001",
                                 "--max-newton INT=20", "--blowup FLOAT=1000", "--linear-solver TEXT=auto"}) {
         EXPECT_NE(r.out.find(shown), std::string::npos) << command << ": " << shown << "\n" << r.out;
       }

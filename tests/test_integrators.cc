@@ -11,7 +11,7 @@
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
@@ -24,7 +24,7 @@ using testing::swinging_spring;
 
 class EveryIntegrator : public testing::RegistryTest {};
 
-double mechanical_energy(const MassSpringModel& m, const Vector& x, const Vector& v) {
+double mechanical_energy(const ElasticModel& m, const Vector& x, const Vector& v) {
   return m.energies(x, v).total();
 }
 
@@ -33,7 +33,7 @@ double mechanical_energy(const MassSpringModel& m, const Vector& x, const Vector
 TEST_P(EveryIntegrator, OscillatorEnergyFactorPerStepIsExact) {
   const IntegratorInfo i = info();
   if (!i.stability_function || i.adaptive) GTEST_SKIP() << "no scalar stability function";
-  const MassSpringModel model(oscillator(100.0, 1.0));
+  const ElasticModel model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double wh : {0.1, 0.7, 2.5}) {
     auto integrator = make_integrator(GetParam());
@@ -57,7 +57,7 @@ TEST_P(EveryIntegrator, OscillatorEnergyFactorPerStepIsExact) {
 // observed order log2(e(h) / e(h/2)) must be within 0.2 of the declared one.
 double observed_order(const std::string& name, int order, const Scene& scene, double t_end,
                       const Vector& x_ref, const Vector& v_ref, double w) {
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   const double h = order == 1 ? 1e-3 : (order == 2 ? 1e-2 : 1e-2);
   double error[2];
   for (int k = 0; k < 2; ++k) {
@@ -86,7 +86,7 @@ TEST_P(EveryIntegrator, ConvergenceOrderOnOscillatorMatchesTheory) {
 }
 
 RunResult reference_run(const Scene& scene, double t_end) {
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   RunSettings s;
   s.integrator = "rk4";
   s.dt = 2.5e-5;
@@ -110,7 +110,7 @@ TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
   const IntegratorInfo i = info();
   if (!i.symplectic) GTEST_SKIP() << "not symplectic";
   for (const Scene& scene : {oscillator(), swinging_spring()}) {
-    const MassSpringModel model(scene);
+    const ElasticModel model(scene);
     auto integrator = make_integrator(GetParam());
     ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
                                        model.initial_velocities(), IntegratorOptions{}).ok);
@@ -137,10 +137,11 @@ TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
 TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
   // Rest length 1, placed where the spring balances the weight m g / k.
   Scene s = oscillator(100.0, 2.0, 1.0, 0.0);
-  s.gravity = Eigen::Vector3d(-9.81, 0, 0);  // pulls along -x, toward the anchor
+  // Pulls along -x, toward the anchor.
+  s.block<Gravity>().acceleration = Eigen::Vector3d(-9.81, 0, 0);
   s.particles[1].x.x() = 1.0 - 2.0 * 9.81 / 100.0;
-  s.drag = 0.5;
-  const MassSpringModel model(s);
+  s.block<Drag>().gamma = 0.5;
+  const ElasticModel model(s);
   const RunResult r = simulate(model, settings(0.01, 1.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT((r.x_final - model.initial_positions()).norm(), 1e-12);
@@ -153,7 +154,7 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
 TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
   const IntegratorInfo i = info();
   if (!i.iterates_to_tolerance) GTEST_SKIP() << "does not iterate Newton to a tolerance";
-  const MassSpringModel model(testing::compressed_chain());
+  const ElasticModel model(testing::compressed_chain());
   const double h = 0.2;
   SparseMatrix dfdx;
   model.jacobians(0.0, model.initial_positions(), model.initial_velocities(), &dfdx, nullptr);
@@ -179,7 +180,7 @@ TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
 // convergence); minimizing the incremental potential with definite matrices
 // where needed converges at every step.
 TEST(ImplicitEuler, ConvergesOnAFoldingClothAtLargeSteps) {
-  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
   ASSERT_TRUE(model.derives_from_potentials());
   RunSettings s;
   s.integrator = "implicit-euler";
@@ -202,7 +203,7 @@ TEST(ImplicitEuler, ConvergesOnAFoldingClothAtLargeSteps) {
 // 2002: each compressed spring's negative transverse stiffness dropped) the
 // matrix stays above M and the energy of this undamped chain only falls.
 TEST(LinearImplicitEuler, DefiniteStiffnessKeepsTheCompressedChainCalm) {
-  const MassSpringModel model(testing::compressed_chain());
+  const ElasticModel model(testing::compressed_chain());
   RunSettings s;
   s.integrator = "linear-implicit-euler";
   s.dt = 0.2;
@@ -233,7 +234,7 @@ TEST(DiscreteGradient, ConservesEnergyToTheNewtonTolerance) {
       {make_builtin_scene("chain", {{"n", "10"}, {"horizontal", "1"}}), 0.01, 2.0}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene.name);
-    const MassSpringModel model(c.scene);
+    const ElasticModel model(c.scene);
     ASSERT_EQ(model.velocity_dependence(), VelocityDependence::kNone) << "no damping";
     auto drift = [&](const std::string& name, double tol) {
       auto integrator = make_integrator(name);
@@ -268,7 +269,7 @@ TEST(DiscreteGradient, ConservesEnergyToTheNewtonTolerance) {
 // undamped, never gains energy in a step: backward Euler solved to the
 // tolerance only dissipates.
 TEST(ImplicitEuler, SolverErrorIsFarBelowTheStepsAndEnergyNeverGrows) {
-  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
   const double h = 1.0 / 60.0, tol = IntegratorOptions{}.newton_tol;
   auto run = make_integrator("implicit-euler");
   ASSERT_TRUE(run->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(),
@@ -305,7 +306,7 @@ TEST(ImplicitEuler, SolverErrorIsFarBelowTheStepsAndEnergyNeverGrows) {
 // steps) until the energy check stops the run -- a divergence with its time,
 // not a Newton failure (Newton solves every step).
 TEST(ImplicitMidpoint, EnergyGrowthOnTheFoldingClothIsReportedAsDivergence) {
-  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
   RunSettings s;
   s.integrator = "implicit-midpoint";
   s.dt = 1.0 / 60.0;
@@ -322,7 +323,7 @@ TEST(ImplicitMidpoint, EnergyGrowthOnTheFoldingClothIsReportedAsDivergence) {
 
 // A Newton that cannot converge is a result naming the reason, not a crash.
 TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
-  const MassSpringModel model(testing::compressed_chain());
+  const ElasticModel model(testing::compressed_chain());
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.2;
@@ -339,7 +340,7 @@ TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
 
 TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
   const IntegratorInfo i = info();
-  const MassSpringModel model(damped_windy_chain());
+  const ElasticModel model(damped_windy_chain());
   const RunResult r = simulate(model, settings(0.001, 0.01));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const IntegratorStats& s = r.stats;
@@ -389,9 +390,9 @@ TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
 }
 
 TEST_P(EveryIntegrator, SameInputsGiveBitIdenticalResults) {
-  const MassSpringModel model(damped_windy_chain());
+  const ElasticModel model(damped_windy_chain());
   const RunResult a = simulate(model, settings(0.002, 0.1));
-  const RunResult b = simulate(MassSpringModel(damped_windy_chain()), settings(0.002, 0.1));
+  const RunResult b = simulate(ElasticModel(damped_windy_chain()), settings(0.002, 0.1));
   ASSERT_EQ(a.x_final.size(), b.x_final.size());
   for (Eigen::Index k = 0; k < a.x_final.size(); ++k) {
     EXPECT_EQ(a.x_final[k], b.x_final[k]);
@@ -409,29 +410,112 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegrator, ::testing::ValuesIn(integrat
 namespace springlab {
 namespace {
 
-// One integrator object reused on a second, different system must start
-// clean (a kept symbolic factorization of the first pattern would be wrong).
-TEST(Integrator, ReinitializedOnAnotherSystemMatchesAFreshOne) {
-  for (const std::string& name : integrator_names()) {
-    const MassSpringModel first(testing::swinging_spring());  // symmetric, 2 unknowns
-    const MassSpringModel second(testing::compressed_chain());
-    IntegratorOptions options;
-    auto reused = make_integrator(name);
-    ASSERT_TRUE(reused->initialize(first, 0.0, first.initial_positions(),
-                                   first.initial_velocities(), options).ok);
-    ASSERT_TRUE(reused->advance_to(0.01).ok) << name;
-    ASSERT_TRUE(reused->initialize(second, 0.0, second.initial_positions(),
-                                   second.initial_velocities(), options).ok);
-    auto fresh = make_integrator(name);
-    ASSERT_TRUE(fresh->initialize(second, 0.0, second.initial_positions(),
-                                  second.initial_velocities(), options).ok);
-    for (int step = 1; step <= 3; ++step) {
-      ASSERT_TRUE(reused->advance_to(0.01 * step).ok) << name;
-      ASSERT_TRUE(fresh->advance_to(0.01 * step).ok) << name;
-    }
-    EXPECT_EQ(reused->x(), fresh->x()) << name;
-    EXPECT_EQ(reused->v(), fresh->v()) << name;
+// A 2-D chain of 6 particles (the first fixed) whose springs join them in
+// `order`: the particles sit on a zig-zag line in that order, so every
+// order gives the same counts (6 particles, 5 springs) and another topology,
+// hence another Jacobian pattern of the same size.
+Scene chain_in_order(const std::vector<int>& order, double rest, double damping) {
+  Scene s;
+  s.name = "chain-in-order";
+  s.dimension = 2;
+  s.block<Gravity>().acceleration = Eigen::Vector3d(0, -9.81, 0);
+  s.particles.resize(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    Particle& p = s.particles[static_cast<std::size_t>(order[k])];
+    p.x = Eigen::Vector3d(0.3 * static_cast<double>(k), 0.05 * static_cast<double>(k % 2), 0.0);
+    p.fixed = order[k] == 0;
   }
+  for (std::size_t k = 0; k + 1 < order.size(); ++k) {
+    s.block<Springs>().push_back({order[k], order[k + 1], 100.0, rest, damping});
+  }
+  return s;
+}
+
+// An integrator serves one system once: a second initialize() is refused and
+// leaves the first run untouched, for every method.
+TEST(Integrator, SecondInitializeIsRefusedAndChangesNothing) {
+  const ElasticModel first(testing::swinging_spring());
+  const ElasticModel second(testing::compressed_chain());
+  for (const std::string& name : integrator_names()) {
+    auto integrator = make_integrator(name);
+    ASSERT_TRUE(integrator->initialize(first, 0.0, first.initial_positions(),
+                                       first.initial_velocities(), {}).ok) << name;
+    ASSERT_TRUE(integrator->advance_to(0.01).ok) << name;
+    const Vector x = integrator->x(), v = integrator->v();
+    const long steps = integrator->stats().steps;
+    const StepResult again = integrator->initialize(second, 0.0, second.initial_positions(),
+                                                    second.initial_velocities(), {});
+    EXPECT_FALSE(again.ok) << name;
+    EXPECT_EQ(again.message, name + ": already initialized: an integrator runs one system once "
+                                    "(its caches belong to that system); make a new one for the "
+                                    "next run");
+    EXPECT_EQ(integrator->t(), 0.01) << name;
+    EXPECT_EQ(integrator->x(), x) << name;
+    EXPECT_EQ(integrator->v(), v) << name;
+    EXPECT_EQ(integrator->stats().steps, steps) << name;
+    EXPECT_TRUE(integrator->advance_to(0.02).ok) << name;  // still runs the first system
+  }
+}
+
+// Runs `name` on `b` for 100 steps of 0.01 s after the same object has run
+// `a`: if the method accepted a second initialize(), with the object that
+// ran `a` (its caches built for a's pattern), else with a new one, as every
+// caller now does. Returns the final positions.
+Vector run_after_another_system(const std::string& name, const MechanicalSystem& a,
+                                const ElasticModel& b, const Vector& xa, const Vector& va) {
+  IntegratorOptions options;
+  options.newton_tol = 1e-13;
+  auto integrator = make_integrator(name);
+  EXPECT_TRUE(integrator->initialize(a, 0.0, xa, va, options).ok);
+  for (int k = 1; k <= 10; ++k) EXPECT_TRUE(integrator->advance_to(0.01 * k).ok) << name;
+  const StepResult again =
+      integrator->initialize(b, 0.0, b.initial_positions(), b.initial_velocities(), options);
+  EXPECT_FALSE(again.ok) << name << " accepted a second system";
+  if (!again.ok) {
+    integrator = make_integrator(name);
+    EXPECT_TRUE(
+        integrator->initialize(b, 0.0, b.initial_positions(), b.initial_velocities(), options).ok);
+  }
+  for (int k = 1; k <= 100; ++k) EXPECT_TRUE(integrator->advance_to(0.01 * k).ok) << name;
+  return integrator->x();
+}
+
+// Issue 12's first example: linear-implicit-euler re-initialized on a scene
+// with the same counts and another topology kept the first pattern's
+// symbolic factorization and ended 0.25 m off here. On zero-rest-length
+// springs (linear forces) its one Newton step is exact, so it must agree
+// with implicit Euler solved to 1e-13.
+TEST(Integrator, LinearImplicitEulerOnSameCountsOtherTopologyIsRight) {
+  const ElasticModel a(chain_in_order({0, 1, 2, 3, 4, 5}, 0.0, 0.0));
+  const ElasticModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.0, 0.0));
+  ASSERT_EQ(a.jacobian_pattern().nonZeros(), b.jacobian_pattern().nonZeros());
+  const Vector x = run_after_another_system("linear-implicit-euler", a, b, a.initial_positions(),
+                                            a.initial_velocities());
+  RunSettings reference;
+  reference.integrator = "implicit-euler";
+  reference.dt = 0.01;
+  reference.t_end = 1.0;
+  reference.options.newton_tol = 1e-13;
+  const RunResult r = simulate(b, reference);
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  EXPECT_LT((x - r.x_final).lpNorm<Eigen::Infinity>(), 1e-9);
+}
+
+// Issue 12's second example: verlet reused on a second spring-damped scene
+// kept the first one's closing-kick factorization: here the factorization
+// of the new matrix with the old symbolic analysis corrupted the heap
+// (glibc: "malloc(): unaligned tcache chunk detected"). It must end exactly
+// where a new verlet on that scene ends.
+TEST(Integrator, VerletOnASecondSpringDampedSceneIsRight) {
+  const ElasticModel a(testing::damped_windy_chain());
+  const ElasticModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.25, 0.5));
+  ASSERT_EQ(b.velocity_dependence(), VelocityDependence::kCoupled);
+  const Vector x =
+      run_after_another_system("verlet", a, b, a.initial_positions(), a.initial_velocities());
+  auto fresh = make_integrator("verlet");
+  ASSERT_TRUE(fresh->initialize(b, 0.0, b.initial_positions(), b.initial_velocities(), {}).ok);
+  for (int k = 1; k <= 100; ++k) ASSERT_TRUE(fresh->advance_to(0.01 * k).ok);
+  EXPECT_EQ(x, fresh->x());
 }
 
 }  // namespace

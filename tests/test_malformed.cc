@@ -213,7 +213,7 @@ TEST_F(MalformedGenerated, ObjectWithManyKeysIsFast) {
   write_text(work() / "keys.json",
              "{\"dimension\": 2, \"particles\": [{\"x\": [0, 0]" + keys + "}], \"springs\": []}\n");
   expect_scene_refused("keys.json",
-                       "particles[0]: unknown key 'k0' (allowed keys: x, v, mass, fixed)");
+                       "particles[0]: unknown key 'k0' (allowed keys: x, X, v, mass, fixed)");
 }
 
 // 10^6 levels of nesting: refused at the cap, without building a path per
@@ -244,7 +244,7 @@ TEST_F(MalformedGenerated, HugeUnknownKeyIsShortenedInTheMessage) {
   write_text(work() / "key.json", "{\"dimension\": 2, \"particles\": [{\"x\": [0, 0], \"" + key +
                                       "\": 1}], \"springs\": []}\n");
   expect_scene_refused("key.json", "particles[0]: unknown key '" + std::string(100, 'k') +
-                                       "... (1048576 bytes)' (allowed keys: x, v, mass, fixed)");
+                                       "... (1048576 bytes)' (allowed keys: x, X, v, mass, fixed)");
 }
 
 // The JSON reader keeps every character between two tokens: a long run of

@@ -10,7 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "models/drag.h"
+#include "models/gravity.h"
 #include "models/scene.h"
+#include "models/springs.h"
+#include "models/wind.h"
 #include "scene_equality.h"
 
 namespace springlab {
@@ -100,7 +104,7 @@ std::vector<BadScene> bad_scenes() {
        "particles, "
        "springs)"},
       {"UnknownParticleKey", two_particles(R"({"x": [0, -1], "vel": [0, 0]})"),
-       "scene.json: particles[1]: unknown key 'vel' (allowed keys: x, v, mass, fixed)"},
+       "scene.json: particles[1]: unknown key 'vel' (allowed keys: x, X, v, mass, fixed)"},
       {"UnknownSpringKey", two_particles(p, R"([{"i": 0, "j": 1, "k": 1, "length": 1}])"),
        "scene.json: springs[0]: unknown key 'length' (allowed keys: i, j, k, rest, damping)"},
       {"UnknownWindKey", two_particles(p, s, R"("wind": {"velocity": [1, 0], "speed": 2}, )"),
@@ -144,6 +148,8 @@ std::vector<BadScene> bad_scenes() {
        "scene.json: particles[1].x: expected 2 numbers (dimension is 2), got 3"},
       {"VTooShort", two_particles(R"({"x": [0, -1], "v": [1]})"),
        "scene.json: particles[1].v: expected 2 numbers (dimension is 2), got 1"},
+      {"RestPositionTooLong", two_particles(R"({"x": [0, -1], "X": [0, -1, 0]})"),
+       "scene.json: particles[1].X: expected 2 numbers (dimension is 2), got 3"},
       {"GravityTooLong", two_particles(p, s, R"("gravity": [0, -9.81, 0], )"),
        "scene.json: gravity: expected 2 numbers (dimension is 2), got 3"},
       {"WindVelocityTooLong", two_particles(p, s, R"("wind": {"velocity": [1, 0, 0]}, )"),
@@ -151,6 +157,18 @@ std::vector<BadScene> bad_scenes() {
       // Non-finite numbers (JSON has no inf, but 1e999 overflows a double).
       {"PositionOverflow", two_particles(R"({"x": [1e999, -1]})"),
        "scene.json: particles[1].x[0]: must be a finite number"},
+      {"RestPositionString", two_particles(R"({"x": [0, -1], "X": [0, "-1"]})"),
+       "scene.json: particles[1].X[1]: expected a number, got string"},
+      {"RestPositionsTooFarApart",
+       R"({"dimension": 2, "particles": [{"x": [0, 0], "X": [-1e308, 0], "fixed": true},
+                                         {"x": [0, -1], "X": [1e308, 0]}],
+           "springs": [{"i": 0, "j": 1, "k": 1}]})",
+       "scene.json: springs[0]: particles 0 and 1 are too far apart to take their distance as "
+       "rest length"},
+      // Coinciding ends at x have no direction, whatever their rest positions.
+      {"CoincideWithRestPositionsApart",
+       two_particles(R"({"x": [0, 0], "X": [0, -1]})", R"([{"i": 0, "j": 1, "k": 1}])"),
+       "scene.json: springs[0]: particles 0 and 1 coincide and no rest length is given"},
       {"StiffnessOverflow", two_particles(p, R"([{"i": 0, "j": 1, "k": 1e999}])"),
        "scene.json: springs[0].k: must be a finite number"},
       {"GravityOverflow", two_particles(p, s, R"("gravity": [0, -1e999], )"),
@@ -231,27 +249,53 @@ TEST(SceneTest, DefaultsAreTheDocumentedOnes) {
           "springs": [{"i": 0, "j": 1, "k": 10}]})",
       "scene.json");
   EXPECT_EQ(scene.name, "");
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d::Zero());
-  EXPECT_EQ(scene.drag, 0.0);
-  EXPECT_FALSE(scene.wind.has_value());
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d::Zero());
+  EXPECT_EQ(scene.get<Drag>().gamma, 0.0);
+  EXPECT_FALSE(scene.has<Wind>());
   ASSERT_EQ(scene.particles.size(), 2u);
   EXPECT_TRUE(scene.particles[0].fixed);
   EXPECT_FALSE(scene.particles[1].fixed);
   EXPECT_EQ(scene.particles[1].mass, 1.0);
   EXPECT_EQ(scene.particles[1].v, Eigen::Vector3d::Zero());
-  ASSERT_EQ(scene.springs.size(), 1u);
-  EXPECT_EQ(scene.springs[0].rest, 5.0);  // the initial distance of (0,0)-(3,4)
-  EXPECT_EQ(scene.springs[0].damping, 0.0);
+  ASSERT_EQ(scene.get<Springs>().size(), 1u);
+  EXPECT_EQ(scene.get<Springs>()[0].rest, 5.0);  // the initial distance of (0,0)-(3,4)
+  EXPECT_EQ(scene.get<Springs>()[0].damping, 0.0);
+}
+
+// SPEC §7: a particle's rest position X defaults to x; a spring without
+// "rest" takes the distance of its ends' rest positions.
+TEST(SceneTest, RestPositionsDefaultToXAndGiveTheSpringsRestLength) {
+  const Scene scene = parse_scene(
+      R"({"dimension": 2, "particles": [{"x": [0, 0], "fixed": true},
+                                        {"x": [0, -1], "X": [0, -2.5]}, {"x": [3, 4]}],
+          "springs": [{"i": 0, "j": 1, "k": 10}, {"i": 0, "j": 2, "k": 10},
+                      {"i": 1, "j": 2, "k": 10, "rest": 0.5}]})",
+      "scene.json");
+  EXPECT_FALSE(scene.particles[0].X.has_value());
+  EXPECT_EQ(scene.particles[0].rest_position(), scene.particles[0].x);
+  ASSERT_TRUE(scene.particles[1].X.has_value());
+  EXPECT_EQ(*scene.particles[1].X, Eigen::Vector3d(0, -2.5, 0));
+  EXPECT_EQ(scene.particles[1].rest_position(), Eigen::Vector3d(0, -2.5, 0));
+  EXPECT_EQ(scene.particles[1].x, Eigen::Vector3d(0, -1, 0));
+  const Springs& springs = scene.get<Springs>();
+  EXPECT_EQ(springs[0].rest, 2.5);  // |X_1 - X_0|, not |x_1 - x_0| = 1
+  EXPECT_EQ(springs[1].rest, 5.0);  // no X: |x_2 - x_0|
+  EXPECT_EQ(springs[2].rest, 0.5);  // given
+  // Rest positions that coincide give a zero rest length (ends apart at x).
+  const Scene zero = parse_scene(
+      two_particles(R"({"x": [0, -1], "X": [0, 0]})", R"([{"i": 0, "j": 1, "k": 1}])"),
+      "scene.json");
+  EXPECT_EQ(zero.get<Springs>()[0].rest, 0.0);
 }
 
 TEST(SceneTest, WindDefaultsToSteadyWithZeroCoefficient) {
   const Scene scene = parse_scene(
       two_particles(R"({"x": [0, -1]})", "[]", R"("wind": {"velocity": [2, 1]}, )"), "scene.json");
-  ASSERT_TRUE(scene.wind.has_value());
-  EXPECT_EQ(scene.wind->velocity, Eigen::Vector3d(2, 1, 0));
-  EXPECT_EQ(scene.wind->coefficient, 0.0);
-  EXPECT_EQ(scene.wind->gust, 0.0);
-  EXPECT_EQ(scene.wind->frequency, 0.0);
+  ASSERT_TRUE(scene.has<Wind>());
+  EXPECT_EQ(scene.find<Wind>()->velocity, Eigen::Vector3d(2, 1, 0));
+  EXPECT_EQ(scene.find<Wind>()->coefficient, 0.0);
+  EXPECT_EQ(scene.find<Wind>()->gust, 0.0);
+  EXPECT_EQ(scene.find<Wind>()->frequency, 0.0);
 }
 
 TEST(SceneTest, TwoDimensionalVectorsHaveZeroZ) {
@@ -261,23 +305,23 @@ TEST(SceneTest, TwoDimensionalVectorsHaveZeroZ) {
                   "scene.json");
   EXPECT_EQ(scene.particles[1].x, Eigen::Vector3d(1.5, -2.5, 0));
   EXPECT_EQ(scene.particles[1].v, Eigen::Vector3d(3, 4, 0));
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d(0.5, -9.81, 0));
-  EXPECT_EQ(scene.wind->velocity, Eigen::Vector3d(7, 8, 0));
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d(0.5, -9.81, 0));
+  EXPECT_EQ(scene.find<Wind>()->velocity, Eigen::Vector3d(7, 8, 0));
 }
 
 TEST(SceneTest, AcceptsEdgeCasesTheSpecAllows) {
   // Coinciding ends with an explicit zero rest length: a linear spring.
   const Scene zero_rest = parse_scene(
       two_particles(R"({"x": [0, 0]})", R"([{"i": 0, "j": 1, "k": 1, "rest": 0}])"), "scene.json");
-  EXPECT_EQ(zero_rest.springs[0].rest, 0.0);
+  EXPECT_EQ(zero_rest.get<Springs>()[0].rest, 0.0);
   // Whole numbers written as floats, an empty spring list, k = 0, dimension 3.
   const Scene scene = parse_scene(
       R"({"dimension": 3.0, "particles": [{"x": [0, 0, 0]}, {"x": [1, 2, 2]}],
           "springs": [{"i": 1.0, "j": 0, "k": 0}]})",
       "scene.json");
   EXPECT_EQ(scene.dimension, 3);
-  EXPECT_EQ(scene.springs[0].i, 1);
-  EXPECT_EQ(scene.springs[0].rest, 3.0);
+  EXPECT_EQ(scene.get<Springs>()[0].i, 1);
+  EXPECT_EQ(scene.get<Springs>()[0].rest, 3.0);
   EXPECT_NO_THROW(parse_scene(two_particles(R"({"x": [0, -1]})", "[]"), "scene.json"));
 }
 
@@ -285,9 +329,9 @@ Scene awkward_3d_scene() {
   Scene scene;
   scene.name = "a \"quoted\"\nname";
   scene.dimension = 3;
-  scene.gravity = {0.1, -9.81, 1.0 / 3.0};
-  scene.drag = 1e-300;
-  scene.wind = Wind{{2.0, -0.0, 1e300}, 0.1, 0.5, 0.7};
+  scene.block<Gravity>().acceleration = {0.1, -9.81, 1.0 / 3.0};
+  scene.block<Drag>().gamma = 1e-300;
+  scene.block<Wind>() = Wind{{2.0, -0.0, 1e300}, 0.1, 0.5, 0.7};
   Particle fixed;
   fixed.fixed = true;
   fixed.mass = 2.0 / 3.0;
@@ -297,7 +341,8 @@ Scene awkward_3d_scene() {
   moving.mass = 7;
   scene.particles = {fixed, moving, moving};
   scene.particles[2].x.x() = 17.0;
-  scene.springs = {{0, 1, 100.0, 0.1 + 0.2, 0.0}, {2, 1, 0.0, 0.0, 3.25}};
+  scene.particles[2].X = Eigen::Vector3d(16.5, -0.0, 1e-300);
+  scene.block<Springs>() = {{0, 1, 100.0, 0.1 + 0.2, 0.0}, {2, 1, 0.0, 0.0, 3.25}};
   return scene;
 }
 
@@ -363,26 +408,27 @@ INSTANTIATE_TEST_SUITE_P(
                "s.json: particles[1].mass: must be > 0 (got -2)"},
         Defect{"Dimension", [](Scene& s) { s.dimension = 4; },
                "s.json: dimension: must be 2 or 3 (got 4)"},
-        Defect{"Stiffness", [](Scene& s) { s.springs[1].k = -1; },
+        Defect{"Stiffness", [](Scene& s) { s.block<Springs>()[1].k = -1; },
                "s.json: springs[1].k: must be >= 0 (got -1)"},
-        Defect{"Rest", [](Scene& s) { s.springs[0].rest = -0.5; },
+        Defect{"Rest", [](Scene& s) { s.block<Springs>()[0].rest = -0.5; },
                "s.json: springs[0].rest: must be >= 0 (got -0.5)"},
-        Defect{"Drag", [](Scene& s) { s.drag = -1; }, "s.json: drag: must be >= 0 (got -1)"},
-        Defect{"Gust", [](Scene& s) { s.wind->gust = -1; },
+        Defect{"Drag", [](Scene& s) { s.block<Drag>().gamma = -1; },
+               "s.json: drag: must be >= 0 (got -1)"},
+        Defect{"Gust", [](Scene& s) { s.block<Wind>().gust = -1; },
                "s.json: wind.gust: must be >= 0 (got -1)"},
-        Defect{"Index", [](Scene& s) { s.springs[1].j = 3; },
+        Defect{"Index", [](Scene& s) { s.block<Springs>()[1].j = 3; },
                "s.json: springs[1]: particle 3 does not exist (scene has 3 particles)"},
-        Defect{"Self", [](Scene& s) { s.springs[1].i = 1; },
+        Defect{"Self", [](Scene& s) { s.block<Springs>()[1].i = 1; },
                "s.json: springs[1]: joins particle 1 to itself"},
         Defect{"Coincide",
                [](Scene& s) {
                  s.particles[2].x = s.particles[1].x;
-                 s.springs[1].rest = 1;
+                 s.block<Springs>()[1].rest = 1;
                },
                "s.json: springs[1]: particles 2 and 1 coincide but the rest length is positive"},
         Defect{"Duplicate",
                [](Scene& s) {
-                 s.springs.push_back({1, 0, 1.0, 1.0, 0.0});
+                 s.block<Springs>().push_back({1, 0, 1.0, 1.0, 0.0});
                },
                "s.json: springs[2]: duplicates springs[0] (both join particles 0 and 1)"},
         Defect{"NoFree",
@@ -396,7 +442,7 @@ TEST(SceneTest, CoincideCheckUsesTheResolvedRest) {
   // In a built scene the rest length is always explicit: 0 at coinciding ends is fine.
   Scene scene = awkward_3d_scene();
   scene.particles[2].x = scene.particles[1].x;
-  scene.springs[1].rest = 0;
+  scene.block<Springs>()[1].rest = 0;
   EXPECT_NO_THROW(validate_scene(scene, "s.json"));
 }
 
@@ -409,6 +455,13 @@ TEST(SceneTest, ValidateRefusesNonFiniteAndStrayZComponents) {
   flat.particles[1].x.z() = 1;
   EXPECT_EQ(error_of([&] { validate_scene(flat, "s"); }),
             "s: particles[1].x[2]: must be 0 in a 2-D scene");
+  flat.particles[1].x.z() = 0;
+  flat.particles[1].X = Eigen::Vector3d(0, -1, 2);
+  EXPECT_EQ(error_of([&] { validate_scene(flat, "s"); }),
+            "s: particles[1].X[2]: must be 0 in a 2-D scene");
+  flat.particles[1].X = Eigen::Vector3d(0, INFINITY, 0);
+  EXPECT_EQ(error_of([&] { validate_scene(flat, "s"); }),
+            "s: particles[1].X[1]: must be a finite number");
 }
 
 TEST(SceneTest, DuplicateCheckScalesToLargeScenes) {
@@ -420,10 +473,10 @@ TEST(SceneTest, DuplicateCheckScalesToLargeScenes) {
     particle.x = {0.0, -p * 0.01, 0.0};
     particle.fixed = p == 0;
     scene.particles.push_back(particle);
-    if (p > 0) scene.springs.push_back({p - 1, p, 1.0, 0.01, 0.0});
+    if (p > 0) scene.block<Springs>().push_back({p - 1, p, 1.0, 0.01, 0.0});
   }
   EXPECT_NO_THROW(validate_scene(scene, "big"));
-  scene.springs.push_back({n - 1, n - 2, 1.0, 0.01, 0.0});
+  scene.block<Springs>().push_back({n - 1, n - 2, 1.0, 0.01, 0.0});
   EXPECT_EQ(
       error_of([&] { validate_scene(scene, "big"); }),
       "big: springs[199999]: duplicates springs[199998] (both join particles 199998 and 199999)");
@@ -441,7 +494,7 @@ TEST(SceneTest, LoadsAFileAndNamesItInMessages) {
     std::ofstream out(path);
     out << two_particles();
   }
-  EXPECT_EQ(load_scene_file(path).springs.at(0).rest, 1.0);
+  EXPECT_EQ(load_scene_file(path).get<Springs>().at(0).rest, 1.0);
   std::remove(path.c_str());
   EXPECT_EQ(error_of([&] { load_scene_file(path); }), path + ": cannot open file");
   EXPECT_EQ(error_of([&] { load_scene_file(::testing::TempDir()); }),
@@ -454,15 +507,15 @@ TEST(SceneTest, SpecExampleFileLoads) {
   const Scene scene =
       load_scene_file(std::string(SPRINGLAB_TEST_DATA) + "/scenes/spec_example.json");
   EXPECT_EQ(scene.name, "single-spring");
-  EXPECT_EQ(scene.gravity, Eigen::Vector3d(0, -9.81, 0));
-  ASSERT_TRUE(scene.wind.has_value());
-  EXPECT_EQ(scene.wind->velocity, Eigen::Vector3d(2, 0, 0));
-  EXPECT_EQ(scene.wind->coefficient, 0.1);
+  EXPECT_EQ(scene.get<Gravity>().acceleration, Eigen::Vector3d(0, -9.81, 0));
+  ASSERT_TRUE(scene.has<Wind>());
+  EXPECT_EQ(scene.find<Wind>()->velocity, Eigen::Vector3d(2, 0, 0));
+  EXPECT_EQ(scene.find<Wind>()->coefficient, 0.1);
   ASSERT_EQ(scene.particles.size(), 2u);
   EXPECT_TRUE(scene.particles[0].fixed);
-  ASSERT_EQ(scene.springs.size(), 1u);
-  EXPECT_EQ(scene.springs[0].k, 100.0);
-  EXPECT_EQ(scene.springs[0].rest, 1.0);
+  ASSERT_EQ(scene.get<Springs>().size(), 1u);
+  EXPECT_EQ(scene.get<Springs>()[0].k, 100.0);
+  EXPECT_EQ(scene.get<Springs>()[0].rest, 1.0);
 }
 #endif
 

@@ -18,8 +18,12 @@
 #include "experiments/stability.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
-#include "models/mass_spring_model.h"
+#include "models/drag.h"
+#include "models/elastic_model.h"
+#include "models/gravity.h"
 #include "models/scene.h"
+#include "models/springs.h"
+#include "models/wind.h"
 
 namespace springlab {
 namespace {
@@ -33,7 +37,7 @@ Scene linear_oscillator(double k = 100.0, double mass = 1.0, double amplitude = 
   s.dimension = 2;
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(amplitude, 0, 0), Eigen::Vector3d::Zero(), mass, false}};
-  s.springs = {{0, 1, k, 0.0, 0.0}};
+  s.block<Springs>() = {{0, 1, k, 0.0, 0.0}};
   return s;
 }
 
@@ -162,7 +166,7 @@ TEST(SimulationTimeGrid, BadStepOrEndTimeThrows) {
 }
 
 TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   EXPECT_THROW(simulate(model, settings("rk4", 0.0, 1.0)), std::invalid_argument);
   EXPECT_THROW(simulate(model, settings("rk4", -0.1, 1.0)), std::invalid_argument);
   EXPECT_THROW(simulate(model, settings("rk4", 0.1, 0.0)), std::invalid_argument);
@@ -174,7 +178,7 @@ TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
 // ----------------------------------------------------------------- observer
 
 TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   RecordingObserver a, b;
   const RunResult r = simulate(model, settings("verlet", 0.1, 1.0), {&a, &b});
   EXPECT_FALSE(r.diverged());
@@ -198,7 +202,7 @@ TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
 }
 
 TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   {
     RecordingObserver o;
     RunSettings s = settings("rk4", 0.1, 1.0);
@@ -224,14 +228,14 @@ TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
     RecordingObserver o;  // shortened last step (w h = 0.3: stable)
     RunSettings s = settings("symplectic-euler", 0.3, 1.0);
     s.every = 2;
-    const RunResult r = simulate(MassSpringModel(linear_oscillator(1.0)), s, {&o});
+    const RunResult r = simulate(ElasticModel(linear_oscillator(1.0)), s, {&o});
     EXPECT_FALSE(r.diverged());
     EXPECT_EQ(o.times, (std::vector<double>{0.0, 2 * 0.3, 1.0}));
   }
 }
 
 TEST(SimulationObserver, NotCalledForTheDivergedStep) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   RecordingObserver o;
   const RunResult r = simulate(model, settings("explicit-euler", 0.05, 10.0), {&o});
   ASSERT_TRUE(r.diverged());
@@ -248,7 +252,7 @@ TEST(SimulationObserver, NotCalledForTheDivergedStep) {
 // 1 + w^2 h^2 per step. Here E(0) = E_s, so with blowup B the run diverges at
 // the first step n with (1 + w^2 h^2)^n > B.
 TEST(SimulationDivergence, ExplicitEulerDivergesAtThePredictedStep) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   ASSERT_DOUBLE_EQ(model.energy_scale(), 0.5);
   const double h = 0.05, w = 10.0;
   const double growth = 1.0 + w * w * h * h;  // 1.25
@@ -296,7 +300,7 @@ TEST(SimulationDivergence, CheapCertificateDecidesAsTheEnergyRuleAtEveryStep) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene.name + " " + c.integrator + " dt " + std::to_string(c.dt));
-    const MassSpringModel model(c.scene);
+    const ElasticModel model(c.scene);
     RunSettings s = settings(c.integrator, c.dt, c.t_end);
     s.blowup = c.blowup;
     const RunResult r = simulate(model, s);
@@ -314,7 +318,7 @@ TEST(SimulationDivergence, CheapCertificateDecidesAsTheEnergyRuleAtEveryStep) {
       bool blown = !x.allFinite() || !v.allFinite();
       if (!blown) {
         const Energies e = model.energies(x, v);
-        blown = e.kinetic + e.spring > c.blowup * model.energy_scale() ||
+        blown = e.kinetic_and_spring() > c.blowup * model.energy_scale() ||
                 !std::isfinite(e.total());
       }
       if (blown) {
@@ -340,10 +344,10 @@ TEST(SimulationDivergence, ThresholdIsOnKineticPlusSpringEnergy) {
   Scene s;
   s.name = "free-fall";
   s.dimension = 2;
-  s.gravity = Eigen::Vector3d(0, -10, 0);
+  s.block<Gravity>().acceleration = Eigen::Vector3d(0, -10, 0);
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   ASSERT_DOUBLE_EQ(model.energy_scale(), 10.0);
   // v_n = -10 n h: kinetic 50 (n h)^2 > 1e4 first at n h = 14.2 (h = 0.1).
   const RunResult r = simulate(model, settings("explicit-euler", 0.1, 20.0));
@@ -362,11 +366,11 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
   Scene s;
   s.name = "zero-energy-scale";
   s.dimension = 2;
-  s.gravity = Eigen::Vector3d(0, -9.81, 0);
+  s.block<Gravity>().acceleration = Eigen::Vector3d(0, -9.81, 0);
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
-  s.springs = {{0, 1, 100.0, 0.0, 0.0}};
-  const MassSpringModel model(s);
+  s.block<Springs>() = {{0, 1, 100.0, 0.0, 0.0}};
+  const ElasticModel model(s);
   ASSERT_EQ(model.energy_scale(), 0.0);
 
   // Stable integrators: finite motion, never a divergence.
@@ -375,9 +379,7 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
     const RunResult r = simulate(model, settings(integrator, 0.01, 5.0));
     EXPECT_EQ(r.status, RunStatus::kCompleted);
     EXPECT_FALSE(r.diverged_at.has_value());
-    EXPECT_GT(model.energies(r.x_final, r.v_final).kinetic +
-                  model.energies(r.x_final, r.v_final).spring,
-              0.0);
+    EXPECT_GT(model.energies(r.x_final, r.v_final).kinetic_and_spring(), 0.0);
   }
   // Forward Euler grows the energy 1.25-fold per step: 1.25^200 ~ 1e19 times
   // whatever it had, still finite, still not a divergence ...
@@ -402,19 +404,19 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
 // rule (kinetic + spring > B E_s, E_s = E0 here) therefore calls it diverged
 // above w h = 2 (1 - 1/B), 0.1% below the limit for B = 1000 -- inside the
 // stability bisection's tolerance -- and a larger --blowup sees closer.
-double peak_energy_ratio(const MassSpringModel& model, const RunSettings& s, RunResult& r) {
+double peak_energy_ratio(const ElasticModel& model, const RunSettings& s, RunResult& r) {
   RecordingObserver o;
   r = simulate(model, s, {&o});
   double peak = 0.0;
   for (std::size_t k = 0; k < o.times.size(); ++k) {
     const Energies e = model.energies(o.xs[k], o.vs[k]);
-    peak = std::max(peak, e.kinetic + e.spring);
+    peak = std::max(peak, e.kinetic_and_spring());
   }
   return peak / r.energy_initial;
 }
 
 TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalfWh) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   RunResult r;
   for (const double wh : {1.9, 1.99, 1.997}) {
@@ -437,7 +439,7 @@ TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalf
 // diverges at t = 0 (it used to complete, with inf energies in every row).
 TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
   Scene s = linear_oscillator(100.0, 1.0, 1e200);  // k x^2 / 2 = 5e401
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   ASSERT_FALSE(std::isfinite(model.energies(model.initial_positions(), model.initial_velocities()).total()));
   const RunResult r = simulate(model, settings("rk4", 0.1, 1.0));
   EXPECT_EQ(r.status, RunStatus::kDiverged);
@@ -450,7 +452,7 @@ TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
 // A stop request ends a run at its next step, as an exception the
 // experiment runner turns into "not done".
 TEST(SimulationStop, StopRequestThrowsAtTheNextStep) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   std::atomic<bool> stop{true};
   RunSettings s = settings("rk4", 0.01, 1.0);
   s.options.stop = &stop;
@@ -489,7 +491,7 @@ void expect_limit(const StabilityResult& r, double limit, double rel_tol) {
 }
 
 TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   for (const char* integrator : {"symplectic-euler", "verlet"}) {
     SCOPED_TRACE(integrator);
@@ -503,7 +505,7 @@ TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
 // Just past its limit RK4 amplifies by only |R(i w h)| - 1 ~ 2.5 (w h - 2
 // sqrt 2) per step, so a long run (~3500 steps) is needed to see it.
 TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   const StabilitySettings s = stability_settings("rk4", 1e4 / w);
   const StabilityResult r = find_max_stable_dt(model, s);
@@ -514,7 +516,7 @@ TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
 // doubles can meet (1e-16, or 0 + the smallest positive) it stops when the
 // bracket's ends are neighbours, after about 60 runs.
 TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
-  const MassSpringModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
   for (const double rel_tol : {1e-16, 4.9e-324}) {
     SCOPED_TRACE(rel_tol);
     StabilitySettings s = stability_settings("symplectic-euler", 10.0);
@@ -529,7 +531,7 @@ TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
 
 // A range with no valid grid is refused before the first run.
 TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   StabilitySettings s = stability_settings("rk4", 1000.0);
   s.dt_min = 1e-12;
   try {
@@ -541,7 +543,7 @@ TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
 }
 
 TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   const StabilityResult r = find_max_stable_dt(model, stability_settings("implicit-euler", 10.0));
   EXPECT_EQ(r.max_stable_dt, 1.0);
   EXPECT_EQ(r.runs, 1);
@@ -552,7 +554,7 @@ TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
 // blowup factor for small enough h: the search finds that finite-time limit,
 // near h with (T / h) ln(1 + w^2 h^2) = ln(1000), i.e. h ~ ln(1000) / (T w^2).
 TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   const StabilitySettings s = stability_settings("explicit-euler", 10.0);
   const StabilityResult r = find_max_stable_dt(model, s);
   ASSERT_GT(r.lo, 0.0);
@@ -569,7 +571,7 @@ TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
 }
 
 TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   StabilitySettings s = stability_settings("explicit-euler", 10.0);
   s.dt_min = 0.1;
   const StabilityResult r = find_max_stable_dt(model, s);
@@ -578,7 +580,7 @@ TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
 }
 
 TEST(SimulationStability, BadRangeThrows) {
-  const MassSpringModel model(linear_oscillator());
+  const ElasticModel model(linear_oscillator());
   StabilitySettings s = stability_settings("rk4", 1.0);
   s.dt_min = 0.0;
   EXPECT_THROW(find_max_stable_dt(model, s), std::invalid_argument);

@@ -5,8 +5,9 @@
 
 #include <random>
 
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "models/spring_force.h"
+#include "models/springs.h"
 
 namespace springlab {
 namespace {
@@ -32,16 +33,16 @@ Scene disjoint_springs(int dim, unsigned seed) {
     const double L = n % 5 == 0 ? 0.0 : rest(rng);
     // Both orders of the ends: the fast loop swaps them to sort by particle.
     if (n % 2 == 0) {
-      s.springs.push_back({i, i + 1, stiffness(rng), L, 0.0});
+      s.block<Springs>().push_back({i, i + 1, stiffness(rng), L, 0.0});
     } else {
-      s.springs.push_back({i + 1, i, stiffness(rng), L, 0.0});
+      s.block<Springs>().push_back({i + 1, i, stiffness(rng), L, 0.0});
     }
   }
   return s;
 }
 
 // The forces on every particle, in scene order, from the model.
-Eigen::MatrixXd model_forces(const MassSpringModel& model) {
+Eigen::MatrixXd model_forces(const ElasticModel& model) {
   Vector f;
   model.force(0.0, model.initial_positions(), model.initial_velocities(), f);
   // No fixed particle: the unknowns are the particles in scene order, which
@@ -52,7 +53,7 @@ Eigen::MatrixXd model_forces(const MassSpringModel& model) {
 Eigen::MatrixXd reference_forces(const Scene& s) {
   Eigen::MatrixXd f = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(s.particles.size()),
                                             s.dimension);
-  for (const Spring& spring : s.springs) {
+  for (const Spring& spring : s.get<Springs>()) {
     const Eigen::Vector3d fi = hooke_force(s.particles[spring.i].x, s.particles[spring.j].x,
                                            spring.k, spring.rest, s.dimension);
     for (int r = 0; r < s.dimension; ++r) {
@@ -66,7 +67,7 @@ Eigen::MatrixXd reference_forces(const Scene& s) {
 TEST(SpringForce, FastLoopEqualsHookesLawBitForBit) {
   for (int dim : {2, 3}) {
     const Scene s = disjoint_springs(dim, 17u + static_cast<unsigned>(dim));
-    const MassSpringModel model(s);
+    const ElasticModel model(s);
     const Eigen::MatrixXd x = model.scene_positions(model.initial_positions());
     for (std::size_t p = 0; p < s.particles.size(); ++p) {
       for (int r = 0; r < dim; ++r) {
@@ -105,12 +106,12 @@ TEST(SpringForce, SharedParticlesAgreeToRounding) {
   for (int a = 0; a < n; ++a) {
     for (int b = 0; b < n; ++b) {
       const int i = a * n + b;
-      if (b + 1 < n) s.springs.push_back({i, i + 1, 1000.0, 0.1, 0.0});
-      if (a + 1 < n) s.springs.push_back({i + n, i, 1000.0, 0.1, 0.0});
-      if (a + 1 < n && b + 1 < n) s.springs.push_back({i, i + n + 1, 1000.0, 0.1414, 0.0});
+      if (b + 1 < n) s.block<Springs>().push_back({i, i + 1, 1000.0, 0.1, 0.0});
+      if (a + 1 < n) s.block<Springs>().push_back({i + n, i, 1000.0, 0.1, 0.0});
+      if (a + 1 < n && b + 1 < n) s.block<Springs>().push_back({i, i + n + 1, 1000.0, 0.1414, 0.0});
     }
   }
-  const MassSpringModel model(s);
+  const ElasticModel model(s);
   const Eigen::MatrixXd fast = model_forces(model);
   const Eigen::MatrixXd reference = reference_forces(s);
   const double scale = reference.cwiseAbs().maxCoeff();

@@ -24,7 +24,7 @@
 
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
@@ -45,7 +45,7 @@ constexpr double kFastRate = 9999.0;
 Scene overdamped_stiff_spring() {
   Scene s = oscillator(1e4, 1.0);
   s.name = "overdamped-stiff-spring";
-  s.drag = 1e4;
+  s.block<Drag>().gamma = 1e4;
   return s;
 }
 
@@ -105,7 +105,7 @@ TEST_P(DeclaredStability, UndampedStiffOscillatorAtWh100) {
   const IntegratorInfo i = info();
   if (i.adaptive) GTEST_SKIP() << "adaptive: the step is the error control's";
   if (i.stability == StabilityKind::kAAlpha) GTEST_SKIP() << "A(alpha): no claim near the axis";
-  const MassSpringModel model(oscillator(100.0, 1.0));
+  const ElasticModel model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(100.0 / 10.0, 1000.0));
   if (stable_on_imaginary_axis(i)) {
     EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -118,7 +118,7 @@ TEST_P(DeclaredStability, UndampedStiffOscillatorAtWh100) {
 TEST_P(DeclaredStability, LStableMethodsDampAStiffModeInOneStep) {
   const IntegratorInfo i = info();
   if (i.adaptive || i.stability != StabilityKind::kL) GTEST_SKIP() << "not a fixed-step L-stable";
-  const MassSpringModel model(oscillator(100.0, 1.0));
+  const ElasticModel model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(100.0 / 10.0, 10.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT(r.energy_final, 1e-2 * r.energy_initial);  // implicit Euler: 1 / (1 + 100^2)
@@ -129,7 +129,7 @@ TEST_P(DeclaredStability, ConditionalLimitHoldsJustBelowAndFailsJustAbove) {
   if (i.adaptive || i.stability != StabilityKind::kConditional || i.stability_limit == 0.0) {
     GTEST_SKIP() << "no finite, positive step limit";
   }
-  const MassSpringModel model(oscillator(100.0, 1.0));
+  const ElasticModel model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double factor : {0.99, 1.01}) {
     const double dt = factor * i.stability_limit / w;
@@ -145,7 +145,7 @@ TEST_P(DeclaredStability, NoStableStepWithoutDampingDivergesAsAResult) {
   if (i.stability != StabilityKind::kConditional || i.stability_limit != 0.0) {
     GTEST_SKIP() << "has a stable range";
   }
-  const MassSpringModel model(oscillator(100.0, 1.0));
+  const ElasticModel model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(0.05, 100.0));
   ASSERT_EQ(r.status, RunStatus::kDiverged);
   // Energy grows by (1 + w^2 h^2) = 1.25 per step; 1000x the scale takes
@@ -161,7 +161,7 @@ TEST_P(DeclaredStability, NoStableStepWithoutDampingDivergesAsAResult) {
 TEST_P(DeclaredStability, FixedStepThroughAStiffDecayAtHLambda100) {
   const IntegratorInfo i = info();
   if (i.adaptive) GTEST_SKIP() << "adaptive: see the next test";
-  const MassSpringModel model(overdamped_stiff_spring());
+  const ElasticModel model(overdamped_stiff_spring());
   const double h = 100.0 / kFastRate;
   const RunResult r = simulate(model, settings(h, 1.0));
   if (stiff_decay_stable(i)) {
@@ -179,7 +179,7 @@ TEST_P(DeclaredStability, FixedStepThroughAStiffDecayAtHLambda100) {
 TEST_P(DeclaredStability, AdaptiveStepsThroughAStiffDecay) {
   const IntegratorInfo i = info();
   if (!i.adaptive) GTEST_SKIP() << "fixed step: see the previous test";
-  const MassSpringModel model(overdamped_stiff_spring());
+  const ElasticModel model(overdamped_stiff_spring());
   const double t_end = 20.0;
   RunSettings s = settings(1.0, t_end);
   s.options.rtol = 1e-5;

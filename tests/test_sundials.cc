@@ -14,7 +14,7 @@
 #include "integrators/registry.h"
 #include "integrators/sundials_integrator.h"
 #include "models/builtin_scenes.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 #include "scenes_for_tests.h"
 
 namespace springlab {
@@ -51,7 +51,7 @@ Scene small_cloth() { return make_builtin_scene("cloth", {{"n", "4"}, {"wind", "
 
 // The reference: rk4 at a step far below its stability limit and error scale.
 Vector reference_positions(const Scene& scene, double t_end, double dt) {
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   RunSettings s;
   s.integrator = "rk4";
   s.dt = dt;
@@ -73,7 +73,7 @@ TEST_P(AdaptiveIntegrator, ErrorFallsWithTolerance) {
   for (const Case& c : {Case{testing::swinging_spring(), 1.0, 1e-5},
                         Case{small_cloth(), 0.5, 2e-6}}) {
     const Vector reference = reference_positions(c.scene, c.t_end, c.reference_dt);
-    const MassSpringModel model(c.scene);
+    const ElasticModel model(c.scene);
     double error[2];
     int k = 0;
     for (double rtol : {1e-4, 1e-8}) {
@@ -88,7 +88,7 @@ TEST_P(AdaptiveIntegrator, ErrorFallsWithTolerance) {
 
 // A run that cannot finish (--max-steps too small) is a result naming the call.
 TEST_P(AdaptiveIntegrator, TooMuchWorkIsReportedAsAResult) {
-  const MassSpringModel model(small_cloth());
+  const ElasticModel model(small_cloth());
   RunSettings s = adaptive(GetParam(), 1e-8, 1.0, 2.0);
   s.options.max_steps = 10;
   const RunResult r = simulate(model, s);
@@ -102,7 +102,7 @@ TEST_P(AdaptiveIntegrator, TooMuchWorkIsReportedAsAResult) {
 }
 
 TEST_P(AdaptiveIntegrator, StabilityLimitDetectionIsCvodeBdfOnly) {
-  const MassSpringModel model(testing::swinging_spring());
+  const ElasticModel model(testing::swinging_spring());
   RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 1.0);
   s.options.stald = true;
   const RunResult r = simulate(model, s);
@@ -121,7 +121,7 @@ TEST_P(AdaptiveIntegrator, StabilityLimitDetectionIsCvodeBdfOnly) {
 // evaluations per Jacobian are the nonlinear iterations it serves (a few
 // hundred at most), far below the 2n a difference-quotient Jacobian costs.
 TEST_P(AdaptiveImplicitIntegrator, AnalyticJacobianCostsNoForceEvaluations) {
-  const MassSpringModel model(make_builtin_scene("chain", {{"n", "600"}, {"horizontal", "1"}}));
+  const ElasticModel model(make_builtin_scene("chain", {{"n", "600"}, {"horizontal", "1"}}));
   const double unknowns = 2.0 * static_cast<double>(model.dofs());  // 2396
   RunSettings s = adaptive(GetParam(), 1e-6, 0.05, 0.1);
   s.options.linear_solver = "klu";
@@ -136,7 +136,7 @@ TEST_P(AdaptiveImplicitIntegrator, AnalyticJacobianCostsNoForceEvaluations) {
 // --dq-jacobian: SUNDIALS differences the right-hand side instead, paying
 // at least one evaluation per unknown per Jacobian, for the same answer.
 TEST_P(AdaptiveImplicitIntegrator, DifferenceQuotientJacobianGivesTheSameAnswer) {
-  const MassSpringModel model(small_cloth());
+  const ElasticModel model(small_cloth());
   const double unknowns = 2.0 * static_cast<double>(model.dofs());
   RunSettings s = adaptive(GetParam(), 1e-8, 0.05, 0.3);
   s.options.linear_solver = "dense";
@@ -154,7 +154,7 @@ TEST_P(AdaptiveImplicitIntegrator, DifferenceQuotientJacobianGivesTheSameAnswer)
 }
 
 TEST_P(AdaptiveImplicitIntegrator, LinearSolversAgree) {
-  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "6"}, {"drag", "0.01"}}));
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "6"}, {"drag", "0.01"}}));
   Vector first;
   for (const char* solver : {"dense", "klu", "gmres"}) {
     RunSettings s = adaptive(GetParam(), 1e-8, 0.05, 0.15);
@@ -170,7 +170,7 @@ TEST_P(AdaptiveImplicitIntegrator, LinearSolversAgree) {
 }
 
 TEST_P(AdaptiveImplicitIntegrator, KluRefusesDifferenceQuotients) {
-  const MassSpringModel model(testing::swinging_spring());
+  const ElasticModel model(testing::swinging_spring());
   RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 1.0);
   s.options.linear_solver = "klu";
   s.options.dq_jacobian = true;
@@ -195,7 +195,7 @@ TEST_P(AdaptiveIntegrator, MaxOrderIsCheckedAgainstTheMethod) {
       {"arkode-dirk", {2, 3, 4, 5}},         {"arkode-imex", {3, 4, 5}}};
   ASSERT_TRUE(orders.count(GetParam())) << "a new adaptive method: add its orders here";
   const auto integrator = make_integrator(GetParam());
-  const MassSpringModel model(testing::swinging_spring());
+  const ElasticModel model(testing::swinging_spring());
   std::set<int> accepted;
   for (int q = 1; q <= 14; ++q) {
     IntegratorOptions o;
@@ -249,7 +249,7 @@ TEST(SundialsWorkLimit, ScalesWithTheSystem) {
 // A stiff cloth asked for one output at t = 1000 s: explicit arkode-erk
 // needs ~10^6 steps; it stops at the scaled limit with what to try.
 TEST(SundialsWorkLimit, HopelessRunFailsAtTheScaledLimit) {
-  const MassSpringModel model(make_builtin_scene("cloth", {{"n", "8"}, {"k", "1e5"}}));
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "8"}, {"k", "1e5"}}));
   const double unknowns = 2.0 * static_cast<double>(model.dofs());
   const long limit = static_cast<long>(kStepBudget / unknowns);
   RunSettings s = adaptive("arkode-erk", 1e-6, 1000.0, 1000.0);
@@ -298,7 +298,7 @@ TEST(SundialsOptions, DenseSizeCapAndDifferenceQuotientsWithAuto) {
 // second, through the right-hand side (ODE packages) or residual (IDA).
 TEST(SundialsStop, StopRequestEndsALongIntervalAtOnce) {
   // w = 1000 rad/s for 10^4 s: ~10^6 periods to resolve.
-  const MassSpringModel model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
+  const ElasticModel model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
   for (const char* name : {"arkode-erk", "ida"}) {
     SCOPED_TRACE(name);
     std::atomic<bool> stop{false};
@@ -327,7 +327,7 @@ INSTANTIATE_TEST_SUITE_P(Registry, AdaptiveImplicitIntegrator,
 // IDA on the residual form) and a tiny-step RK4 agree on the chain.
 TEST(Sundials, IdaCvodeBdfAndRk4AgreeOnTheChain) {
   const Scene chain = make_builtin_scene("chain", {{"n", "8"}, {"horizontal", "1"}});
-  const MassSpringModel model(chain);
+  const ElasticModel model(chain);
   const Vector reference = reference_positions(chain, 0.5, 1e-5);
   for (const char* name : {"cvode-bdf", "ida"}) {
     const RunResult r = simulate(model, adaptive(name, 1e-10, 0.05, 0.5));

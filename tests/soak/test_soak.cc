@@ -9,7 +9,7 @@
 
 #include "experiments/simulation.h"
 #include "models/builtin_scenes.h"
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 namespace springlab {
 namespace {
@@ -35,7 +35,7 @@ class MemorySampler final : public Observer {
 };
 
 void soak(const Scene& scene, const RunSettings& settings, long steps, long allowed_growth_kb) {
-  const MassSpringModel model(scene);
+  const ElasticModel model(scene);
   MemorySampler sampler(settings.t_end / 10);
   const RunResult r = simulate(model, settings, {&sampler});
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;

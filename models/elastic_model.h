@@ -1,6 +1,8 @@
-// The mass-spring system of SPEC §2 assembled from a Scene: the state holds
-// only free particles, forces come from the registered ForceTerms the scene
-// names, and both Jacobians share one sparsity pattern built here once.
+// The elastic model: the mechanical system of SPEC §2 (springs today, finite
+// elements and contact as they are registered) assembled from a Scene: the state holds
+// only free particles, forces come from the terms of the registered element
+// kinds (element_kind.h) the scene has, and both Jacobians share one sparsity
+// pattern built here once.
 //
 // Not thread-safe: evaluation uses the model's scratch arrays. Use one model
 // per thread (they are cheap to build from the Scene).
@@ -10,23 +12,16 @@
 #include <memory>
 #include <vector>
 
-#include "models/force_registry.h"
+#include "models/energies.h"
 #include "models/force_term.h"
 #include "models/mechanical_system.h"
 #include "models/scene.h"
 
 namespace springlab {
 
-struct Energies {
-  double kinetic = 0.0;
-  double spring = 0.0;
-  double gravity = 0.0;
-  double total() const { return kinetic + spring + gravity; }
-};
-
-class MassSpringModel final : public MechanicalSystem {
+class ElasticModel final : public MechanicalSystem {
  public:
-  explicit MassSpringModel(const Scene& scene);
+  explicit ElasticModel(const Scene& scene);
 
   // MechanicalSystem
   using MechanicalSystem::force;
@@ -58,9 +53,16 @@ class MassSpringModel final : public MechanicalSystem {
   const Vector& initial_positions() const { return x0_; }
   const Vector& initial_velocities() const { return v0_; }
 
+  // The energy report's columns (energies.h: kinetic, spring, gravity,
+  // total, then those of the kinds the scene has) and their values at (x, v).
+  const EnergyLayout& energy_layout() const { return *energy_layout_; }
+  const std::vector<std::string>& energy_columns() const { return energy_layout_->columns; }
   Energies energies(const Vector& x, const Vector& v) const;
+  // The same into `out` (made by energies() once), without allocating.
+  void energies(const Vector& x, const Vector& v, Energies& out) const;
 
-  // SPEC §6's energy scale E_s = T(0) + U_spring(0) + sum_free m (|g| d + |w_max|^2/2).
+  // SPEC §6's energy scale E_s = T(0) + U_spring(0) + sum_free m (|g| d + |w_max|^2/2)
+  // (U_spring: every potential that counts with the spring energy).
   double energy_scale() const { return energy_scale_; }
 
   // Positions/velocities of all particles in scene order, one row each
@@ -82,6 +84,10 @@ class MassSpringModel final : public MechanicalSystem {
   Vector mass_;
   Vector x0_, v0_;
   std::vector<std::unique_ptr<ForceTerm>> terms_;
+  // The energy column each term's potential goes to (a position in the
+  // layout), or -1 when its kind stores no energy.
+  std::vector<long> term_column_;
+  std::shared_ptr<const EnergyLayout> energy_layout_;
   SparseMatrix pattern_;
   bool symmetric_ = true;
   bool derives_from_potentials_ = true;

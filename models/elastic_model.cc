@@ -1,10 +1,12 @@
-#include "models/mass_spring_model.h"
+#include "models/elastic_model.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include <Eigen/SparseCore>
+
+#include "models/element_kind.h"
 
 namespace springlab {
 namespace {
@@ -35,7 +37,7 @@ bool in_part(const ForceTerm& term, ForcePart part) {
 
 }  // namespace
 
-MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
+ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   const int dim = order_.dim;
   const int all = particle_count();
   const Eigen::Index n = static_cast<Eigen::Index>(order_.free_particles) * dim;
@@ -58,8 +60,17 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
     }
   }
 
-  for (const ForceKind& kind : force_kinds()) {
-    if (auto term = kind.make(scene_, order_)) terms_.push_back(std::move(term));
+  energy_layout_ = std::make_shared<const EnergyLayout>(springlab::energy_layout(scene_));
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->make == nullptr) continue;
+    if (auto term = kind->make(scene_, order_)) {
+      terms_.push_back(std::move(term));
+      const std::size_t column =
+          kind->energy.name.empty() ? energy_layout_->columns.size()
+                                    : energy_layout_->find(kind->energy.name);
+      term_column_.push_back(column < energy_layout_->columns.size() ? static_cast<long>(column)
+                                                                     : -1);
+    }
   }
 
   // One pattern for dF/dx and dF/dv: the full diagonal plus every block a
@@ -95,7 +106,8 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
   }
 
   // SPEC §6: E_s = T(0) + U_spring(0) + sum_free m_i (|g| d + |w_max|^2 / 2),
-  // d the diameter of the initial positions' bounding box.
+  // d the diameter of the initial positions' bounding box; each kind gives
+  // its term per unit of free mass (gravity |g| d, wind |w_max|^2 / 2).
   double diameter2 = 0.0;
   for (int r = 0; r < dim; ++r) {
     double lo = INFINITY, hi = -INFINITY;
@@ -106,15 +118,18 @@ MassSpringModel::MassSpringModel(const Scene& scene) : scene_(scene), order_(mak
     diameter2 += (hi - lo) * (hi - lo);
   }
   const double diameter = std::sqrt(diameter2);
-  double w_max = 0.0;
-  if (scene_.wind) w_max = scene_.wind->velocity.norm() * (1.0 + std::abs(scene_.wind->gust));
+  double per_mass = 0.0;
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->energy_scale_per_mass != nullptr) {
+      per_mass += kind->energy_scale_per_mass(scene_, diameter);
+    }
+  }
   const Energies e0 = energies(x0_, v0_);
   const double free_mass = mass_.sum() / dim;
-  energy_scale_ = e0.kinetic + e0.spring +
-                  free_mass * (scene_.gravity.norm() * diameter + 0.5 * w_max * w_max);
+  energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
 }
 
-Configuration MassSpringModel::stored_configuration(double t) const {
+Configuration ElasticModel::stored_configuration(double t) const {
   Configuration c;
   c.t = t;
   c.x = x_all_.data();
@@ -124,14 +139,14 @@ Configuration MassSpringModel::stored_configuration(double t) const {
   return c;
 }
 
-Configuration MassSpringModel::configure(double t, const Vector& x, const Vector& v) const {
+Configuration ElasticModel::configure(double t, const Vector& x, const Vector& v) const {
   const Eigen::Index n = dofs();
   x_all_.head(n) = x;
   if (reads_velocity_) v_all_.head(n) = v;
   return stored_configuration(t);
 }
 
-void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
+void ElasticModel::force(ForcePart part, double t, const Vector& x, const Vector& v,
                             Vector& f) const {
   const Configuration c = configure(t, x, v);
   // One pass initializes f with the constant forces (instead of zero-fill,
@@ -143,19 +158,19 @@ void MassSpringModel::force(ForcePart part, double t, const Vector& x, const Vec
   f = f_all_.head(dofs());
 }
 
-void MassSpringModel::jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
+void ElasticModel::jacobians(ForcePart part, double t, const Vector& x, const Vector& v,
                                 SparseMatrix* dfdx, SparseMatrix* dfdv) const {
   assemble_jacobians(part, /*definite=*/false, t, x, v, dfdx, dfdv);
 }
 
-void MassSpringModel::definite_jacobians(double t, const Vector& x, const Vector& v,
+void ElasticModel::definite_jacobians(double t, const Vector& x, const Vector& v,
                                          SparseMatrix* dfdx, SparseMatrix* dfdv) const {
   assemble_jacobians(ForcePart::kAll, /*definite=*/true, t, x, v, dfdx, dfdv);
 }
 
 // The potentials read only the half of the configuration they depend on:
 // each sets that half, the other holds whatever was stored last.
-double MassSpringModel::position_potential(double t, const Vector& x) const {
+double ElasticModel::position_potential(double t, const Vector& x) const {
   x_all_.head(dofs()) = x;
   const Configuration c = stored_configuration(t);
   double sum = 0.0;
@@ -163,7 +178,7 @@ double MassSpringModel::position_potential(double t, const Vector& x) const {
   return sum;
 }
 
-double MassSpringModel::velocity_potential(double t, const Vector& v) const {
+double ElasticModel::velocity_potential(double t, const Vector& v) const {
   if (!derives_from_potentials_ || !reads_velocity_) return 0.0;  // no term has a W
   v_all_.head(dofs()) = v;
   const Configuration c = stored_configuration(t);
@@ -172,7 +187,7 @@ double MassSpringModel::velocity_potential(double t, const Vector& v) const {
   return sum;
 }
 
-void MassSpringModel::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
+void ElasticModel::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
                                          const Vector& v, SparseMatrix* dfdx,
                                          SparseMatrix* dfdv) const {
   const Configuration c = configure(t, x, v);
@@ -194,21 +209,25 @@ void MassSpringModel::assemble_jacobians(ForcePart part, bool definite, double t
   }
 }
 
-Energies MassSpringModel::energies(const Vector& x, const Vector& v) const {
-  const Configuration c = configure(0.0, x, v);
-  Energies e;
-  e.kinetic = 0.5 * mass_.dot(v.cwiseProduct(v));
-  for (const auto& term : terms_) {
-    switch (term->energy_kind()) {
-      case EnergyKind::kSpring: e.spring += term->potential_energy(c); break;
-      case EnergyKind::kGravity: e.gravity += term->potential_energy(c); break;
-      case EnergyKind::kNone: break;
-    }
-  }
+Energies ElasticModel::energies(const Vector& x, const Vector& v) const {
+  Energies e(energy_layout_);
+  energies(x, v, e);
   return e;
 }
 
-double MassSpringModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {
+void ElasticModel::energies(const Vector& x, const Vector& v, Energies& e) const {
+  const Configuration c = configure(0.0, x, v);
+  e.clear();
+  e.set_kinetic(0.5 * mass_.dot(v.cwiseProduct(v)));
+  for (std::size_t k = 0; k < terms_.size(); ++k) {
+    if (term_column_[k] >= 0) {
+      e.add(static_cast<std::size_t>(term_column_[k]), terms_[k]->potential_energy(c));
+    }
+  }
+  e.finish();
+}
+
+double ElasticModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {
   const Configuration c = configure(t, x, v);
   f_all_.setZero();
   for (const auto& term : terms_) {
@@ -217,7 +236,7 @@ double MassSpringModel::nonconservative_power(double t, const Vector& x, const V
   return f_all_.head(dofs()).dot(v);
 }
 
-Eigen::MatrixXd MassSpringModel::scene_positions(const Vector& x) const {
+Eigen::MatrixXd ElasticModel::scene_positions(const Vector& x) const {
   const int dim = order_.dim;
   Eigen::MatrixXd out(particle_count(), dim);
   for (int s = 0; s < particle_count(); ++s) {
@@ -229,7 +248,7 @@ Eigen::MatrixXd MassSpringModel::scene_positions(const Vector& x) const {
   return out;
 }
 
-Eigen::MatrixXd MassSpringModel::scene_velocities(const Vector& v) const {
+Eigen::MatrixXd ElasticModel::scene_velocities(const Vector& v) const {
   const int dim = order_.dim;
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(particle_count(), dim);
   for (int s = 0; s < particle_count(); ++s) {

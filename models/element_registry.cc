@@ -1,0 +1,40 @@
+// The registered element kinds (element_kind.h). Adding a kind: write its
+// file (an `ElementKind` returned by a function like the ones below) and add
+// one line to this table.
+//
+// The order is the order of the model's terms, and so of the summation of
+// forces (keep it: floating-point sums depend on it), and within each group
+// the order of keys in scene files and messages and of energy columns.
+#include "models/element_kind.h"
+
+namespace springlab {
+
+// Each in its kind's own file.
+const ElementKind& spring_kind();          // springs.cc
+const ElementKind& spring_damping_kind();  // spring_damping_force.cc
+const ElementKind& gravity_kind();         // gravity_force.cc
+const ElementKind& drag_kind();            // drag_force.cc
+const ElementKind& wind_kind();            // wind_force.cc
+
+const std::vector<const ElementKind*>& element_kinds() {
+  static const std::vector<const ElementKind*> kinds = {
+      &spring_kind(),
+      &spring_damping_kind(),
+      &gravity_kind(),
+      &drag_kind(),
+      &wind_kind(),
+  };
+  return kinds;
+}
+
+std::vector<ElementCount> element_counts(const Scene& scene) {
+  std::vector<ElementCount> counts;
+  for (const ElementKind* kind : element_kinds()) {
+    for (const SceneKey& key : kind->keys) {
+      if (key.cap > 0) counts.push_back({key.name, key.count(scene), key.cap});
+    }
+  }
+  return counts;
+}
+
+}  // namespace springlab

@@ -1,0 +1,85 @@
+#include "models/energies.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "models/element_kind.h"
+
+namespace springlab {
+namespace {
+
+// Whether the scene has any element of this kind (an optional column is
+// reported only then).
+bool has_elements(const ElementKind& kind, const Scene& scene) {
+  return std::any_of(kind.keys.begin(), kind.keys.end(), [&](const SceneKey& key) {
+    return key.count != nullptr && key.count(scene) > 0;
+  });
+}
+
+}  // namespace
+
+std::size_t EnergyLayout::find(std::string_view column) const {
+  const auto it = std::find(columns.begin(), columns.end(), column);
+  return static_cast<std::size_t>(it - columns.begin());
+}
+
+EnergyLayout energy_layout(const Scene& scene) { return energy_layout({&scene}); }
+
+EnergyLayout energy_layout(const std::vector<const Scene*>& scenes) {
+  std::vector<const EnergyColumn*> always, present;
+  auto add_once = [](std::vector<const EnergyColumn*>& list, const EnergyColumn& c) {
+    const bool known = std::any_of(list.begin(), list.end(),
+                                   [&](const EnergyColumn* seen) { return seen->name == c.name; });
+    if (!known) list.push_back(&c);
+  };
+  for (const ElementKind* kind : element_kinds()) {
+    const EnergyColumn& c = kind->energy;
+    if (c.name.empty()) continue;
+    if (c.always) {
+      add_once(always, c);
+    } else if (std::any_of(scenes.begin(), scenes.end(),
+                           [&](const Scene* s) { return has_elements(*kind, *s); })) {
+      add_once(present, c);
+    }
+  }
+  EnergyLayout layout;
+  auto add_potential = [&](const EnergyColumn* c) {
+    if (c->counts_with_spring) layout.counts_with_spring.push_back(layout.columns.size());
+    layout.potentials.push_back(layout.columns.size());
+    layout.columns.emplace_back(c->name);
+  };
+  layout.kinetic = 0;
+  layout.columns.push_back("kinetic");
+  for (const EnergyColumn* c : always) add_potential(c);
+  layout.total = layout.columns.size();
+  layout.columns.push_back("total");
+  for (const EnergyColumn* c : present) add_potential(c);
+  return layout;
+}
+
+Energies::Energies(std::shared_ptr<const EnergyLayout> layout)
+    : layout_(std::move(layout)), values_(layout_->columns.size(), 0.0) {}
+
+double Energies::kinetic_and_spring() const {
+  double sum = kinetic();
+  for (std::size_t c : layout_->counts_with_spring) sum += values_[c];
+  return sum;
+}
+
+double Energies::operator[](std::string_view column) const {
+  const std::size_t c = layout_->find(column);
+  if (c == values_.size()) {
+    throw std::out_of_range("energies: no column '" + std::string(column) + "'");
+  }
+  return values_[c];
+}
+
+void Energies::clear() { std::fill(values_.begin(), values_.end(), 0.0); }
+
+void Energies::finish() {
+  double sum = kinetic();
+  for (std::size_t c : layout_->potentials) sum += values_[c];
+  values_[layout_->total] = sum;
+}
+
+}  // namespace springlab

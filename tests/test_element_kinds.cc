@@ -1,0 +1,226 @@
+// Shared suites over the element kind registry (models/element_kind.h), in
+// 2-D and 3-D, on each kind's own random instances and on all kinds at once:
+// a kind is covered by registering it.
+//   - its random instance is a valid scene whose file reads back to the same
+//     scene and the same forces (its reader, writer and checks agree);
+//   - force = -grad of its potentials, the stored one being what the energy
+//     report shows (central differences);
+//   - dF/dx and dF/dv against central differences;
+//   - the definite part of dF/dx (Newton's matrix) is negative
+//     semidefinite, and equals dF/dx where that already is.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <ostream>
+#include <string>
+
+#include "models/elastic_model.h"
+#include "random_scenes.h"
+
+namespace springlab {
+namespace {
+
+using testing::random_scene;
+
+struct KindCase {
+  const ElementKind* kind;  // nullptr: every kind at once
+  int dim;
+};
+
+void PrintTo(const KindCase& c, std::ostream* os) {
+  *os << (c.kind != nullptr ? std::string(c.kind->name) : "all kinds") << ", " << c.dim << "-D";
+}
+
+std::vector<const ElementKind*> kinds_of(const KindCase& c) {
+  return c.kind != nullptr ? std::vector<const ElementKind*>{c.kind} : element_kinds();
+}
+
+std::vector<KindCase> all_cases() {
+  std::vector<KindCase> cases;
+  for (int dim : {2, 3}) {
+    for (const ElementKind* kind : element_kinds()) cases.push_back({kind, dim});
+    cases.push_back({nullptr, dim});
+  }
+  return cases;
+}
+
+std::string case_name(const ::testing::TestParamInfo<KindCase>& info) {
+  std::string name = info.param.kind != nullptr ? std::string(info.param.kind->name) : "all";
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name + "_" + std::to_string(info.param.dim) + "D";
+}
+
+class EveryKind : public ::testing::TestWithParam<KindCase> {
+ protected:
+  Scene scene(unsigned seed, RandomStates states = RandomStates::kAny) const {
+    return random_scene(kinds_of(GetParam()), GetParam().dim, seed, states);
+  }
+  // The same, keeping only the kinds whose force derives from potentials
+  // (all of "all" but spring damping): what the potential tests need.
+  Scene potential_scene(unsigned seed, RandomStates states = RandomStates::kAny) const {
+    std::vector<const ElementKind*> kinds;
+    for (const ElementKind* kind : kinds_of(GetParam())) {
+      if (ElasticModel(random_scene({kind}, GetParam().dim, seed)).derives_from_potentials()) {
+        kinds.push_back(kind);
+      }
+    }
+    return random_scene(kinds, GetParam().dim, seed, states);
+  }
+};
+
+// Lowest eigenvalue of the symmetric part of -m.
+double lowest_stiffness(const SparseMatrix& m) {
+  const Eigen::MatrixXd k = -Eigen::MatrixXd(m);
+  const Eigen::MatrixXd symmetric = 0.5 * (k + k.transpose());
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(symmetric).eigenvalues()[0];
+}
+
+TEST_P(EveryKind, RandomInstanceIsAValidSceneThatReadsBack) {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const Scene s = scene(seed);
+    ASSERT_NO_THROW(validate_scene(s, "random")) << "seed " << seed;
+    const std::string text = scene_to_json(s);
+    const Scene again = parse_scene(text, "random.json");
+    EXPECT_EQ(scene_to_json(again), text);
+    const ElasticModel model(s), reread(again);
+    Vector f, g;
+    model.force(0.3, model.initial_positions(), model.initial_velocities(), f);
+    reread.force(0.3, reread.initial_positions(), reread.initial_velocities(), g);
+    EXPECT_EQ(f, g) << "seed " << seed;
+  }
+}
+
+// F = -dV/dx - dW/dv (MechanicalSystem::derives_from_potentials), and V is
+// the sum of the potential columns of the energy report. A kind whose force
+// has no such form (spring damping) is never asked for one.
+TEST_P(EveryKind, ForceIsMinusGradientOfItsReportedPotentials) {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const ElasticModel model(potential_scene(seed));
+    if (!model.derives_from_potentials()) GTEST_SKIP() << "no potential";
+    const double t = 0.7;
+    const Vector x = model.initial_positions();
+    const Vector v = model.initial_velocities();
+    const Energies e = model.energies(x, v);
+    const double V = model.position_potential(t, x);
+    EXPECT_NEAR(e.total() - e.kinetic(), V, 1e-12 * (1.0 + std::abs(V))) << "seed " << seed;
+    Vector f;
+    model.force(t, x, v, f);
+    const double eps = 1e-6;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      Vector xp = x, xm = x, vp = v, vm = v;
+      xp[k] += eps;
+      xm[k] -= eps;
+      vp[k] += eps;
+      vm[k] -= eps;
+      const double dV =
+          (model.position_potential(t, xp) - model.position_potential(t, xm)) / (2 * eps);
+      const double dW =
+          (model.velocity_potential(t, vp) - model.velocity_potential(t, vm)) / (2 * eps);
+      EXPECT_NEAR(f[k], -dV - dW, 1e-6 * (1.0 + std::abs(f[k])))
+          << "coordinate " << k << ", seed " << seed;
+    }
+  }
+}
+
+TEST_P(EveryKind, JacobiansMatchCentralDifferences) {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const ElasticModel model(scene(seed));
+    const double t = 0.37 * seed;
+    const Vector x = model.initial_positions();
+    const Vector v = model.initial_velocities();
+    SparseMatrix dfdx, dfdv;
+    model.jacobians(t, x, v, &dfdx, &dfdv);
+    const Eigen::MatrixXd Kx(dfdx), Kv(dfdv);
+    const double eps = 1e-6;
+    Vector fp, fm;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      Vector xp = x, xm = x;
+      xp[k] += eps;
+      xm[k] -= eps;
+      model.force(t, xp, v, fp);
+      model.force(t, xm, v, fm);
+      const Vector column_x = (fp - fm) / (2 * eps);
+      EXPECT_LT((Kx.col(k) - column_x).norm(), 1e-6 * (1.0 + column_x.norm()))
+          << "dF/dx column " << k << ", seed " << seed;
+      Vector vp = v, vm = v;
+      vp[k] += eps;
+      vm[k] -= eps;
+      model.force(t, x, vp, fp);
+      model.force(t, x, vm, fm);
+      const Vector column_v = (fp - fm) / (2 * eps);
+      EXPECT_LT((Kv.col(k) - column_v).norm(), 1e-6 * (1.0 + column_v.norm()))
+          << "dF/dv column " << k << ", seed " << seed;
+    }
+  }
+}
+
+// Newton's definite matrix (used when the forces derive from potentials):
+// -dF/dx's definite part is positive semidefinite at any state, dF/dv is
+// unchanged, and where the exact -dF/dx is already semidefinite (the
+// instances' kDefinite states) the definite part is exactly dF/dx.
+TEST_P(EveryKind, DefinitePartIsSemidefiniteAndExactWhereItCanBe) {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    for (RandomStates states : {RandomStates::kAny, RandomStates::kDefinite}) {
+      const ElasticModel model(potential_scene(seed, states));
+      if (!model.derives_from_potentials()) GTEST_SKIP() << "no potential: no definite part";
+      const Vector x = model.initial_positions();
+      const Vector v = model.initial_velocities();
+      SparseMatrix dfdx, dfdv, definite_dfdx, definite_dfdv;
+      model.jacobians(0.2, x, v, &dfdx, &dfdv);
+      model.definite_jacobians(0.2, x, v, &definite_dfdx, &definite_dfdv);
+      const double scale = 1.0 + Eigen::MatrixXd(dfdx).norm();
+      EXPECT_GT(lowest_stiffness(definite_dfdx), -1e-12 * scale) << "seed " << seed;
+      EXPECT_EQ(Eigen::MatrixXd(definite_dfdv), Eigen::MatrixXd(dfdv)) << "seed " << seed;
+      if (states == RandomStates::kDefinite) {
+        EXPECT_GT(lowest_stiffness(dfdx), -1e-12 * scale) << "seed " << seed;
+        EXPECT_EQ(Eigen::MatrixXd(definite_dfdx), Eigen::MatrixXd(dfdx)) << "seed " << seed;
+      }
+    }
+  }
+}
+
+// A kind that stores energy shows it in its column: present in the model's
+// report, and -- on its own -- holding the whole potential.
+TEST_P(EveryKind, StoredEnergyIsInTheKindsColumn) {
+  const KindCase& c = GetParam();
+  if (c.kind == nullptr) GTEST_SKIP() << "per kind";
+  const ElasticModel model(scene(4));
+  const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
+  const double potential = e.total() - e.kinetic();
+  if (c.kind->energy.name.empty()) {
+    EXPECT_EQ(potential, 0.0);
+    return;
+  }
+  const std::vector<std::string>& columns = model.energy_columns();
+  ASSERT_NE(std::find(columns.begin(), columns.end(), c.kind->energy.name), columns.end());
+  EXPECT_EQ(e[c.kind->energy.name], potential);
+  EXPECT_NE(potential, 0.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, EveryKind, ::testing::ValuesIn(all_cases()), case_name);
+
+// What the registry promises every kind file: a name, a random instance, and
+// columns named alike mean alike (two kinds may share one, like triangles and
+// tetrahedra share "elastic").
+TEST(ElementKinds, EveryKindIsCompleteAndColumnsAgree) {
+  for (const ElementKind* kind : element_kinds()) {
+    SCOPED_TRACE(std::string(kind->name));
+    EXPECT_FALSE(kind->name.empty());
+    EXPECT_NE(kind->add_random, nullptr);
+    for (const SceneKey& key : kind->keys) {
+      EXPECT_EQ(key.cap > 0, key.count != nullptr) << key.name;
+      EXPECT_NE(kind->read, nullptr);
+      EXPECT_NE(kind->write, nullptr);
+      EXPECT_NE(kind->validate, nullptr);
+    }
+    for (const ElementKind* other : element_kinds()) {
+      if (other->energy.name.empty() || other->energy.name != kind->energy.name) continue;
+      EXPECT_EQ(other->energy.always, kind->energy.always) << other->name;
+      EXPECT_EQ(other->energy.counts_with_spring, kind->energy.counts_with_spring) << other->name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace springlab
