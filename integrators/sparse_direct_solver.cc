@@ -1,6 +1,7 @@
 #include "integrators/sparse_direct_solver.h"
 
 #include <cholmod.h>
+#include <dlfcn.h>
 
 #include <cstdlib>
 #include <mutex>
@@ -22,6 +23,22 @@ void set_blas_threads_once() {
       if (requested >= 1) threads = requested;
     }
     openblas_set_num_threads(threads);
+    // Debian's CHOLMOD runs loops of its supernodal factorization in OpenMP
+    // parallel regions with a fixed num_threads(4) clause, which neither
+    // OMP_NUM_THREADS nor a BLAS setting overrides. On 2 cores their threads
+    // wake and wait once per supernode: on cloth 48 at 1/60 the run took
+    // 3.6 s wall (0.7 s of it in the kernel, 165,000 context switches) where
+    // one thread takes 2.1 s (0.05 s, 150). With one BLAS thread, CHOLMOD's
+    // regions are made inactive too (max-active-levels 0: every region runs
+    // on the calling thread). libgomp is loaded by CHOLMOD; looked up at run
+    // time, so springlab does not link OpenMP itself.
+    if (threads == 1) {
+      using SetLevels = void (*)(int);
+      if (auto set_levels = reinterpret_cast<SetLevels>(
+              dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))) {
+        set_levels(0);
+      }
+    }
   });
 }
 

@@ -23,7 +23,9 @@
 // threads spin while they wait), and keeps `experiment --jobs N`'s tasks off
 // each other's cores; one thread is also deterministic run to run. The
 // solver therefore sets one BLAS thread (see benchmarks/README.md for the
-// figures); the environment variable SPRINGLAB_BLAS_THREADS overrides it.
+// figures), and with it keeps CHOLMOD's own OpenMP loops on the calling
+// thread (sparse_direct_solver.cc); the environment variable
+// SPRINGLAB_BLAS_THREADS overrides both.
 #pragma once
 
 #include <Eigen/SparseCholesky>
