@@ -169,6 +169,8 @@ class ImplicitIntegrator : public Integrator {
   // (r is then the gradient of the midpoint's potential + c |D|^2).
   bool frozen_ = false;
   double frozen_c_ = 0.0;
+  // The step's second attempt (solve_velocity): the definite matrix only.
+  bool definite_only_ = false;
   double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
 };
 
