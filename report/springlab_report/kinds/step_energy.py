@@ -44,19 +44,24 @@ def render(exp, ctx):
         for k, ((task, name, stiffness), idx) in enumerate(by_run.items()):
             idx = np.asarray(idx)
             style = integ.style(name)
+            # The integrator's colour and marker; its definite variant
+            # dotted with filled markers, so the two read apart.
+            fill = "none"
             if stiffness == "definite":
                 style = dict(style, ls=":")
+                fill = style["color"]
             text = label(name, stiffness)
-            axes[row, 0].plot(steps["t"][idx], steps["total"][idx], lw=1.6, ms=5, mfc="none",
+            axes[row, 0].plot(steps["t"][idx], steps["total"][idx], lw=1.6, ms=5, mfc=fill,
                               markevery=max(1, len(idx) // 10), label=text, **style)
             change, compressed = steps["change"][idx], steps["compressed"][idx]
             ok = np.isfinite(change)
             axes[row, 1].plot(compressed[ok], change[ok], ls="none", marker=style["marker"],
-                              ms=5, mfc="none", color=style["color"], label=text)
+                              ms=5, mfc=fill, color=style["color"], label=text)
             facts.append(run_sentence(scene, text, runs, task, change[ok], compressed[ok],
                                       steps["indefinite_springs"][idx][ok]))
         axes[row, 0].set_xlabel("t [s]")
         axes[row, 0].set_ylabel("total energy [J]")
+        axes[row, 0].set_yscale("symlog", linthresh=1.0)
         axes[row, 0].set_title("%s, dt = %s s" % (scene, fmt(float(dt), 6)), loc="left",
                                fontweight="bold")
         axes[row, 1].set_xlabel("compressed springs at the end of the step")
@@ -67,8 +72,8 @@ def render(exp, ctx):
             ax.grid(True, alpha=0.3)
         legend_outside(axes[row, 1])
     saved = ctx.figs.save(fig, exp.name + ".png")
-    caption = ("Left: the total mechanical energy of each run over time (dotted: the definite "
-               "stiffness). Right: the energy change of every step against the number of "
+    caption = ("Left: the total mechanical energy of each run over time (symmetric log scale, "
+               "linear within ±1 J; dotted with filled markers: the definite stiffness). Right: the energy change of every step against the number of "
                "compressed springs at its end (symmetric log scale, linear within ±1e-3 J).")
     return figure_html(saved, "step energy", esc(caption)) + facts_html(facts)
 
