@@ -1,0 +1,128 @@
+#include "models/materials/kinematics.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+namespace springlab {
+namespace {
+
+using V3 = Eigen::Vector3d;
+
+V3 column(const Mat& F, int c) { return F.col(c); }
+
+}  // namespace
+
+Volume volume(const Mat& F) {
+  Volume out;
+  out.g = Mat::Zero(F.rows(), F.cols());
+  if (F.rows() == 2 && F.cols() == 2) {
+    out.J = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
+    out.g << F(1, 1), -F(1, 0), -F(0, 1), F(0, 0);
+  } else if (F.cols() == 3) {
+    const V3 f0 = column(F, 0), f1 = column(F, 1), f2 = column(F, 2);
+    out.J = f0.dot(f1.cross(f2));
+    out.g.col(0) = f1.cross(f2);
+    out.g.col(1) = f2.cross(f0);
+    out.g.col(2) = f0.cross(f1);
+  } else {  // 3 x 2, a membrane: J = |f0 x f1|
+    const V3 f0 = column(F, 0), f1 = column(F, 1);
+    const V3 n = f0.cross(f1);
+    out.J = n.norm();
+    if (out.J > 0.0) {
+      const V3 u = n / out.J;
+      out.g.col(0) = f1.cross(u);
+      out.g.col(1) = u.cross(f0);
+    }
+  }
+  return out;
+}
+
+Mat volume_differential(const Mat& F, const Mat& dF) {
+  Mat dg = Mat::Zero(F.rows(), F.cols());
+  if (F.rows() == 2 && F.cols() == 2) {
+    dg << dF(1, 1), -dF(1, 0), -dF(0, 1), dF(0, 0);  // the cofactor is linear in F
+  } else if (F.cols() == 3) {
+    const V3 f0 = column(F, 0), f1 = column(F, 1), f2 = column(F, 2);
+    const V3 d0 = column(dF, 0), d1 = column(dF, 1), d2 = column(dF, 2);
+    dg.col(0) = d1.cross(f2) + f1.cross(d2);
+    dg.col(1) = d2.cross(f0) + f2.cross(d0);
+    dg.col(2) = d0.cross(f1) + f0.cross(d1);
+  } else {
+    const V3 f0 = column(F, 0), f1 = column(F, 1);
+    const V3 d0 = column(dF, 0), d1 = column(dF, 1);
+    const V3 n = f0.cross(f1);
+    const double J = n.norm();
+    if (J > 0.0) {
+      const V3 u = n / J;
+      const V3 dn = d0.cross(f1) + f0.cross(d1);
+      const V3 du = (dn - u * u.dot(dn)) / J;  // d(n/|n|)
+      dg.col(0) = d1.cross(u) + f1.cross(du);
+      dg.col(1) = du.cross(f0) + u.cross(d0);
+    }
+  }
+  return dg;
+}
+
+Polar polar(const Mat& F) {
+  Polar p;
+  if (F.rows() == F.cols()) {
+    // R = U V^T from the SVD; a reflection (det < 0: an inverted element) is
+    // turned into a rotation by flipping U's last column, so S = R^T F keeps
+    // a negative eigenvalue instead (Irving et al. 2004).
+    Eigen::JacobiSVD<Mat> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Mat U = svd.matrixU();
+    const Mat V = svd.matrixV();
+    if ((U * V.transpose()).determinant() < 0.0) U.col(U.cols() - 1) *= -1.0;
+    p.R = U * V.transpose();
+    const Mat S = p.R.transpose() * F;
+    p.S = 0.5 * (S + S.transpose());
+  } else {
+    // A membrane: S = C^1/2, R = F S^-1 (orthonormal columns).
+    const Mat C = F.transpose() * F;
+    Eigen::SelfAdjointEigenSolver<Mat> eig(C);
+    const Eigen::Vector2d s = eig.eigenvalues().cwiseSqrt();
+    const Mat Q = eig.eigenvectors();
+    p.S = Q * s.asDiagonal() * Q.transpose();
+    p.R = F * (Q * s.cwiseInverse().asDiagonal() * Q.transpose());
+  }
+  return p;
+}
+
+Mat polar_differential(const Polar& p, const Mat& F, const Mat& dF) {
+  if (F.rows() == F.cols()) {
+    // F = R S with W = R^T dR skew and dS symmetric gives
+    // R^T dF - dF^T R = W S + S W (the symmetric part of R^T dF is dS).
+    const Mat A = p.R.transpose() * dF;
+    const Mat K = A - A.transpose();
+    if (F.rows() == 2) {
+      // W = theta [[0, -1], [1, 0]]: W S + S W = tr(S) W.
+      const double theta = K(1, 0) / p.S.trace();
+      Mat W(2, 2);
+      W << 0.0, -theta, theta, 0.0;
+      return p.R * W;
+    }
+    // W = [w]x: W S + S W = [(tr(S) I - S) w]x (Twigg and Kacic-Alesic 2010).
+    const Eigen::Vector3d u(K(2, 1), K(0, 2), K(1, 0));
+    const Eigen::Matrix3d M = p.S.trace() * Eigen::Matrix3d::Identity() - Eigen::Matrix3d(p.S);
+    const Eigen::Vector3d w = M.fullPivLu().solve(u);
+    Mat W(3, 3);
+    W << 0.0, -w(2), w(1), w(2), 0.0, -w(0), -w(1), w(0), 0.0;
+    return p.R * W;
+  }
+  // A membrane: S^2 = C, so S dS + dS S = dC, solved in S's eigenbasis
+  // (dS'_ij = dC'_ij / (s_i + s_j)); then R = F S^-1 gives
+  // dR = (dF - R dS) S^-1.
+  const Mat dC = dF.transpose() * F + F.transpose() * dF;
+  Eigen::SelfAdjointEigenSolver<Mat> eig(p.S);
+  const Mat Q = eig.eigenvectors();
+  const Eigen::Vector2d s = eig.eigenvalues();
+  Mat dSp = Q.transpose() * dC * Q;
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) dSp(i, j) /= s(i) + s(j);
+  }
+  const Mat dS = Q * dSp * Q.transpose();
+  const Mat S_inv = Q * s.cwiseInverse().asDiagonal() * Q.transpose();
+  return (dF - p.R * dS) * S_inv;
+}
+
+}  // namespace springlab

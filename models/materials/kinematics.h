@@ -1,0 +1,38 @@
+// The kinematic quantities the materials share, for a d x k deformation
+// gradient F (square: a solid; 3 x 2: a membrane):
+//   - J, the ratio of deformed to rest area/volume: det F for a solid (its
+//     sign kept, negative where the element is inverted), |f0 x f1| =
+//     sqrt(det C) for a membrane (f_i the columns of F);
+//   - g = dJ/dF: the cofactor matrix of a solid (columns f1 x f2, f2 x f0,
+//     f0 x f1 in 3-D), (f1 x n, n x f0) for a membrane (n the unit normal);
+//   - dg = (dg/dF)[dF], its change along dF;
+//   - the rotation R of the polar decomposition F = R S (fixed corotated):
+//     for a solid the proper rotation nearest F (an inverted element keeps
+//     det R = 1, S then has a negative eigenvalue; Irving et al. 2004), for a
+//     membrane R = F C^-1/2 with orthonormal columns; and its change dR.
+#pragma once
+
+#include "models/materials/material.h"
+
+namespace springlab {
+
+struct Volume {
+  double J = 0.0;
+  Mat g;  // dJ/dF, the shape of F
+};
+Volume volume(const Mat& F);
+// (dg/dF)[dF] (the second derivative of J along dF).
+Mat volume_differential(const Mat& F, const Mat& dF);
+
+// A : B, the sum of the entrywise products.
+inline double contract(const Mat& A, const Mat& B) { return A.cwiseProduct(B).sum(); }
+
+struct Polar {
+  Mat R;  // d x k, orthonormal columns (a rotation for a solid)
+  Mat S;  // k x k symmetric, F = R S
+};
+Polar polar(const Mat& F);
+// dR = (dR/dF)[dF] at F = R S.
+Mat polar_differential(const Polar& p, const Mat& F, const Mat& dF);
+
+}  // namespace springlab

@@ -1,0 +1,46 @@
+// Linear elasticity (small strain): eps = (F + F^T)/2 - I,
+//   Psi = mu eps:eps + lambda/2 (tr eps)^2,  P = 2 mu eps + lambda tr(eps) I.
+// Not invariant under rotation: a rotated element stores energy (the
+// lecture's reason for corotated models). Square F only: refused for
+// membranes (SPEC §7). Sifakis and Barbic, "FEM simulation of 3D deformable
+// solids", SIGGRAPH course 2012, §3.
+#include "models/materials/material.h"
+
+namespace springlab {
+namespace {
+
+Mat strain(const Mat& F) {
+  return 0.5 * (F + F.transpose()) - Mat::Identity(F.rows(), F.cols());
+}
+
+double Psi(const Mat& F, const Lame& m) {
+  const Mat eps = strain(F);
+  const double tr = eps.trace();
+  return m.mu * eps.squaredNorm() + 0.5 * m.lambda * tr * tr;
+}
+
+Mat P(const Mat& F, const Lame& m) {
+  const Mat eps = strain(F);
+  return 2.0 * m.mu * eps + m.lambda * eps.trace() * Mat::Identity(F.rows(), F.cols());
+}
+
+Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
+  return m.mu * (dF + dF.transpose()) +
+         m.lambda * dF.trace() * Mat::Identity(F.rows(), F.cols());
+}
+
+}  // namespace
+
+const MaterialModel& linear_material() {
+  static const MaterialModel model = {
+      .name = "linear",
+      .formula = "mu eps:eps + lambda/2 (tr eps)^2, eps = (F + F^T)/2 - I",
+      .membranes = false,
+      .Psi = Psi,
+      .P = P,
+      .dP = dP,
+  };
+  return model;
+}
+
+}  // namespace springlab

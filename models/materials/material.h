@@ -1,0 +1,61 @@
+// Hyperelastic materials (SPEC §7; the lecture's "generalized springs"): an
+// energy density Psi(F) of the deformation gradient F = Ds Dm^-1, its first
+// Piola-Kirchhoff stress P = dPsi/dF, and the derivative of P.
+//
+// F is d x k: square for solids (2 x 2 plane strain, 3 x 3 tetrahedra) and
+// 3 x 2 for membranes (triangles in 3-D: in-plane stretch and shear only).
+// Every formula below is written for any of these shapes, with C = F^T F
+// (k x k), I_C = tr C and J the element's area or volume ratio
+// (kinematics.h). Each material lives in its own file and registers a
+// MaterialModel in material_registry.cc (one line).
+//
+// Derivatives: each model gives P and the directional derivative
+// dP = dP/dF [dF] in closed form (the differential of its P formula); the
+// tangent dPdF, a (d k) x (d k) matrix on vec(F) (column-major), is
+// assembled from dP along each basis direction of F (dPdF below), so one
+// formula per model serves every shape.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace springlab {
+
+// A matrix of at most 3 x 3, on the stack.
+using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
+// dPdF on vec(F): at most 9 x 9.
+using Tangent = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
+
+// Lame parameters from Young's modulus E and Poisson's ratio nu (SPEC §7):
+// mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
+struct Lame {
+  double mu = 0.0;
+  double lambda = 0.0;
+};
+Lame lame(double young, double poisson);
+
+struct MaterialModel {
+  std::string_view name;  // "neo-hookean": the "model" of a scene's material
+  std::string_view formula;  // Psi, for `springlab list` and the README
+  bool membranes = true;  // defined for 3 x 2 F (linear: not, SPEC §7)
+  // Psi(F); +infinity where the model has no energy (neo-Hookean, J <= 0).
+  double (*Psi)(const Mat& F, const Lame& m) = nullptr;
+  // P = dPsi/dF (d x k).
+  Mat (*P)(const Mat& F, const Lame& m) = nullptr;
+  // dP = (dP/dF)[dF], the change of P along dF (d x k).
+  Mat (*dP)(const Mat& F, const Mat& dF, const Lame& m) = nullptr;
+};
+
+// The registered models, in registry order; nullptr for an unknown name.
+const std::vector<const MaterialModel*>& material_models();
+const MaterialModel* find_material_model(std::string_view name);
+// "linear, corotated, ..." for messages.
+std::string material_model_names();
+
+// dPdF on vec(F) (column-major: entry (r, c) of F is r + d c), column by
+// column from dP along each basis matrix E_rc.
+Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m);
+
+}  // namespace springlab

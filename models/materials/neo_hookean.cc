@@ -1,0 +1,58 @@
+// Compressible neo-Hookean (Bonet and Wood, "Nonlinear continuum mechanics
+// for finite element analysis", 2008, eq. 6.27), with d the element's own
+// dimension (the columns of F):
+//   Psi = mu/2 (I_C - d) - mu ln J + lambda/2 (ln J)^2,
+//   P = mu F + (lambda ln J - mu) (dJ/dF) / J.
+// J <= 0 (an inverted or flattened element) has no energy: Psi = +infinity
+// and P is not a number there (SPEC §7: the run ends as diverged; the
+// implicit solvers' line search keeps J > 0 because the incremental
+// potential is +infinity beyond it).
+#include <cmath>
+#include <limits>
+
+#include "models/materials/kinematics.h"
+
+namespace springlab {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Psi(const Mat& F, const Lame& m) {
+  const double J = volume(F).J;
+  if (!(J > 0.0)) return kInfinity;
+  const double lnJ = std::log(J);
+  const double d = static_cast<double>(F.cols());
+  return 0.5 * m.mu * (F.squaredNorm() - d) - m.mu * lnJ + 0.5 * m.lambda * lnJ * lnJ;
+}
+
+Mat P(const Mat& F, const Lame& m) {
+  const Volume v = volume(F);
+  if (!(v.J > 0.0)) return Mat::Constant(F.rows(), F.cols(), kNaN);
+  return m.mu * F + (m.lambda * std::log(v.J) - m.mu) / v.J * v.g;
+}
+
+// dP = mu dF + lambda (dJ/J) g/J + (lambda ln J - mu) (dg/J - dJ g/J^2), dJ = g:dF.
+Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
+  const Volume v = volume(F);
+  if (!(v.J > 0.0)) return Mat::Constant(F.rows(), F.cols(), kNaN);
+  const double dJ = contract(v.g, dF);
+  const double a = m.lambda * std::log(v.J) - m.mu;
+  return m.mu * dF + (m.lambda * dJ / (v.J * v.J)) * v.g +
+         a * (volume_differential(F, dF) / v.J - dJ / (v.J * v.J) * v.g);
+}
+
+}  // namespace
+
+const MaterialModel& neo_hookean_material() {
+  static const MaterialModel model = {
+      .name = "neo-hookean",
+      .formula = "mu/2 (I_C - d) - mu ln J + lambda/2 (ln J)^2",
+      .Psi = Psi,
+      .P = P,
+      .dP = dP,
+  };
+  return model;
+}
+
+}  // namespace springlab

@@ -1,0 +1,51 @@
+// Stable neo-Hookean (Smith, de Goes and Kim, "Stable neo-Hookean flesh
+// simulation", ACM TOG 2018, eq. 14, without its log term), with
+// lambda' = lambda + mu and alpha = 1 + mu/lambda':
+//   Psi = mu/2 (I_C - d) + lambda'/2 (J - alpha)^2 - mu^2/(2 lambda'),
+//   P = mu F + lambda' (J - alpha) dJ/dF.
+// Defined for every F, inverted ones included (no logarithm): the energy
+// pushes an inverted element back instead of ending the run. The constant
+// makes Psi(I) = 0 and alpha makes P(I) = 0.
+#include "models/materials/kinematics.h"
+
+namespace springlab {
+namespace {
+
+double shifted_lambda(const Lame& m) { return m.lambda + m.mu; }
+double alpha(const Lame& m) { return 1.0 + m.mu / shifted_lambda(m); }
+
+double Psi(const Mat& F, const Lame& m) {
+  const double J = volume(F).J;
+  const double l = shifted_lambda(m), a = alpha(m);
+  const double d = static_cast<double>(F.cols());
+  return 0.5 * m.mu * (F.squaredNorm() - d) + 0.5 * l * (J - a) * (J - a) -
+         m.mu * m.mu / (2.0 * l);
+}
+
+Mat P(const Mat& F, const Lame& m) {
+  const Volume v = volume(F);
+  return m.mu * F + shifted_lambda(m) * (v.J - alpha(m)) * v.g;
+}
+
+// dP = mu dF + lambda' (dJ g + (J - alpha) dg), dJ = g:dF.
+Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
+  const Volume v = volume(F);
+  return m.mu * dF + shifted_lambda(m) * (contract(v.g, dF) * v.g +
+                                          (v.J - alpha(m)) * volume_differential(F, dF));
+}
+
+}  // namespace
+
+const MaterialModel& stable_neo_hookean_material() {
+  static const MaterialModel model = {
+      .name = "stable-neo-hookean",
+      .formula = "mu/2 (I_C - d) + lambda'/2 (J - alpha)^2 - mu^2/(2 lambda'), "
+                 "lambda' = lambda + mu, alpha = 1 + mu/lambda'",
+      .Psi = Psi,
+      .P = P,
+      .dP = dP,
+  };
+  return model;
+}
+
+}  // namespace springlab

@@ -1,0 +1,46 @@
+// St. Venant-Kirchhoff: the Green strain G = (C - I)/2, C = F^T F,
+//   Psi = mu G:G + lambda/2 (tr G)^2,  P = F S,  S = 2 mu G + lambda tr(G) I
+// (S the second Piola-Kirchhoff stress). Rotation invariant, but it softens
+// under compression and has no resistance to inversion. Sifakis and Barbic
+// 2012, §3.
+#include "models/materials/material.h"
+
+namespace springlab {
+namespace {
+
+Mat green(const Mat& F) {
+  return 0.5 * (F.transpose() * F - Mat::Identity(F.cols(), F.cols()));
+}
+
+Mat second_pk(const Mat& G, const Lame& m) {
+  return 2.0 * m.mu * G + m.lambda * G.trace() * Mat::Identity(G.rows(), G.cols());
+}
+
+double Psi(const Mat& F, const Lame& m) {
+  const Mat G = green(F);
+  const double tr = G.trace();
+  return m.mu * G.squaredNorm() + 0.5 * m.lambda * tr * tr;
+}
+
+Mat P(const Mat& F, const Lame& m) { return F * second_pk(green(F), m); }
+
+// dP = dF S + F dS, dS = 2 mu dG + lambda tr(dG) I, dG = (dF^T F + F^T dF)/2.
+Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
+  const Mat dG = 0.5 * (dF.transpose() * F + F.transpose() * dF);
+  return dF * second_pk(green(F), m) + F * second_pk(dG, m);
+}
+
+}  // namespace
+
+const MaterialModel& stvk_material() {
+  static const MaterialModel model = {
+      .name = "stvk",
+      .formula = "mu G:G + lambda/2 (tr G)^2, G = (F^T F - I)/2",
+      .Psi = Psi,
+      .P = P,
+      .dP = dP,
+  };
+  return model;
+}
+
+}  // namespace springlab
