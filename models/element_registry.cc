@@ -15,6 +15,9 @@ const ElementKind& spring_damping_kind();  // spring_damping_force.cc
 const ElementKind& gravity_kind();         // gravity_force.cc
 const ElementKind& drag_kind();            // drag_force.cc
 const ElementKind& wind_kind();            // wind_force.cc
+const ElementKind& material_kind();        // materials_kind.cc
+const ElementKind& triangle_kind();        // triangles.cc
+const ElementKind& tetrahedron_kind();     // tetrahedra.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -23,6 +26,9 @@ const std::vector<const ElementKind*>& element_kinds() {
       &gravity_kind(),
       &drag_kind(),
       &wind_kind(),
+      &material_kind(),
+      &triangle_kind(),
+      &tetrahedron_kind(),
   };
   return kinds;
 }

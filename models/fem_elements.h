@@ -1,0 +1,68 @@
+// What the two finite-element kinds (triangles.cc, tetrahedra.cc) share:
+// reading and checking an element's nodes and material, its rest shape
+// (Dm, W; SPEC §7), the lumped masses, and the force term (fem_force.cc).
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "models/element_kind.h"
+#include "models/fem.h"
+#include "models/materials/material.h"
+
+namespace springlab {
+
+// The rest shape of one element from its nodes' rest positions X: the
+// matrix G (nodes x k) with F = sum_j x_j g_j^T (g_j its rows; G's rows
+// below the first are the rows of Dm^-1 and the first is minus their sum),
+// and W, the rest area x thickness (triangles) or rest volume. k is the
+// element's own dimension: 2 for triangles (a membrane's Dm is taken in an
+// orthonormal frame of its rest plane), 3 for tetrahedra.
+struct RestShape {
+  Eigen::MatrixXd G;
+  double W = 0.0;
+  double scale = 0.0;  // the longest rest edge, for the degeneracy check
+};
+RestShape rest_shape(const std::vector<Eigen::Vector3d>& X, int dimension);
+
+// Reads `"nodes": [...]` of `count` particles, each a whole index below
+// particle_count, none repeated.
+std::vector<int> read_element_nodes(const Reporter& r, const std::string& where, const Json& j,
+                                    std::size_t count, std::size_t particle_count);
+// The same checks on a built element.
+void check_element_nodes(const Reporter& r, const std::string& where, const int* nodes,
+                         std::size_t count, std::size_t particle_count);
+// The index of `name` in the scene's materials, or a refusal naming them.
+int find_material(const Reporter& r, const std::string& where, const Materials& materials,
+                  const std::string& name);
+// A rest area/volume of zero (W below 1e-12 of the longest edge^k) is refused.
+void check_rest_shape(const Reporter& r, const std::string& where, const RestShape& shape, int k);
+
+// Particles without a "mass" in `document` that belong to an element whose
+// material has a density get the lumped mass sum_e rho W_e / (nodes of e)
+// over the scene's triangles and tetrahedra (SPEC §7). Each element kind's
+// reader calls it once its elements are in; it recomputes from all of them.
+void lump_masses(const Json& document, Scene& scene);
+
+// The elements of one kind as the force term sees them.
+struct ElementBlock {
+  std::string_view name;  // "triangle"
+  int nodes = 3;
+  std::vector<std::vector<int>> node_lists = {};  // scene indices
+  std::vector<int> materials = {};
+};
+std::unique_ptr<ForceTerm> make_element_force(const Scene& scene, const ParticleOrder& order,
+                                              const ElementBlock& block);
+
+// A random material (any model; `membranes`: one defined for membranes)
+// added to the scene's materials; returns its index.
+int add_random_material(Scene& scene, std::mt19937& rng, bool membranes);
+// Gives every particle a rest position, unless an earlier kind's random
+// instance did: X = x (kDefinite: elements start at rest, their Hessians
+// semidefinite) or x under a random uniform deformation plus a little noise.
+void give_rest_positions(Scene& scene, std::mt19937& rng, RandomStates states);
+
+}  // namespace springlab
