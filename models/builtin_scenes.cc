@@ -14,6 +14,12 @@
 #include "models/wind.h"
 
 namespace springlab {
+
+// builtin_solids.cc: the finite-element scenes.
+Scene build_beam(const std::map<std::string, double>& p);
+Scene build_membrane(const std::map<std::string, double>& p);
+Scene build_block(const std::map<std::string, double>& p);
+
 namespace {
 
 // How a parameter's value is restricted (every value must be finite).
@@ -188,6 +194,19 @@ Scene build_cloth(const Values& p) {
 
 Counts chain_counts(const Values& p) { return {p.at("n"), p.at("n") - 1}; }
 
+// Particles only (the element caps are far above what the parameters' ranges allow).
+Counts beam_counts(const Values& p) {
+  const double cross = p.at("dimension") == 3 ? (p.at("ny") + 1) * (p.at("ny") + 1) : p.at("ny") + 1;
+  return {(p.at("nx") + 1) * cross, 0.0};
+}
+Counts membrane_counts(const Values& p) { return {p.at("n") * p.at("n"), 0.0}; }
+Counts block_counts(const Values& p) {
+  const double side = p.at("n") + 1;
+  return {side * side * side, 0.0};
+}
+
+
+
 // Structural 2 n (n-1), shear 2 (n-1)^2, bend 2 n (n-2), as build_cloth makes them.
 Counts cloth_counts(const Values& p) {
   const double n = p.at("n");
@@ -199,10 +218,52 @@ ParameterSpec param(const char* name, double value, const char* meaning, Range r
   return {{name, value, meaning}, range, min, max};
 }
 
+// The material parameters of the finite-element scenes.
+std::vector<ParameterSpec> material_params(double young, double poisson, double density,
+                                           double model) {
+  return {param("model", model,
+                "material model: 0 linear, 1 corotated, 2 stvk, 3 neo-hookean, "
+                "4 stable-neo-hookean",
+                Range::kWhole, 0, 4),
+          param("young", young, "Young's modulus E [Pa]", Range::kPositive),
+          param("poisson", poisson, "Poisson's ratio nu, in (-1, 0.5)", Range::kAny),
+          param("density", density, "density [kg/m^3] (lumped masses)", Range::kPositive)};
+}
+
+std::vector<ParameterSpec> with(std::vector<ParameterSpec> a, const std::vector<ParameterSpec>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
 // Sorted by name.
 const std::vector<Generator>& generators() {
   static const std::vector<Generator> table = [] {
     std::vector<Generator> list = {
+        {{"beam",
+          "a cantilever clamped at x = 0 bending under gravity: 2-D plane-strain triangles or "
+          "3-D tetrahedra",
+          {}},
+         with({param("dimension", 2, "2: triangles (plane strain), 3: tetrahedra", Range::kWhole,
+                     2, 3),
+               param("nx", 20, "cells along the length", Range::kWhole, 1, 1000),
+               param("ny", 4, "cells across the height (and the depth in 3-D)", Range::kWhole, 1,
+                     40),
+               param("length", 1, "length [m]", Range::kPositive),
+               param("height", 0.1, "height (and depth in 3-D) [m]", Range::kPositive),
+               param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]",
+                     Range::kAny)},
+              material_params(1e7, 0.3, 1000, 3)),
+         build_beam, beam_counts, "nx"},
+        {{"block",
+          "a box of tetrahedra falling under gravity and spinning about the vertical (no ground "
+          "yet)",
+          {}},
+         with({param("n", 4, "cells per side (6 tetrahedra each)", Range::kWhole, 1, 60),
+               param("size", 0.2, "side length [m]", Range::kPositive),
+               param("height", 0.5, "height of its bottom above y = 0 [m]", Range::kAny),
+               param("spin", 2, "angular velocity about the vertical [rad/s]", Range::kAny)},
+              material_params(1e5, 0.3, 1000, 3)),
+         build_block, block_counts, "n"},
         {{"chain",
           "n masses in a line joined by springs, the first fixed; hanging under gravity or "
           "released from horizontal",
@@ -232,6 +293,15 @@ const std::vector<Generator>& generators() {
           param("drag", 0, "drag coefficient per particle [kg/s]", Range::kNonNegative),
           param("wind", 0, "mean wind speed along +z, 0 for no wind [m/s]", Range::kAny)},
          build_cloth, cloth_counts, "n"},
+        {{"membrane",
+          "the cloth's set-up made of membrane triangles (in-plane stretch and shear, no "
+          "bending) instead of springs",
+          {}},
+         with({param("n", 16, "particles per side (n x n grid)", Range::kWhole, 2, 1024),
+               param("size", 1, "side length [m]", Range::kPositive),
+               param("thickness", 0.001, "thickness [m]", Range::kPositive)},
+              material_params(1e6, 0.3, 1000, 3)),
+         build_membrane, membrane_counts, "n"},
         {{"oscillator",
           "one undamped linear spring, no gravity, mass released stretched: exact solution known",
           {}},

@@ -94,7 +94,7 @@ namespace {
 
 template <typename Element>
 void add_lumped(const Scene& scene, const std::vector<Element>& elements,
-                std::vector<double>& lumped, std::vector<bool>& has) {
+                std::vector<double>& lumped) {
   const Materials& materials = scene.get<Materials>();
   for (const Element& e : elements) {
     const MaterialSpec& m = materials[static_cast<std::size_t>(e.material)];
@@ -103,26 +103,24 @@ void add_lumped(const Scene& scene, const std::vector<Element>& elements,
     for (int n : e.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
     const int nodes = static_cast<int>(e.nodes.size());
     const double W = rest_shape(X, scene.dimension).W * (nodes == 3 ? m.thickness_or_one() : 1.0);
-    for (int n : e.nodes) {
-      lumped[static_cast<std::size_t>(n)] += *m.density * W / nodes;
-      has[static_cast<std::size_t>(n)] = true;
-    }
+    for (int n : e.nodes) lumped[static_cast<std::size_t>(n)] += *m.density * W / nodes;
   }
 }
 
 }  // namespace
 
+std::vector<double> lumped_masses(const Scene& scene) {
+  std::vector<double> lumped(scene.particles.size(), 0.0);
+  add_lumped(scene, scene.get<Triangles>(), lumped);
+  add_lumped(scene, scene.get<Tetrahedra>(), lumped);
+  return lumped;
+}
+
 void lump_masses(const Json& document, Scene& scene) {
-  const std::size_t n = scene.particles.size();
-  std::vector<double> lumped(n, 0.0);
-  std::vector<bool> has(n, false);
-  add_lumped(scene, scene.get<Triangles>(), lumped, has);
-  add_lumped(scene, scene.get<Tetrahedra>(), lumped, has);
+  const std::vector<double> lumped = lumped_masses(scene);
   const Json& particles = document.at("particles");
-  for (std::size_t p = 0; p < n; ++p) {
-    if (has[p] && !particles[p].contains("mass") && lumped[p] > 0.0) {
-      scene.particles[p].mass = lumped[p];
-    }
+  for (std::size_t p = 0; p < lumped.size(); ++p) {
+    if (lumped[p] > 0.0 && !particles[p].contains("mass")) scene.particles[p].mass = lumped[p];
   }
 }
 

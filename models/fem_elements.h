@@ -46,6 +46,9 @@ void check_rest_shape(const Reporter& r, const std::string& where, const RestSha
 // over the scene's triangles and tetrahedra (SPEC §7). Each element kind's
 // reader calls it once its elements are in; it recomputes from all of them.
 void lump_masses(const Json& document, Scene& scene);
+// sum_e rho W_e / (nodes of e) per particle (0 where no element with a
+// density touches it): what lump_masses gives, for scenes built in code.
+std::vector<double> lumped_masses(const Scene& scene);
 
 // The elements of one kind as the force term sees them.
 struct ElementBlock {

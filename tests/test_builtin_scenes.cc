@@ -97,9 +97,10 @@ INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin, ::testing::ValuesIn(builtin_scen
 
 // ---- The registry and its messages. ----
 
-TEST(BuiltinScenesTest, AreTheFourOfTheSpecSortedByName) {
+TEST(BuiltinScenesTest, AreTheSpecsSortedByName) {
   EXPECT_EQ(names_of(builtin_scenes()),
-            (std::vector<std::string>{"chain", "cloth", "oscillator", "spring"}));
+            (std::vector<std::string>{"beam", "block", "chain", "cloth", "membrane", "oscillator",
+                                      "spring"}));
   EXPECT_FALSE(is_builtin_scene("xyz"));
   EXPECT_FALSE(is_builtin_scene("Chain"));
 }
@@ -125,7 +126,7 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
 
 TEST(BuiltinScenesTest, ExactMessages) {
   EXPECT_EQ(build_error("xyz", {}),
-            "unknown built-in scene 'xyz' (built-in scenes: chain, cloth, oscillator, spring)");
+            "unknown built-in scene 'xyz' (built-in scenes: beam, block, chain, cloth, membrane, oscillator, spring)");
   EXPECT_EQ(build_error("chain", {{"foo", "1"}}),
             "scene 'chain': unknown parameter 'foo' (parameters: n, k, mass, length, drag, g, "
             "horizontal, stretch)");
