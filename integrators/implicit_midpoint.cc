@@ -16,7 +16,7 @@ ImplicitMidpoint::ImplicitMidpoint()
 
 StepResult ImplicitMidpoint::do_step(double h) {
   const StepResult result =
-      solve_velocity(h, {.t_eval_offset = 0.5, .a = 0.25, .b = 0.25, .c = 0.5}, v_new_);
+      solve_velocity(h, {.t_eval_offset = 0.5, .a = 0.25, .b = 0.25, .c = 0.5, .end = 2.0}, v_new_);
   if (!result.ok) return result;
   x_ += 0.5 * h * (v_ + v_new_);
   v_.swap(v_new_);

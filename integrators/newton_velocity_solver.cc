@@ -299,6 +299,7 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   const double t = t_ + s.t_eval_offset * h;
   const double tol = options().newton_tol;
   const bool symmetric = system().jacobian_symmetric();
+  const bool forbidden_states = system().has_forbidden_states();
   // Newton minimizes the incremental potential when r is its gradient.
   const bool has_potential = system().derives_from_potentials() && s.b > 0.0 && s.c > 0.0;
   bool minimize = has_potential;
@@ -314,6 +315,13 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
 
   v = v_;
   residual(h, s, v, r_);
+  if (!r_.allFinite() && s.b > 0.0) {
+    // The guess v = v_n leaves the states where the forces are defined (a
+    // barrier's gap closed, an element inverted): start where the stage
+    // stays at x_n, a v_n + b v = 0, a state the last step accepted.
+    v = (-s.a / s.b) * v_;
+    residual(h, s, v, r_);
+  }
   double magnitude = 0.0, magnitude_try = 0.0;
   double phi = minimize ? potential(h, s, v, magnitude) : 0.0;
   const double r_start = r_.norm();
@@ -406,9 +414,16 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     auto noise = [&] {
       return 1e3 * std::numeric_limits<double>::epsilon() * std::max(magnitude, magnitude_try);
     };
+    // Where some states have no energy, a trial whose step would end in one
+    // is refused even when the forces' state (the midpoint) is allowed.
+    auto end_allowed = [&] {
+      if (s.end == 1.0 || !forbidden_states) return true;
+      x_end_ = x_ + s.end * (xs_ - x_);
+      return std::isfinite(system().position_potential(t_ + h, x_end_));
+    };
     auto accept = [&](double alpha) {
       const double r_try_norm = r_try_.norm();
-      if (!std::isfinite(r_try_norm)) return false;
+      if (!std::isfinite(r_try_norm) || !end_allowed()) return false;
       const bool residual_decreases = r_try_norm <= (1.0 - kArmijo * alpha) * r_norm;
       if (!minimize) return residual_decreases;
       phi_try = potential(h, s, v_try_, magnitude_try);
@@ -429,7 +444,7 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
         v_try_ = v + alpha * dv_;
         residual(h, s, v_try_, r_try_);
         phi_try = potential(h, s, v_try_, magnitude_try);
-        if (!std::isfinite(phi_try) || phi_try > best_phi + noise()) break;
+        if (!std::isfinite(phi_try) || phi_try > best_phi + noise() || !end_allowed()) break;
         if (phi_try < best_phi) {
           best_phi = phi_try;
           best_magnitude = magnitude_try;

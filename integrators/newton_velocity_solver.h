@@ -82,6 +82,9 @@ struct VelocityImplicitScheme {
   // Gonzalez's discrete gradient of V in place of grad V(x*) (needs the
   // midpoint's (a, b, c) = (1/4, 1/4, 1/2), t* = t_n + h/2).
   bool discrete_gradient = false;
+  // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
+  // are evaluated at the end (implicit Euler), 2 at the midpoint.
+  double end = 1.0;
 };
 
 class ImplicitIntegrator : public Integrator {
@@ -167,6 +170,7 @@ class ImplicitIntegrator : public Integrator {
   double correction_ = 0.0;
   // On the potential path the coefficient is frozen for each iteration
   // (r is then the gradient of the midpoint's potential + c |D|^2).
+  Vector x_end_;  // a trial's step end (has_forbidden_states)
   bool frozen_ = false;
   double frozen_c_ = 0.0;
   // The step's second attempt (solve_velocity): the definite matrix only.

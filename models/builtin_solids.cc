@@ -11,6 +11,7 @@
 #include <map>
 #include <string>
 
+#include "models/contact.h"
 #include "models/fem.h"
 #include "models/fem_elements.h"
 #include "models/gravity.h"
@@ -150,10 +151,11 @@ Scene build_membrane(const Values& p) {
   return scene;
 }
 
-// A box of side `size` in tetrahedra, its bottom `height` above y = 0,
-// falling under gravity and spinning about the vertical at `spin` rad/s: a
-// rigid rotation, which the rotation-invariant models carry without strain
-// and the linear model does not.
+// A box of side `size` in tetrahedra, its bottom `height` above the ground
+// plane y = 0 (SPEC §8: penalty or barrier contact), falling under gravity
+// and spinning about the vertical at `spin` rad/s: a rigid rotation, which
+// the rotation-invariant models carry without strain and the linear model
+// does not.
 Scene build_block(const Values& p) {
   const int n = static_cast<int>(p.at("n"));
   const double size = p.at("size"), height = p.at("height"), spin = p.at("spin");
@@ -175,6 +177,10 @@ Scene build_block(const Values& p) {
   }
   grid_tetrahedra(n, n, n, index, material, scene.block<Tetrahedra>());
   set_lumped_masses(scene);
+  scene.block<Planes>().push_back(Plane{});  // y = 0, normal +y
+  Contact& contact = scene.block<Contact>();
+  contact.model = p.at("contact") == 1.0 ? ContactModel::kBarrier : ContactModel::kPenalty;
+  contact.stiffness = p.at("contact_stiffness");
   return scene;
 }
 

@@ -259,4 +259,11 @@ Eigen::MatrixXd ElasticModel::scene_velocities(const Vector& v) const {
   return out;
 }
 
+bool ElasticModel::has_forbidden_states() const {
+  for (const auto& term : terms_) {
+    if (term->forbids_states()) return true;
+  }
+  return false;
+}
+
 }  // namespace springlab

@@ -43,6 +43,7 @@ class ElasticModel final : public MechanicalSystem {
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
+  bool has_forbidden_states() const override;
 
   int dimension() const { return order_.dim; }
   int particle_count() const { return static_cast<int>(order_.scene_of_internal.size()); }

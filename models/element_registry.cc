@@ -18,6 +18,8 @@ const ElementKind& wind_kind();            // wind_force.cc
 const ElementKind& material_kind();        // materials_kind.cc
 const ElementKind& triangle_kind();        // triangles.cc
 const ElementKind& tetrahedron_kind();     // tetrahedra.cc
+const ElementKind& contact_kind();         // contact_kind.cc
+const ElementKind& plane_kind();           // planes.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -29,6 +31,8 @@ const std::vector<const ElementKind*>& element_kinds() {
       &material_kind(),
       &triangle_kind(),
       &tetrahedron_kind(),
+      &contact_kind(),
+      &plane_kind(),
   };
   return kinds;
 }

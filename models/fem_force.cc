@@ -42,6 +42,12 @@ class ElementForce final : public ForceTerm {
 
   std::string_view name() const override { return name_; }
   bool conservative() const override { return true; }
+  bool forbids_states() const override {
+    for (const Element& e : elements_) {
+      if (!e.model->finite_everywhere) return true;
+    }
+    return false;
+  }
 
   void add_force(const Configuration& c, double* f) const override {
     for (const Element& e : elements_) {

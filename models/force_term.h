@@ -144,6 +144,9 @@ class ForceTerm {
   // MechanicalSystem::derives_from_potentials). Conservative terms do;
   // dissipative ones that do (drag, wind) say so and supply W.
   virtual bool derives_from_potentials() const { return conservative(); }
+  // Whether potential_energy can be +infinity (MechanicalSystem::
+  // has_forbidden_states).
+  virtual bool forbids_states() const { return false; }
   virtual double velocity_potential(const Configuration&) const { return 0.0; }
 };
 

@@ -92,6 +92,12 @@ class MechanicalSystem {
   virtual bool jacobian_symmetric() const = 0;
 
   virtual VelocityDependence velocity_dependence() const = 0;
+
+  // True when some states have no energy (+infinity: a barrier's closed gap,
+  // an inverted neo-Hookean element). An implicit solver then keeps every
+  // state it accepts, including a step's end when the forces are evaluated
+  // elsewhere (the midpoint), where the energy is finite.
+  virtual bool has_forbidden_states() const { return false; }
 };
 
 }  // namespace springlab

@@ -40,6 +40,7 @@ struct MaterialModel {
   std::string_view name;  // "neo-hookean": the "model" of a scene's material
   std::string_view formula;  // Psi, for `springlab list` and the README
   bool membranes = true;  // defined for 3 x 2 F (linear: not, SPEC §7)
+  bool finite_everywhere = true;  // false: Psi = +infinity somewhere (neo-Hookean, J <= 0)
   // Psi(F); +infinity where the model has no energy (neo-Hookean, J <= 0).
   double (*Psi)(const Mat& F, const Lame& m) = nullptr;
   // P = dPsi/dF (d x k).

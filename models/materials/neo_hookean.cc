@@ -48,6 +48,7 @@ const MaterialModel& neo_hookean_material() {
   static const MaterialModel model = {
       .name = "neo-hookean",
       .formula = "mu/2 (I_C - d) - mu ln J + lambda/2 (ln J)^2",
+      .finite_everywhere = false,
       .Psi = Psi,
       .P = P,
       .dP = dP,
