@@ -55,5 +55,6 @@ void register_linear_solver_benchmarks();
 void register_odeint_benchmarks();
 void register_run_benchmarks();
 void register_newton_benchmarks();
+void register_element_benchmarks();
 
 }  // namespace springlab::bench
