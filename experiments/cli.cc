@@ -136,7 +136,7 @@ Json stats_json(const IntegratorStats& s) {
 const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
                                       "max-newton", "max-steps",    "max-order",
                                       "linear-solver", "dq-jacobian", "stald",
-                                      "stiffness"};
+                                      "stiffness", "iterations", "substeps"};
 
 // Options shared by `run` and `stability`.
 struct CommonOptions {
@@ -164,6 +164,12 @@ struct CommonOptions {
     cmd.add_option("--stiffness", stiffness,
                    "linear-implicit-euler: exact dF/dx, or definite (compressed springs' negative "
                    "transverse stiffness dropped, Choi and Ko 2002)");
+    cmd.add_option("--iterations", run.options.iterations,
+                   "projective-dynamics (default 10), xpbd (default 1): iterations per step "
+                   "or substep")
+        ->default_str("the method's");
+    cmd.add_option("--substeps", run.options.substeps, "xpbd: substeps per --dt")
+        ->default_str("10");
     cmd.add_option("--max-steps", run.options.max_steps,
                    "adaptive methods: internal steps per output interval before failing "
                    "(default: 5e6 / unknowns, between 500 and 100000)")
@@ -194,6 +200,10 @@ struct CommonOptions {
     require_positive("--newton-tol", run.options.newton_tol);
     require_positive("--blowup", run.blowup);
     if (run.options.max_newton < 1) throw UsageError("--max-newton: must be >= 1");
+    if (given("iterations") && run.options.iterations < 1) {
+      throw UsageError("--iterations: must be >= 1");
+    }
+    if (given("substeps") && run.options.substeps < 1) throw UsageError("--substeps: must be >= 1");
     if (run.options.max_steps < 0 || (given("max-steps") && run.options.max_steps < 1)) {
       throw UsageError("--max-steps: must be >= 1");
     }

@@ -23,6 +23,8 @@ const std::map<std::string, IntegratorStyle>& style_table() {
       {"implicit-euler", {"#9467bd", "P"}},
       {"linear-implicit-euler", {"#e377c2", "X"}},
       {"discrete-gradient", {"#8c564b", "h"}},
+      {"projective-dynamics", {"#bcbd22", "8"}},
+      {"xpbd", {"#6b6ecf", "1"}},
       {"cvode-bdf", {"#000000", "<"}},
       {"cvode-adams", {"#e6ab02", ">"}},
       {"ida", {"#7f7f7f", "p"}},

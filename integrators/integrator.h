@@ -47,6 +47,8 @@ struct IntegratorOptions {
   double newton_tol = 1e-4;   // m/s: converged when the Newton update ||dv||_inf is below it
   int max_newton = 200;       // Newton iterations per step before giving up (measured: benchmarks/README.md)
   Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
+  int iterations = 0;  // projective-dynamics, xpbd: iterations per (sub)step; 0 = the method's
+  int substeps = 0;    // xpbd: substeps per step; 0 = the method's
   double rtol = 1e-6;         // adaptive methods
   double atol = 1e-8;
   long max_steps = 0;         // adaptive: internal steps per output interval; 0 = scaled to the system
@@ -92,6 +94,9 @@ struct IntegratorInfo {
   bool adaptive = false;
   bool implicit = false;
   bool iterates_to_tolerance = false;  // solves its nonlinear system to --newton-tol
+  // Approximates implicit Euler's step with a fixed number of iterations
+  // and no Jacobian (projective dynamics, XPBD: SPEC §9).
+  bool jacobian_free = false;
   bool symplectic = false;   // for forces that depend on x only
   StabilityKind stability = StabilityKind::kUnknown;
   // Largest stable omega*h on the undamped linear oscillator (eigenvalues

@@ -13,9 +13,11 @@
 #include "integrators/implicit_euler.h"
 #include "integrators/implicit_midpoint.h"
 #include "integrators/linear_implicit_euler.h"
+#include "integrators/projective_dynamics.h"
 #include "integrators/rk4.h"
 #include "integrators/symplectic_euler.h"
 #include "integrators/verlet.h"
+#include "integrators/xpbd.h"
 
 namespace springlab {
 namespace {
@@ -45,9 +47,11 @@ const std::vector<Entry>& registry() {
       entry<ImplicitEuler>(),
       entry<ImplicitMidpoint>(),
       entry<LinearImplicitEuler>(),
+      entry<ProjectiveDynamics>(),
       entry<RungeKutta4>(),
       entry<SymplecticEuler>(),
       entry<VelocityVerlet>(),
+      entry<Xpbd>(),
   };
   return entries;
 }

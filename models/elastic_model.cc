@@ -266,4 +266,42 @@ bool ElasticModel::has_forbidden_states() const {
   return false;
 }
 
+bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) const {
+  out.clear();
+  std::vector<DistanceConstraint> all;
+  for (const auto& term : terms_) {
+    if (!term->conservative() || !term->stiff()) continue;  // external: explicit
+    if (!term->distance_constraints(all)) return false;
+  }
+  // Internal indices: free particles first. A fixed end becomes an anchor;
+  // a constraint between two fixed particles moves nothing.
+  const int dim = order_.dim, free = order_.free_particles;
+  for (DistanceConstraint c : all) {
+    if (c.a >= free) std::swap(c.a, c.b);
+    if (c.a >= free) continue;
+    if (c.b >= free) {
+      for (int r = 0; r < dim; ++r) c.anchor[r] = x_all_[c.b * dim + r];
+      c.b = -1;
+    }
+    out.push_back(c);
+  }
+  return true;
+}
+
+void ElasticModel::external_force(double t, const Vector& x, const Vector& v, Vector& f) const {
+  const Configuration c = configure(t, x, v);
+  if (constraint_terms_.empty()) {
+    std::vector<DistanceConstraint> probe;
+    for (const auto& term : terms_) {
+      constraint_terms_.push_back(term->conservative() && term->stiff() &&
+                                  term->distance_constraints(probe));
+    }
+  }
+  f_all_.setZero(x_all_.size());
+  for (std::size_t k = 0; k < terms_.size(); ++k) {
+    if (!constraint_terms_[k]) terms_[k]->add_force(c, f_all_.data());
+  }
+  f = f_all_.head(dofs());
+}
+
 }  // namespace springlab

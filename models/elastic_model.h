@@ -44,6 +44,9 @@ class ElasticModel final : public MechanicalSystem {
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
   bool has_forbidden_states() const override;
+  bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
+  void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
+  int dimension_of_state() const override { return order_.dim; }
 
   int dimension() const { return order_.dim; }
   int particle_count() const { return static_cast<int>(order_.scene_of_internal.size()); }
@@ -104,6 +107,9 @@ class ElasticModel final : public MechanicalSystem {
   // Scratch: all particles, internal order. The fixed tail of x_all_ holds
   // the fixed positions and never changes; v_all_'s fixed tail stays 0.
   mutable Vector x_all_, v_all_, f_all_;
+  // Which terms are distance constraints (external_force skips them); set
+  // at its first call.
+  mutable std::vector<char> constraint_terms_;
 };
 
 }  // namespace springlab

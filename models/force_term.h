@@ -147,6 +147,13 @@ class ForceTerm {
   // Whether potential_energy can be +infinity (MechanicalSystem::
   // has_forbidden_states).
   virtual bool forbids_states() const { return false; }
+  // A stiff conservative term that is a set of distance constraints
+  // (MechanicalSystem::distance_constraints) appends them with internal
+  // particle indices (b may be fixed: the model ties it to its place) and
+  // returns true.
+  virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
+    return false;
+  }
   virtual double velocity_potential(const Configuration&) const { return 0.0; }
 };
 

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <vector>
 
 namespace springlab {
 
@@ -28,6 +29,19 @@ enum class VelocityDependence {
 // Which forces to evaluate. IMEX methods treat the stiff part (springs,
 // spring damping, drag) implicitly and the rest (gravity, wind) explicitly.
 enum class ForcePart { kAll, kStiff, kNonstiff };
+
+// A distance constraint |x_a - x_b| = length of stiffness k (compliance
+// 1/k): what the fast solvers of SPEC §9 (projective dynamics, XPBD) see of
+// a stiff conservative force that has this form. a is a free particle (its
+// unknowns at a * dim); b a free particle, or -1 with `anchor` the fixed
+// position it is tied to.
+struct DistanceConstraint {
+  int a = 0;
+  int b = -1;
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
+  double stiffness = 0.0;
+  double length = 0.0;
+};
 
 class MechanicalSystem {
  public:
@@ -98,6 +112,18 @@ class MechanicalSystem {
   // state it accepts, including a step's end when the forces are evaluated
   // elsewhere (the midpoint), where the energy is finite.
   virtual bool has_forbidden_states() const { return false; }
+
+  // The fast solvers' view (SPEC §9): the stiff conservative forces as
+  // distance constraints, and F minus their forces (gravity, drag, wind,
+  // spring damping: treated explicitly). False when some stiff force has no
+  // such form (finite elements, contact): those solvers refuse the system.
+  virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
+    return false;
+  }
+  virtual void external_force(double /*t*/, const Vector& /*x*/, const Vector& /*v*/,
+                              Vector& /*f*/) const {}
+  // Particle count of the free particles and the dimension (dofs = both).
+  virtual int dimension_of_state() const { return 0; }
 };
 
 }  // namespace springlab

@@ -143,6 +143,14 @@ class SpringForce final : public ForceTerm {
   std::string_view name() const override { return "spring"; }
   bool conservative() const override { return true; }
 
+  // Each spring is the constraint |x_a - x_b| = L of stiffness k.
+  bool distance_constraints(std::vector<DistanceConstraint>& out) const override {
+    for (const SpringData& s : springs_) {
+      out.push_back({.a = s.a, .b = s.b, .stiffness = s.k, .length = s.rest});
+    }
+    return true;
+  }
+
   void add_force(const Configuration& c, double* f) const override {
     if (dim_ == 2) add_force_d<2>(c, f); else add_force_d<3>(c, f);
   }

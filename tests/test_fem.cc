@@ -194,6 +194,13 @@ TEST_P(EveryIntegratorOnElements, RunsTheBeamInTwoAndThreeDimensions) {
     RunSettings s = settings(2e-4, 4e-3);
     s.options.newton_tol = 1e-9;
     const RunResult r = simulate(model, s);
+    if (info().jacobian_free) {
+      // Projective dynamics and XPBD solve springs only, so far: a refusal
+      // that says what to use.
+      EXPECT_EQ(r.status, RunStatus::kFailed);
+      EXPECT_NE(r.failure.find("use implicit-euler"), std::string::npos) << r.failure;
+      continue;
+    }
     EXPECT_EQ(r.status, RunStatus::kCompleted) << dimension << "-D: " << r.failure;
     EXPECT_LT(std::abs(r.energy_final - r.energy_initial), 1e-2 * model.energy_scale())
         << dimension << "-D";

@@ -1,0 +1,32 @@
+#include "integrators/fast_solver.h"
+
+namespace springlab {
+
+StepResult FastSolver::do_initialize() {
+  dim_ = system().dimension_of_state();
+  if (dim_ < 1 || !system().distance_constraints(constraints_)) {
+    return StepResult::failure(
+        name() + ": this scene has stiff forces that are not distance constraints (finite "
+                 "elements, contact planes), which " + name() +
+        " does not solve yet; use implicit-euler, or an explicit method at a small --dt");
+  }
+  const Eigen::Index n = system().dofs() / dim_;
+  inv_particle_mass_.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) inv_particle_mass_[i] = inv_mass()[i * dim_];
+  return StepResult::success();
+}
+
+void FastSolver::eval_external_force(double t, const Vector& x, const Vector& v, Vector& f) {
+  ++mutable_stats().force_evals;
+  system().external_force(t, x, v, f);
+}
+
+Eigen::Vector3d FastSolver::difference(const DistanceConstraint& c, const Vector& x) const {
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  for (int r = 0; r < dim_; ++r) {
+    d[r] = x[c.a * dim_ + r] - (c.b >= 0 ? x[c.b * dim_ + r] : c.anchor[r]);
+  }
+  return d;
+}
+
+}  // namespace springlab

@@ -1,0 +1,34 @@
+// What the two fast solvers of SPEC §9 share (projective_dynamics.cc,
+// xpbd.cc): the system's stiff forces as distance constraints
+// (MechanicalSystem::distance_constraints), the other forces applied
+// explicitly, a refusal where the system has no such form, and the gap of
+// one constraint.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "integrators/integrator.h"
+
+namespace springlab {
+
+class FastSolver : public Integrator {
+ protected:
+  using Integrator::Integrator;
+
+  // Reads the constraints; a failure that says which methods run the
+  // system when its stiff forces are not all distance constraints.
+  StepResult do_initialize() override;
+
+  // F minus the constraints' forces, counted as a force evaluation.
+  void eval_external_force(double t, const Vector& x, const Vector& v, Vector& f);
+
+  // d = x_a - x_b (or x_a - anchor) of constraint c at x.
+  Eigen::Vector3d difference(const DistanceConstraint& c, const Vector& x) const;
+
+  int dim_ = 2;
+  std::vector<DistanceConstraint> constraints_;
+  Vector inv_particle_mass_;  // 1/m per free particle
+};
+
+}  // namespace springlab

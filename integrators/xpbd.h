@@ -1,0 +1,40 @@
+// xpbd — extended position-based dynamics (Macklin, Mueller and Chentanez,
+// "XPBD: position-based simulation of compliant constrained dynamics", MIG
+// 2016), what games use. Each spring is the constraint
+// C = |x_a - x_b| - L with compliance alpha = 1/k. A step of h is S
+// substeps of h_s = h/S (--substeps, default 10; "Small Steps", Macklin et
+// al. 2019); each substep
+//   predicts    v += h_s M^-1 F_ext(t, x, v),  x_prev = x,  x += h_s v
+//               (F_ext: gravity, drag, wind, spring damping, explicitly),
+//   projects    N times (--iterations, default 1), constraint by constraint
+//               (Gauss-Seidel), with lambda_c = 0 at the substep's start:
+//               a~ = alpha / h_s^2,
+//               dlambda = (-C - a~ lambda_c) / (w_a + w_b + a~),
+//               x_a += w_a dlambda n,  x_b -= w_b dlambda n,  lambda_c += dlambda
+//               (w = 1/m, n = (x_a - x_b)/|x_a - x_b|),
+//   and sets    v = (x - x_prev) / h_s.
+// On a spring of rest length 0 one iteration is exactly implicit Euler's
+// substep (tests/test_fast_solvers.cc), so S substeps of one iteration are S
+// implicit Euler steps of h/S; more iterations converge toward it on
+// nonlinear springs. Projections count as newton_iterations.
+#pragma once
+
+#include "integrators/fast_solver.h"
+
+namespace springlab {
+
+class Xpbd final : public FastSolver {
+ public:
+  Xpbd();
+  std::vector<std::string> options_read() const override { return {"iterations", "substeps"}; }
+  static constexpr int kDefaultSubsteps = 10;
+  static constexpr int kDefaultIterations = 1;
+
+ protected:
+  StepResult do_step(double h) override;
+
+ private:
+  Vector f_, x_prev_, lambda_;
+};
+
+}  // namespace springlab

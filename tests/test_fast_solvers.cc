@@ -1,0 +1,101 @@
+// The fast solvers of SPEC §9 against the implicit Euler step they
+// approximate: exact on linear springs, converging on nonlinear ones, and
+// XPBD's compliance giving the right static extension.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "experiments/simulation.h"
+#include "integrators/registry.h"
+#include "models/builtin_scenes.h"
+#include "models/elastic_model.h"
+#include "models/gravity.h"
+#include "models/scene.h"
+
+namespace springlab {
+namespace {
+
+// The oscillator (one spring of rest length 0: a linear force) with gravity,
+// so the explicit part of the step is exercised too.
+Scene linear_spring() {
+  Scene s = make_builtin_scene("oscillator", {{"k", "400"}, {"amplitude", "0.3"}});
+  s.block<Gravity>().acceleration = {0.0, -9.81, 0.0};
+  s.particles[1].v = {0.5, -1.0, 0.0};
+  return s;
+}
+
+RunResult run(const Scene& scene, const std::string& method, double dt, double t_end,
+              int iterations = 0, int substeps = 0) {
+  const ElasticModel model(scene);
+  RunSettings s;
+  s.integrator = method;
+  s.dt = dt;
+  s.t_end = t_end;
+  s.options.newton_tol = 1e-14;
+  s.options.iterations = iterations;
+  s.options.substeps = substeps;
+  return simulate(model, s);
+}
+
+double distance(const RunResult& a, const RunResult& b) {
+  return (a.x_final - b.x_final).norm() + (a.v_final - b.v_final).norm();
+}
+
+// SPEC §9: on a linear spring of rest length 0, one iteration of
+// projective-dynamics, and one substep with one iteration of xpbd, give
+// implicit Euler's step to round-off.
+TEST(FastSolvers, OneIterationIsImplicitEulerOnALinearSpring) {
+  const Scene scene = linear_spring();
+  const RunResult euler = run(scene, "implicit-euler", 0.05, 0.05);
+  ASSERT_EQ(euler.status, RunStatus::kCompleted) << euler.failure;
+  const RunResult pd = run(scene, "projective-dynamics", 0.05, 0.05, 1);
+  const RunResult xpbd = run(scene, "xpbd", 0.05, 0.05, 1, 1);
+  const double size = euler.x_final.norm() + euler.v_final.norm();
+  EXPECT_LT(distance(pd, euler), 1e-12 * size);
+  EXPECT_LT(distance(xpbd, euler), 1e-12 * size);
+}
+
+// XPBD with S substeps (one iteration each) is S implicit Euler steps of
+// dt/S there.
+TEST(FastSolvers, XpbdSubstepsAreImplicitEulerAtTheSubstep) {
+  const Scene scene = linear_spring();
+  const RunResult euler = run(scene, "implicit-euler", 0.0125, 0.05);
+  const RunResult xpbd = run(scene, "xpbd", 0.05, 0.05, 1, 4);
+  EXPECT_LT(distance(xpbd, euler), 1e-12 * (euler.x_final.norm() + euler.v_final.norm()));
+}
+
+// On a nonlinear scene (the folding cloth), one step of projective dynamics
+// approaches implicit Euler's converged step as the iterations grow.
+TEST(FastSolvers, ProjectiveDynamicsConvergesToImplicitEulerAsIterationsGrow) {
+  const Scene cloth = make_builtin_scene("cloth", {{"n", "8"}});
+  const RunResult euler = run(cloth, "implicit-euler", 1.0 / 60.0, 1.0 / 60.0);
+  ASSERT_EQ(euler.status, RunStatus::kCompleted) << euler.failure;
+  double previous = 1e300;
+  for (int iterations : {1, 4, 16, 64}) {
+    const RunResult pd = run(cloth, "projective-dynamics", 1.0 / 60.0, 1.0 / 60.0, iterations);
+    const double error = (pd.x_final - euler.x_final).lpNorm<Eigen::Infinity>();
+    EXPECT_LT(error, previous) << iterations << " iterations";
+    previous = error;
+  }
+  // Local/global converges linearly (Liu et al. 2013): within 10 um after 64.
+  EXPECT_LT(previous, 1e-5);
+}
+
+// XPBD's compliance 1/k: a mass hanging on a spring (drag settles it)
+// comes to rest at the extension m g / k whatever the iteration count, up
+// to g h_s^2 (the substep's prediction).
+TEST(FastSolvers, XpbdHangingMassSettlesAtWeightOverStiffness) {
+  const Scene scene = make_builtin_scene("spring", {{"drag", "4"}});
+  const double k = 100.0, m = 1.0, g = 9.81, rest = 1.0;
+  for (int iterations : {1, 3, 10}) {
+    const RunResult r = run(scene, "xpbd", 1.0 / 60.0, 30.0, iterations, 10);
+    ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+    const double extension = -r.x_final[1] - rest;
+    const double hs = 1.0 / 600.0;
+    EXPECT_NEAR(extension, m * g / k, g * hs * hs + 1e-9) << iterations << " iterations";
+  }
+}
+
+}  // namespace
+}  // namespace springlab
