@@ -1,4 +1,4 @@
-// The `springlab` command line (SPEC §6). Kept out of main() so the
+// The `springlab` command line (README "The command line"). Kept out of main() so the
 // commands' pieces can be reused by later tools (experiments, bindings).
 #pragma once
 

@@ -77,7 +77,7 @@ std::vector<double> time_grid(double dt, double t_end) {
 
 namespace {
 
-// SPEC §6's divergence rule, checked after every step at the cost of one
+// README "The command line"'s divergence rule, checked after every step at the cost of one
 // pass over the state instead of an energy evaluation (a pass over every
 // spring with a square root each, as much as the force).
 //

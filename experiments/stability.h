@@ -1,5 +1,5 @@
 // `springlab stability`: the largest step at which a run of length t_end
-// does not diverge (SPEC §6 divergence rule), by bisection on log(dt).
+// does not diverge (README "The command line" divergence rule), by bisection on log(dt).
 // It assumes stability is monotone in dt (true for the course's linear
 // analysis; near a limit a nonlinear scene may not be).
 //

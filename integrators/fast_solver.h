@@ -1,4 +1,4 @@
-// What the two fast solvers of SPEC §9 share (projective_dynamics.cc,
+// What the two fast solvers of README "Fast solvers" share (projective_dynamics.cc,
 // xpbd.cc): the system's stiff forces as distance constraints
 // (MechanicalSystem::distance_constraints), the other forces applied
 // explicitly, a refusal where the system has no such form, and the gap of

@@ -20,7 +20,7 @@
 
 namespace springlab {
 
-// One vocabulary for every method (SPEC §5), exported with these names.
+// One vocabulary for every method (README "The integrators"), exported with these names.
 struct IntegratorStats {
   long steps = 0;               // accepted steps
   long rejected_steps = 0;      // error-test failures (adaptive) or failed attempts
@@ -95,7 +95,7 @@ struct IntegratorInfo {
   bool implicit = false;
   bool iterates_to_tolerance = false;  // solves its nonlinear system to --newton-tol
   // Approximates implicit Euler's step with a fixed number of iterations
-  // and no Jacobian (projective dynamics, XPBD: SPEC §9).
+  // and no Jacobian (projective dynamics, XPBD: README "Fast solvers").
   bool jacobian_free = false;
   bool symplectic = false;   // for forces that depend on x only
   StabilityKind stability = StabilityKind::kUnknown;

@@ -1,4 +1,4 @@
-// Built-in scenes (SPEC §4): each is a generator from named parameters to a
+// Built-in scenes (README "Built-in scenes"): each is a generator from named parameters to a
 // Scene, checked afterwards by validate_scene like any scene file.
 #include "models/builtin_scenes.h"
 

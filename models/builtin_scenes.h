@@ -1,4 +1,4 @@
-// Built-in scenes (SPEC §4): generators that return a Scene, parameterised by
+// Built-in scenes (README "Built-in scenes"): generators that return a Scene, parameterised by
 // `-p key=value`. Each is printable as a scene file (`springlab scene NAME`).
 #pragma once
 

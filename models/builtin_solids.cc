@@ -1,11 +1,11 @@
-// The built-in finite-element scenes (SPEC §7): beam, membrane, block. How
+// The built-in finite-element scenes (README "Finite elements"): beam, membrane, block. How
 // each mesh is split into elements:
 //   - a grid cell (2-D) becomes two triangles split along a diagonal that
 //     alternates from cell to cell (so the mesh has no preferred direction);
 //   - a grid cube (3-D) becomes six tetrahedra around its main diagonal
 //     (Kuhn's subdivision: one per ordering of the three axes), which
 //     matches the neighbouring cubes face by face.
-// Masses are the lumped masses of the elements (SPEC §7), computed here.
+// Masses are the lumped masses of the elements (README "Finite elements"), computed here.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <map>
@@ -152,7 +152,7 @@ Scene build_membrane(const Values& p) {
 }
 
 // A box of side `size` in tetrahedra, its bottom `height` above the ground
-// plane y = 0 (SPEC §8: penalty or barrier contact), falling under gravity
+// plane y = 0 (README "Contact with planes": penalty or barrier contact), falling under gravity
 // and spinning about the vertical at `spin` rad/s: a rigid rotation, which
 // the rotation-invariant models carry without strain and the linear model
 // does not.

@@ -1,4 +1,4 @@
-// Contact in a scene (SPEC §8): the blocks of scene data of the "contact"
+// Contact in a scene (README "Contact with planes"): the blocks of scene data of the "contact"
 // kind (contact_kind.cc: how contact is modelled) and the "plane" kind
 // (planes.cc: the half-spaces free particles must not enter, and their
 // force).
@@ -15,7 +15,7 @@ namespace springlab {
 struct Plane {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
-  double friction = 0.0;  // Coulomb mu >= 0 (SPEC §8; only 0 is accepted so far)
+  double friction = 0.0;  // Coulomb mu >= 0 (README "Contact with planes"; only 0 is accepted so far)
 };
 using Planes = std::vector<Plane>;
 

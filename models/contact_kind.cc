@@ -1,4 +1,4 @@
-// The "contact" kind: a scene's "contact" settings (SPEC §8), how its planes
+// The "contact" kind: a scene's "contact" settings (README "Contact with planes"), how its planes
 // push back: the penalty k_c/2 min(d, 0)^2 (default, stiffness 1e4 N/m) or
 // the IPC log-barrier kappa b(d) (Li et al. 2020; stiffness 1e3 N/m,
 // distance 0.01 m). Data only: the force is the planes' (planes.cc).

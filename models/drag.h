@@ -1,4 +1,4 @@
-// Drag in a scene (SPEC §2, §3 key "drag"): the block of scene data of the
+// Drag in a scene (README "The physics", "Scene files" key "drag"): the block of scene data of the
 // "drag" element kind (drag_force.cc).
 #pragma once
 

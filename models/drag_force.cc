@@ -1,5 +1,5 @@
-// The "drag" element kind: the scene key "drag" (SPEC §3) and the course's
-// F^dp = -gamma v on every free particle (SPEC §2).
+// The "drag" element kind: the scene key "drag" (README "Scene files") and the course's
+// F^dp = -gamma v on every free particle (README "The physics").
 // dF/dv = -gamma I (diagonal), dF/dx = 0. Dissipates power gamma |v|^2.
 // Derives from the dissipation potential W(v) = gamma |v|^2 / 2.
 #include <memory>

@@ -82,7 +82,7 @@ struct ElementKind {
   ForceFactory make = nullptr;
   // Where its potential energy is reported; an empty name: it stores none.
   EnergyColumn energy = {};
-  // Its term of SPEC §6's energy scale E_s per unit of free mass, given the
+  // Its term of README "The command line"'s energy scale E_s per unit of free mass, given the
   // diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
   double (*energy_scale_per_mass)(const Scene& scene, double diameter) = nullptr;
 

@@ -1,6 +1,6 @@
 // What the two finite-element kinds (triangles.cc, tetrahedra.cc) share:
 // reading and checking an element's nodes and material, its rest shape
-// (Dm, W; SPEC §7), the lumped masses, and the force term (fem_force.cc).
+// (Dm, W; README "Finite elements"), the lumped masses, and the force term (fem_force.cc).
 #pragma once
 
 #include <Eigen/Core>
@@ -43,7 +43,7 @@ void check_rest_shape(const Reporter& r, const std::string& where, const RestSha
 
 // Particles without a "mass" in `document` that belong to an element whose
 // material has a density get the lumped mass sum_e rho W_e / (nodes of e)
-// over the scene's triangles and tetrahedra (SPEC §7). Each element kind's
+// over the scene's triangles and tetrahedra (README "Finite elements"). Each element kind's
 // reader calls it once its elements are in; it recomputes from all of them.
 void lump_masses(const Json& document, Scene& scene);
 // sum_e rho W_e / (nodes of e) per particle (0 where no element with a

@@ -1,4 +1,4 @@
-// Gravity in a scene (SPEC §2, §3 key "gravity"): the block of scene data of
+// Gravity in a scene (README "The physics", "Scene files" key "gravity"): the block of scene data of
 // the "gravity" element kind (gravity_force.cc).
 #pragma once
 

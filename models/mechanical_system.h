@@ -31,7 +31,7 @@ enum class VelocityDependence {
 enum class ForcePart { kAll, kStiff, kNonstiff };
 
 // A distance constraint |x_a - x_b| = length of stiffness k (compliance
-// 1/k): what the fast solvers of SPEC §9 (projective dynamics, XPBD) see of
+// 1/k): what the fast solvers of README "Fast solvers" (projective dynamics, XPBD) see of
 // a stiff conservative force that has this form. a is a free particle (its
 // unknowns at a * dim); b a free particle, or -1 with `anchor` the fixed
 // position it is tied to.
@@ -113,7 +113,7 @@ class MechanicalSystem {
   // elsewhere (the midpoint), where the energy is finite.
   virtual bool has_forbidden_states() const { return false; }
 
-  // The fast solvers' view (SPEC §9): the stiff conservative forces as
+  // The fast solvers' view (README "Fast solvers"): the stiff conservative forces as
   // distance constraints, and F minus their forces (gravity, drag, wind,
   // spring damping: treated explicitly). False when some stiff force has no
   // such form (finite elements, contact): those solvers refuse the system.

@@ -1,4 +1,4 @@
-// The "plane" kind: a scene's "planes" (SPEC §8), half-spaces the free
+// The "plane" kind: a scene's "planes" (README "Contact with planes"), half-spaces the free
 // particles must not enter, and the contact force that keeps them out. With
 // d = n.(x_i - point) the gap of particle i to a plane, each pair stores
 //   penalty:  phi(d) = k_c/2 min(d, 0)^2                      (any d)

@@ -1,4 +1,4 @@
-// The scene: what a scene file (SPEC §3) or a built-in scene (SPEC §4)
+// The scene: what a scene file (README "Scene files") or a built-in scene (README "Built-in scenes")
 // describes, before any physics is assembled from it. Plain data; the model
 // (elastic_model.h) turns it into forces and a state.
 //
@@ -33,7 +33,7 @@ struct Particle {
   Eigen::Vector3d v = Eigen::Vector3d::Zero();
   double mass = 1.0;
   bool fixed = false;
-  // The rest (material) position X (SPEC §7): where the particle sits in the
+  // The rest (material) position X (README "Finite elements"): where the particle sits in the
   // undeformed object. Absent: x. Springs take their default rest length
   // from it, elements their rest shape.
   std::optional<Eigen::Vector3d> X = std::nullopt;
@@ -109,7 +109,7 @@ inline constexpr std::size_t kMaxSceneJsonValues = 32'000'000;
 // its messages: a long run of whitespace would cost its length in memory.
 inline constexpr std::size_t kMaxJsonWhitespaceRun = std::size_t{1} << 20;  // 1 MiB
 
-// Parses and validates a scene (SPEC §3). `source` names the file in messages.
+// Parses and validates a scene (README "Scene files"). `source` names the file in messages.
 // Throws SceneError on any violation; never returns a half-valid scene.
 Scene parse_scene(const std::string& json_text, const std::string& source);
 // `source` names the file in messages (default: the path). A FIFO or a
@@ -129,7 +129,7 @@ std::optional<std::string> json_text_problem(const std::string& text);
 // length ("aaaa... (1048576 bytes)").
 std::string printable(const std::string& text);
 
-// Runs every SPEC §3 check on an already-built scene (used for built-ins too).
+// Runs every README "Scene files" check on an already-built scene (used for built-ins too).
 void validate_scene(const Scene& scene, const std::string& source);
 
 }  // namespace springlab

@@ -1,4 +1,4 @@
-// Springs in a scene (SPEC §2, §3): the block of scene data of the "spring"
+// Springs in a scene (README "The physics", "Scene files"): the block of scene data of the "spring"
 // element kind (springs.cc), whose force is spring_force.cc and whose
 // `damping` the "spring-damping" kind (spring_damping_force.cc) reads.
 #pragma once

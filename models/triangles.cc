@@ -1,4 +1,4 @@
-// The "triangle" element kind: the "triangles" key of a scene (SPEC §7). In a
+// The "triangle" element kind: the "triangles" key of a scene (README "Finite elements"). In a
 // 2-D scene a triangle is a plane-strain solid (F 2 x 2); in a 3-D scene a
 // membrane (F 3 x 2: in-plane stretch and shear, no bending), where the
 // linear model is refused. Its force is fem_force.cc; its energy, W Psi(F)

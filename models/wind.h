@@ -1,4 +1,4 @@
-// Wind in a scene (SPEC §2, §3 key "wind"): the block of scene data of the
+// Wind in a scene (README "The physics", "Scene files" key "wind"): the block of scene data of the
 // "wind" element kind (wind_force.cc).
 #pragma once
 

@@ -1,4 +1,4 @@
-// Built-in scenes (SPEC §4): each builds a valid scene that round-trips as a
+// Built-in scenes (README "Built-in scenes"): each builds a valid scene that round-trips as a
 // file, its parameters do what they say, and bad -p values are refused with
 // an exact message.
 #include <gtest/gtest.h>

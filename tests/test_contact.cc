@@ -1,4 +1,4 @@
-// Contact with planes (SPEC §8), checked against closed forms: the penalty's
+// Contact with planes (README "Contact with planes"), checked against closed forms: the penalty's
 // resting gap, the explicit methods' stability limit with the contact
 // stiffness, energy through a bounce, and the barrier's positive gaps.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// The fast solvers of SPEC §9 against the implicit Euler step they
+// The fast solvers of README "Fast solvers" against the implicit Euler step they
 // approximate: exact on linear springs, converging on nonlinear ones, and
 // XPBD's compliance giving the right static extension.
 #include <gtest/gtest.h>
@@ -42,7 +42,7 @@ double distance(const RunResult& a, const RunResult& b) {
   return (a.x_final - b.x_final).norm() + (a.v_final - b.v_final).norm();
 }
 
-// SPEC §9: on a linear spring of rest length 0, one iteration of
+// README "Fast solvers": on a linear spring of rest length 0, one iteration of
 // projective-dynamics, and one substep with one iteration of xpbd, give
 // implicit Euler's step to round-off.
 TEST(FastSolvers, OneIterationIsImplicitEulerOnALinearSpring) {

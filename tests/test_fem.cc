@@ -1,4 +1,4 @@
-// Finite elements as a whole (SPEC §7): the patch test, the lumped masses,
+// Finite elements as a whole (README "Finite elements"): the patch test, the lumped masses,
 // a cantilever against beam theory, the built-in scenes, and every
 // integrator on an element scene. (The element kinds' derivatives are in
 // test_element_kinds.cc, the materials' in test_materials.cc.)
@@ -104,7 +104,7 @@ TEST(FiniteElements, PatchTestUniformStrainHasNoInteriorForce) {
   }
 }
 
-// SPEC §7: without a given mass, a particle gets sum rho W / nodes of its
+// README "Finite elements": without a given mass, a particle gets sum rho W / nodes of its
 // elements; a given mass wins; the total is rho x the rest measure.
 TEST(FiniteElements, LumpedMassesSumToTheBodysMass) {
   const Scene block = make_builtin_scene("block", {{"n", "3"}});
@@ -161,7 +161,7 @@ TEST(FiniteElements, CantileverTipDeflectionApproachesBeamTheory) {
   EXPECT_LT(previous_error, 0.05);
 }
 
-// SPEC §7: a neo-Hookean element has no energy once inverted, so an
+// README "Finite elements": a neo-Hookean element has no energy once inverted, so an
 // explicit method whose step inverts one ends the run as diverged (not a
 // crash, not "completed"); implicit Euler's line search keeps J > 0 at the
 // same step and completes.

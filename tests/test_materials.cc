@@ -1,6 +1,6 @@
 // Every registered material model (models/materials/), on every shape of F it
 // is defined for (2 x 2 plane strain, 3 x 3 solid, 3 x 2 membrane): the
-// properties SPEC §7 states and the derivatives the solvers rely on, checked
+// properties README "Finite elements" states and the derivatives the solvers rely on, checked
 // against closed forms and central differences.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The run driver (experiments/simulation.h) and the stability search
-// (experiments/stability.h) in-process: the output time grid of SPEC §6, the
+// (experiments/stability.h) in-process: the output time grid of README "The command line", the
 // observer protocol, the divergence rule (the E_s threshold) and the
 // bisection on dt, each checked against a value worked out by hand.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Hyperelastic materials (SPEC §7; the lecture's "generalized springs"): an
+// Hyperelastic materials (README "Finite elements"; the lecture's "generalized springs"): an
 // energy density Psi(F) of the deformation gradient F = Ds Dm^-1, its first
 // Piola-Kirchhoff stress P = dPsi/dF, and the derivative of P.
 //
@@ -28,7 +28,7 @@ using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
 // dPdF on vec(F): at most 9 x 9.
 using Tangent = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
 
-// Lame parameters from Young's modulus E and Poisson's ratio nu (SPEC §7):
+// Lame parameters from Young's modulus E and Poisson's ratio nu (README "Finite elements"):
 // mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
 struct Lame {
   double mu = 0.0;
@@ -39,7 +39,7 @@ Lame lame(double young, double poisson);
 struct MaterialModel {
   std::string_view name;  // "neo-hookean": the "model" of a scene's material
   std::string_view formula;  // Psi, for `springlab list` and the README
-  bool membranes = true;  // defined for 3 x 2 F (linear: not, SPEC §7)
+  bool membranes = true;  // defined for 3 x 2 F (linear: not, README "Finite elements")
   bool finite_everywhere = true;  // false: Psi = +infinity somewhere (neo-Hookean, J <= 0)
   // Psi(F); +infinity where the model has no energy (neo-Hookean, J <= 0).
   double (*Psi)(const Mat& F, const Lame& m) = nullptr;
