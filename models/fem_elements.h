@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <memory>
 #include <random>
 #include <string>
@@ -59,6 +60,86 @@ struct ElementBlock {
 };
 std::unique_ptr<ForceTerm> make_element_force(const Scene& scene, const ParticleOrder& order,
                                               const ElementBlock& block);
+
+// ---- The element arrays ("triangles", "tetrahedra"): each element
+// {"nodes": [N particle indices], "material": name}. One reader, checker and
+// writer for both kinds; `check(where, element)` adds a kind's own checks.
+
+template <typename Element>
+std::vector<Eigen::Vector3d> rest_positions(const Scene& scene, const Element& e) {
+  std::vector<Eigen::Vector3d> X;
+  for (int n : e.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
+  return X;
+}
+
+template <typename Element, typename Check>
+void read_elements(const Json& document, const Reporter& r, Scene& scene, const char* key,
+                   Check check) {
+  if (!document.contains(key)) return;
+  const Json& list = document.at(key);
+  require_array(r, key, list);
+  std::vector<Element>& out = scene.block<std::vector<Element>>();
+  for (std::size_t e = 0; e < list.size(); ++e) {
+    const std::string where = element(key, e);
+    require_object(r, where, list[e]);
+    check_keys(r, where, list[e], {"nodes", "material"}, {"nodes", "material"});
+    Element el;
+    const std::vector<int> nodes =
+        read_element_nodes(r, where, list[e], el.nodes.size(), scene.particles.size());
+    std::copy(nodes.begin(), nodes.end(), el.nodes.begin());
+    if (!list[e].at("material").is_string()) {
+      r.fail(field(where, "material"), "expected a material's name (a string)");
+    }
+    el.material = find_material(r, where, scene.get<Materials>(),
+                                list[e].at("material").get<std::string>());
+    check(where, el);
+    out.push_back(el);
+  }
+  lump_masses(document, scene);
+}
+
+template <typename Element, typename Check>
+void validate_elements(const Scene& scene, const Reporter& r, const char* key, Check check) {
+  const std::vector<Element>& elements = scene.get<std::vector<Element>>();
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    const std::string where = element(key, e);
+    const Element& el = elements[e];
+    check_element_nodes(r, where, el.nodes.data(), el.nodes.size(), scene.particles.size());
+    if (el.material < 0 ||
+        static_cast<std::size_t>(el.material) >= scene.get<Materials>().size()) {
+      r.fail(field(where, "material"), "no such material");
+    }
+    check(where, el);
+  }
+}
+
+template <typename Element>
+void write_elements(const Scene& scene, const char* key,
+                    std::vector<std::pair<std::string, std::string>>& entries) {
+  const std::vector<Element>* elements = scene.find<std::vector<Element>>();
+  if (elements == nullptr || elements->empty()) return;
+  JsonLines lines;
+  for (const Element& el : *elements) {
+    std::string nodes;
+    for (int n : el.nodes) nodes += (nodes.empty() ? "" : ", ") + std::to_string(n);
+    lines.add("{\"nodes\": [" + nodes + "], \"material\": " +
+              json_string(scene.get<Materials>()[static_cast<std::size_t>(el.material)].name) +
+              "}");
+  }
+  entries.emplace_back(key, lines.str());
+}
+
+// The force term of one kind's elements (nullptr without any).
+template <typename Element>
+std::unique_ptr<ForceTerm> make_elements_force(const Scene& scene, const ParticleOrder& order,
+                                               std::string_view name) {
+  ElementBlock block{.name = name, .nodes = static_cast<int>(Element{}.nodes.size())};
+  for (const Element& el : scene.get<std::vector<Element>>()) {
+    block.node_lists.emplace_back(el.nodes.begin(), el.nodes.end());
+    block.materials.push_back(el.material);
+  }
+  return make_element_force(scene, order, block);
+}
 
 // A random material (any model; `membranes`: one defined for membranes)
 // added to the scene's materials; returns its index.

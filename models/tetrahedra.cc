@@ -13,12 +13,6 @@
 namespace springlab {
 namespace {
 
-std::vector<Eigen::Vector3d> rest_positions(const Scene& scene, const Tetrahedron& t) {
-  std::vector<Eigen::Vector3d> X;
-  for (int n : t.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
-  return X;
-}
-
 void check_dimension(const Reporter& r, const Scene& scene) {
   if (scene.dimension != 3) {
     r.fail("tetrahedra", "need a 3-D scene (this one is " + std::to_string(scene.dimension) +
@@ -27,67 +21,34 @@ void check_dimension(const Reporter& r, const Scene& scene) {
 }
 
 void read_tetrahedra(const Json& document, const Reporter& r, Scene& scene) {
-  if (!document.contains("tetrahedra")) return;
-  const Json& list = document.at("tetrahedra");
-  require_array(r, "tetrahedra", list);
-  if (!list.empty()) check_dimension(r, scene);
-  Tetrahedra& out = scene.block<Tetrahedra>();
-  for (std::size_t e = 0; e < list.size(); ++e) {
-    const std::string where = element("tetrahedra", e);
-    require_object(r, where, list[e]);
-    check_keys(r, where, list[e], {"nodes", "material"}, {"nodes", "material"});
-    Tetrahedron t;
-    const std::vector<int> nodes =
-        read_element_nodes(r, where, list[e], 4, scene.particles.size());
-    std::copy(nodes.begin(), nodes.end(), t.nodes.begin());
-    if (!list[e].at("material").is_string()) {
-      r.fail(field(where, "material"), "expected a material's name (a string)");
-    }
-    t.material = find_material(r, where, scene.get<Materials>(),
-                               list[e].at("material").get<std::string>());
-    check_rest_shape(r, where, rest_shape(rest_positions(scene, t), 3), 3);
-    out.push_back(t);
+  if (document.contains("tetrahedra") && document.at("tetrahedra").is_array() &&
+      !document.at("tetrahedra").empty()) {
+    check_dimension(r, scene);
   }
-  lump_masses(document, scene);
+  read_elements<Tetrahedron>(document, r, scene, "tetrahedra",
+                             [&](const std::string& where, const Tetrahedron& t) {
+                               check_rest_shape(r, where, rest_shape(rest_positions(scene, t), 3),
+                                                3);
+                             });
 }
 
 void validate_tetrahedra(const Scene& scene, const Reporter& r) {
-  const Tetrahedra& tetrahedra = scene.get<Tetrahedra>();
-  if (!tetrahedra.empty()) check_dimension(r, scene);
-  for (std::size_t e = 0; e < tetrahedra.size(); ++e) {
-    const std::string where = element("tetrahedra", e);
-    const Tetrahedron& t = tetrahedra[e];
-    check_element_nodes(r, where, t.nodes.data(), 4, scene.particles.size());
-    if (t.material < 0 || static_cast<std::size_t>(t.material) >= scene.get<Materials>().size()) {
-      r.fail(field(where, "material"), "no such material");
-    }
-    check_rest_shape(r, where, rest_shape(rest_positions(scene, t), 3), 3);
-  }
+  if (!scene.get<Tetrahedra>().empty()) check_dimension(r, scene);
+  validate_elements<Tetrahedron>(scene, r, "tetrahedra",
+                                 [&](const std::string& where, const Tetrahedron& t) {
+                                   check_rest_shape(
+                                       r, where, rest_shape(rest_positions(scene, t), 3), 3);
+                                 });
 }
 
 void write_tetrahedra(const Scene& scene,
                       std::vector<std::pair<std::string, std::string>>& entries) {
-  const Tetrahedra* tetrahedra = scene.find<Tetrahedra>();
-  if (tetrahedra == nullptr || tetrahedra->empty()) return;
-  JsonLines lines;
-  for (const Tetrahedron& t : *tetrahedra) {
-    lines.add("{\"nodes\": [" + std::to_string(t.nodes[0]) + ", " + std::to_string(t.nodes[1]) +
-              ", " + std::to_string(t.nodes[2]) + ", " + std::to_string(t.nodes[3]) +
-              "], \"material\": " +
-              json_string(scene.get<Materials>()[static_cast<std::size_t>(t.material)].name) +
-              "}");
-  }
-  entries.emplace_back("tetrahedra", lines.str());
+  write_elements<Tetrahedron>(scene, "tetrahedra", entries);
 }
 
 std::unique_ptr<ForceTerm> make_tetrahedron_force(const Scene& scene,
                                                   const ParticleOrder& order) {
-  ElementBlock block{.name = "tetrahedron", .nodes = 4};
-  for (const Tetrahedron& t : scene.get<Tetrahedra>()) {
-    block.node_lists.emplace_back(t.nodes.begin(), t.nodes.end());
-    block.materials.push_back(t.material);
-  }
-  return make_element_force(scene, order, block);
+  return make_elements_force<Tetrahedron>(scene, order, "tetrahedron");
 }
 
 double signed_volume(const std::vector<Eigen::Vector3d>& p) {

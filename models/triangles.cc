@@ -11,12 +11,6 @@
 namespace springlab {
 namespace {
 
-std::vector<Eigen::Vector3d> rest_positions(const Scene& scene, const Triangle& t) {
-  std::vector<Eigen::Vector3d> X;
-  for (int n : t.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
-  return X;
-}
-
 void check_triangle(const Reporter& r, const std::string& where, const Scene& scene,
                     const Triangle& t) {
   const MaterialSpec& m = scene.get<Materials>()[static_cast<std::size_t>(t.material)];
@@ -29,63 +23,26 @@ void check_triangle(const Reporter& r, const std::string& where, const Scene& sc
 }
 
 void read_triangles(const Json& document, const Reporter& r, Scene& scene) {
-  if (!document.contains("triangles")) return;
-  const Json& list = document.at("triangles");
-  require_array(r, "triangles", list);
-  Triangles& out = scene.block<Triangles>();
-  for (std::size_t e = 0; e < list.size(); ++e) {
-    const std::string where = element("triangles", e);
-    require_object(r, where, list[e]);
-    check_keys(r, where, list[e], {"nodes", "material"}, {"nodes", "material"});
-    Triangle t;
-    const std::vector<int> nodes =
-        read_element_nodes(r, where, list[e], 3, scene.particles.size());
-    std::copy(nodes.begin(), nodes.end(), t.nodes.begin());
-    if (!list[e].at("material").is_string()) {
-      r.fail(field(where, "material"), "expected a material's name (a string)");
-    }
-    t.material = find_material(r, where, scene.get<Materials>(),
-                               list[e].at("material").get<std::string>());
-    check_triangle(r, where, scene, t);
-    out.push_back(t);
-  }
-  lump_masses(document, scene);
+  read_elements<Triangle>(document, r, scene, "triangles",
+                          [&](const std::string& where, const Triangle& t) {
+                            check_triangle(r, where, scene, t);
+                          });
 }
 
 void validate_triangles(const Scene& scene, const Reporter& r) {
-  const Triangles& triangles = scene.get<Triangles>();
-  for (std::size_t e = 0; e < triangles.size(); ++e) {
-    const std::string where = element("triangles", e);
-    const Triangle& t = triangles[e];
-    check_element_nodes(r, where, t.nodes.data(), 3, scene.particles.size());
-    if (t.material < 0 || static_cast<std::size_t>(t.material) >= scene.get<Materials>().size()) {
-      r.fail(field(where, "material"), "no such material");
-    }
-    check_triangle(r, where, scene, t);
-  }
+  validate_elements<Triangle>(scene, r, "triangles",
+                              [&](const std::string& where, const Triangle& t) {
+                                check_triangle(r, where, scene, t);
+                              });
 }
 
 void write_triangles(const Scene& scene,
                      std::vector<std::pair<std::string, std::string>>& entries) {
-  const Triangles* triangles = scene.find<Triangles>();
-  if (triangles == nullptr || triangles->empty()) return;
-  JsonLines lines;
-  for (const Triangle& t : *triangles) {
-    lines.add("{\"nodes\": [" + std::to_string(t.nodes[0]) + ", " + std::to_string(t.nodes[1]) +
-              ", " + std::to_string(t.nodes[2]) + "], \"material\": " +
-              json_string(scene.get<Materials>()[static_cast<std::size_t>(t.material)].name) +
-              "}");
-  }
-  entries.emplace_back("triangles", lines.str());
+  write_elements<Triangle>(scene, "triangles", entries);
 }
 
 std::unique_ptr<ForceTerm> make_triangle_force(const Scene& scene, const ParticleOrder& order) {
-  ElementBlock block{.name = "triangle", .nodes = 3};
-  for (const Triangle& t : scene.get<Triangles>()) {
-    block.node_lists.emplace_back(t.nodes.begin(), t.nodes.end());
-    block.materials.push_back(t.material);
-  }
-  return make_element_force(scene, order, block);
+  return make_elements_force<Triangle>(scene, order, "triangle");
 }
 
 // Triangles on node triples of the random particles, each with its own
