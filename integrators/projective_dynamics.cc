@@ -17,7 +17,7 @@ ProjectiveDynamics::ProjectiveDynamics()
                   // stiff damper limits the step (tests/test_stability_property.cc).
                   .stability = StabilityKind::kL,
                   .stability_limit = kInfinity,
-                  .stability_note = "for the springs (exactly implicit Euler on linear ones); "
+                  .stability_note = "for linear springs (one iteration is implicit Euler); "
                                     "damping, drag and wind are explicit"}) {}
 
 StepResult ProjectiveDynamics::do_initialize() {

@@ -18,8 +18,10 @@ Xpbd::Xpbd()
                   // (tests/test_stability_property.cc shows both).
                   .stability = StabilityKind::kL,
                   .stability_limit = kInfinity,
-                  .stability_note = "for the springs (one iteration per substep on linear ones); "
-                                    "damping, drag and wind are explicit"}) {}
+                  .stability_note = "for linear springs, one iteration per substep (S implicit "
+                                    "Euler steps of h/S); unconverged projections of stiff "
+                                    "nonlinear springs can gain energy; damping, drag and wind "
+                                    "are explicit"}) {}
 
 StepResult Xpbd::do_step(double h) {
   const int substeps = options().substeps > 0 ? options().substeps : kDefaultSubsteps;
