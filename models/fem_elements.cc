@@ -116,11 +116,17 @@ std::vector<double> lumped_masses(const Scene& scene) {
   return lumped;
 }
 
-void lump_masses(const Json& document, Scene& scene) {
+void lump_masses(const Json& document, const Reporter& r, Scene& scene) {
   const std::vector<double> lumped = lumped_masses(scene);
   const Json& particles = document.at("particles");
   for (std::size_t p = 0; p < lumped.size(); ++p) {
-    if (lumped[p] > 0.0 && !particles[p].contains("mass")) scene.particles[p].mass = lumped[p];
+    if (lumped[p] > 0.0 && !particles[p].contains("mass")) {
+      if (!std::isfinite(lumped[p])) {
+        r.fail(element("particles", p),
+               "its lumped mass (density x rest size / nodes) is not finite: give its \"mass\"");
+      }
+      scene.particles[p].mass = lumped[p];
+    }
   }
 }
 

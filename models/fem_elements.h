@@ -46,7 +46,7 @@ void check_rest_shape(const Reporter& r, const std::string& where, const RestSha
 // material has a density get the lumped mass sum_e rho W_e / (nodes of e)
 // over the scene's triangles and tetrahedra (README "Finite elements"). Each element kind's
 // reader calls it once its elements are in; it recomputes from all of them.
-void lump_masses(const Json& document, Scene& scene);
+void lump_masses(const Json& document, const Reporter& r, Scene& scene);
 // sum_e rho W_e / (nodes of e) per particle (0 where no element with a
 // density touches it): what lump_masses gives, for scenes built in code.
 std::vector<double> lumped_masses(const Scene& scene);
@@ -95,7 +95,7 @@ void read_elements(const Json& document, const Reporter& r, Scene& scene, const 
     check(where, el);
     out.push_back(el);
   }
-  lump_masses(document, scene);
+  lump_masses(document, r, scene);
 }
 
 template <typename Element, typename Check>
