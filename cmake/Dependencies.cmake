@@ -47,10 +47,11 @@ if(SPRINGLAB_BUILD_BENCHMARKS)
   springlab_require(Boost libboost-dev 1.71 CONFIG)  # header-only: Boost.Odeint
 endif()
 
-# The report is drawn by Python 3 with matplotlib and numpy. The python3
-# first on PATH may lack them (a pyenv build, say), so try each candidate
-# and keep the first that can import both.
-function(springlab_find_report_python out)
+# Python 3 draws the report (matplotlib, numpy) and, with the tests on, reads
+# the --vtk output back with VTK and executes the example notebook. The
+# python3 first on PATH may lack these (a pyenv build, say), so try each
+# candidate and keep the first that can import them all.
+function(springlab_find_python out imports packages)
   set(candidates)
   if(SPRINGLAB_PYTHON)
     list(APPEND candidates "${SPRINGLAB_PYTHON}")
@@ -61,7 +62,7 @@ function(springlab_find_report_python out)
     list(APPEND candidates "${_path_python3}")
   endif()
   foreach(candidate IN LISTS candidates)
-    execute_process(COMMAND "${candidate}" -c "import matplotlib, numpy"
+    execute_process(COMMAND "${candidate}" -c "import ${imports}"
                     RESULT_VARIABLE status OUTPUT_QUIET ERROR_QUIET)
     if(status EQUAL 0)
       set(${out} "${candidate}" PARENT_SCOPE)
@@ -69,12 +70,17 @@ function(springlab_find_report_python out)
     endif()
   endforeach()
   message(FATAL_ERROR
-    "springlab: no Python 3 that can import matplotlib and numpy (tried: ${candidates}).\n"
-    "Install them with:  ${SPRINGLAB_APT_HINT} python3-matplotlib python3-numpy\n"
+    "springlab: no Python 3 that can import ${imports} (tried: ${candidates}).\n"
+    "Install them with:  ${SPRINGLAB_APT_HINT} ${packages}\n"
     "or point -DSPRINGLAB_PYTHON=/path/to/python3 at one that has them.")
 endfunction()
-springlab_find_report_python(SPRINGLAB_REPORT_PYTHON)
+springlab_find_python(SPRINGLAB_REPORT_PYTHON "matplotlib, numpy" "python3-matplotlib python3-numpy")
 message(STATUS "springlab: report Python: ${SPRINGLAB_REPORT_PYTHON}")
+if(SPRINGLAB_BUILD_TESTS)
+  springlab_find_python(SPRINGLAB_TEST_PYTHON "matplotlib, numpy, vtkmodules.vtkIOXML"
+                        "python3-matplotlib python3-numpy python3-vtk9")
+  message(STATUS "springlab: test Python: ${SPRINGLAB_TEST_PYTHON}")
+endif()
 
 if(SPRINGLAB_BUILD_TESTS)
   find_program(SPRINGLAB_CHROMIUM NAMES chromium chromium-browser)

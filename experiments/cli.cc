@@ -24,6 +24,7 @@
 #include "experiments/experiment_runner.h"
 #include "experiments/integrator_table.h"
 #include "experiments/output_files.h"
+#include "experiments/vtk_series.h"
 #include "experiments/signals.h"
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
@@ -286,7 +287,7 @@ class ProgressLine final : public Observer {
 };
 
 int command_run(CommonOptions& common, const std::string& energy_path,
-                const std::string& trajectory_path) {
+                const std::string& trajectory_path, const std::string& vtk_dir) {
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
@@ -321,6 +322,11 @@ int command_run(CommonOptions& common, const std::string& energy_path,
                std::to_string(scene.particles.size()) + " particles x " +
                    std::to_string(static_cast<long long>(times)) + " output times");
   }
+  if (!vtk_dir.empty()) {
+    check_rows("--vtk", times * static_cast<double>(scene.particles.size()),
+               std::to_string(scene.particles.size()) + " points x " +
+                   std::to_string(static_cast<long long>(times)) + " frames");
+  }
   const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
@@ -328,6 +334,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   // Files are opened (regular files as temporaries) before any step runs.
   std::unique_ptr<OutputFile> energy_file, trajectory_file;
   std::unique_ptr<Observer> energy_csv, trajectory_csv, progress;
+  std::unique_ptr<VtkSeries> vtk;
   std::vector<Observer*> observers;
   if (!energy_path.empty()) {
     energy_file = std::make_unique<OutputFile>(energy_path);
@@ -338,6 +345,10 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     trajectory_file = std::make_unique<OutputFile>(trajectory_path);
     trajectory_csv = std::make_unique<TrajectoryCsv>(model, *trajectory_file);
     observers.push_back(trajectory_csv.get());
+  }
+  if (!vtk_dir.empty()) {
+    vtk = std::make_unique<VtkSeries>(model, scene, vtk_dir);
+    observers.push_back(vtk.get());
   }
   if (::isatty(2)) {
     progress = std::make_unique<ProgressLine>(common.run.integrator, common.run.t_end);
@@ -352,10 +363,11 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
     if (f != nullptr) f->publish();
   }
+  if (vtk) vtk->publish();
 
   // A run that diverged or failed still publishes its files: they hold the
   // rows up to its last good state (t_final), and the summary says so.
-  const bool any_output = energy_file != nullptr || trajectory_file != nullptr;
+  const bool any_output = energy_file != nullptr || trajectory_file != nullptr || vtk != nullptr;
   const bool outputs_complete = r.status == RunStatus::kCompleted;
   std::ostringstream out;
   if (common.json) {
@@ -613,7 +625,7 @@ int run_cli(int argc, char** argv) {
   app.option_defaults()->always_capture_default();
 
   CommonOptions run_options;
-  std::string energy_path, trajectory_path;
+  std::string energy_path, trajectory_path, vtk_dir;
   CLI::App* run = app.add_subcommand("run", "simulate a scene with one integrator");
   run_options.add_to(*run);
   run->add_option("--dt", run_options.run.dt,
@@ -622,6 +634,7 @@ int run_cli(int argc, char** argv) {
       ->default_str("");
   run->add_option("--energy", energy_path, "CSV t,kinetic,spring,gravity,total");
   run->add_option("--trajectory", trajectory_path, "CSV t,i,x,y[,z],vx,vy[,vz]");
+  run->add_option("--vtk", vtk_dir, "folder for ParaView frames: <scene>_NNNNNN.vtu and <scene>.pvd");
   run->add_option("--every", run_options.run.every, "write every K-th output time (and the last)");
 
   CommonOptions stability_options;
@@ -675,7 +688,7 @@ int run_cli(int argc, char** argv) {
   }
 
   try {
-    if (*run) return command_run(run_options, energy_path, trajectory_path);
+    if (*run) return command_run(run_options, energy_path, trajectory_path, vtk_dir);
     if (*stability) return command_stability(stability_options, stability_settings);
     if (*scene) {
       if (!is_builtin_scene(scene_name)) {

@@ -67,6 +67,8 @@ std::string follow_links(const std::string& path) {
   return "";
 }
 
+}  // namespace
+
 std::string host_name() {
   char name[256] = {};
   if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "localhost";
@@ -76,6 +78,8 @@ std::string host_name() {
   }
   return host;
 }
+
+namespace {
 
 // `<file>.springlab-tmp.` shortened so that the whole temporary name fits
 // in 255 bytes: the stem every temporary of this file starts with.

@@ -69,6 +69,10 @@ class OutputFile {
 // and links). Two character devices (/dev/null twice) do not count.
 bool same_file(const std::string& a, const std::string& b);
 
+// This machine's name as temporaries carry it ('/' and control characters
+// made '_'; "localhost" when it has none).
+std::string host_name();
+
 // Shortest decimal text that reads back to the same double (deterministic).
 std::string format_number(double value);
 

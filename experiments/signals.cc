@@ -19,16 +19,50 @@ struct Slot {
 constexpr int kSlots = 64;
 Slot slots[kSlots];
 
+// The frame series (register_temporary_series).
+struct Series {
+  std::atomic<bool> ready{false};
+  const std::atomic<int>* frames = nullptr;
+  char dir[PATH_MAX];
+  char stem[256];
+};
+Series series;
+
+// `dir/stem` + suffix into `out` (PATH_MAX), by hand: async-signal-safe.
+void series_path(char* out, const char* suffix) {
+  std::size_t n = 0;
+  for (const char* part : {static_cast<const char*>(series.dir), "/", static_cast<const char*>(series.stem), suffix}) {
+    for (const char* c = part; *c != '\0' && n + 1 < PATH_MAX; ++c) out[n++] = *c;
+  }
+  out[n] = '\0';
+}
+
+void remove_series() {
+  if (!series.ready.load(std::memory_order_acquire)) return;
+  char path[PATH_MAX];
+  const int frames = series.frames->load();
+  for (int k = 0; k <= frames; ++k) {  // <= : the frame being written
+    char suffix[] = "_000000.vtu";
+    for (int digit = 6, rest = k; digit >= 1; --digit, rest /= 10) suffix[digit] = static_cast<char>('0' + rest % 10);
+    series_path(path, suffix);
+    ::unlink(path);
+  }
+  series_path(path, ".pvd");
+  ::unlink(path);
+  ::rmdir(series.dir);
+}
+
 std::atomic<bool> stop_requested{false};
 std::atomic<bool> stop_mode{false};  // StopOnSignals alive: a signal is a request
 
 constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
 
-// Async-signal-safe: unlink, signal, raise.
+// Async-signal-safe: unlink, rmdir, signal, raise.
 void remove_temporaries_and_die(int signal_number) {
   for (Slot& slot : slots) {
     if (slot.state.load(std::memory_order_acquire) == kReady) ::unlink(slot.path);
   }
+  remove_series();
   ::signal(signal_number, SIG_DFL);
   ::raise(signal_number);  // delivered when the handler returns
 }
@@ -77,6 +111,18 @@ void unregister_temporary(const std::string& path) {
     }
   }
 }
+
+void register_temporary_series(const std::string& dir, const std::string& stem,
+                               const std::atomic<int>* frames) {
+  if (dir.size() >= PATH_MAX || stem.size() >= sizeof series.stem) return;
+  series.ready.store(false, std::memory_order_release);
+  std::memcpy(series.dir, dir.c_str(), dir.size() + 1);
+  std::memcpy(series.stem, stem.c_str(), stem.size() + 1);
+  series.frames = frames;
+  series.ready.store(true, std::memory_order_release);
+}
+
+void unregister_temporary_series() { series.ready.store(false, std::memory_order_release); }
 
 StopOnSignals::StopOnSignals() {
   stop_requested.store(false);

@@ -30,6 +30,14 @@ void install_signal_handlers();
 void register_temporary(const std::string& path);
 void unregister_temporary(const std::string& path);
 
+// A folder of numbered frames being written (--vtk): a signal removes
+// `<dir>/<stem>_NNNNNN.vtu` for N < *frames, `<dir>/<stem>.pvd` and the
+// folder itself. One series at a time; `frames` must outlive the
+// registration.
+void register_temporary_series(const std::string& dir, const std::string& stem,
+                               const std::atomic<int>* frames);
+void unregister_temporary_series();
+
 // While alive, SIGINT, SIGTERM and SIGHUP set stop_requested() instead of
 // ending the process (a second one ends it, removing the temporaries).
 class StopOnSignals {

@@ -19,6 +19,7 @@
 // report and the shared tests then cover it without further edits.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <random>
@@ -47,6 +48,14 @@ struct SceneKey {
   // how many a scene has. cap 0: not an element array.
   std::size_t cap = 0;
   std::size_t (*count)(const Scene&) = nullptr;
+};
+
+// One element as drawn (--vtk, the report's player, the Python module): the
+// particles it joins, in scene order: 2 (a line), 3 (a triangle) or 4 (a
+// tetrahedron) of `nodes`.
+struct Cell {
+  int size = 0;
+  std::array<int, 4> nodes{};
 };
 
 // Which states a random instance may be in (the shared derivative tests).
@@ -86,6 +95,11 @@ struct ElementKind {
   // diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
   double (*energy_scale_per_mass)(const Scene& scene, double diameter) = nullptr;
 
+  // Appends the cells of the kind's elements, in file order. nullptr: the
+  // kind joins no particles (gravity) or draws none of its own (spring
+  // damping lives on the springs).
+  void (*cells)(const Scene& scene, std::vector<Cell>& out) = nullptr;
+
   // Adds a random instance of the kind to `scene`, whose particles (random
   // positions and velocities, some fixed) are in place; it may give them
   // rest positions but not change their number. For the shared tests.
@@ -104,5 +118,8 @@ struct ElementCount {
   std::size_t cap = 0;
 };
 std::vector<ElementCount> element_counts(const Scene& scene);
+
+// Every element of the scene as a cell, kinds in registry order.
+std::vector<Cell> scene_cells(const Scene& scene);
 
 }  // namespace springlab

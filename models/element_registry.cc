@@ -47,4 +47,12 @@ std::vector<ElementCount> element_counts(const Scene& scene) {
   return counts;
 }
 
+std::vector<Cell> scene_cells(const Scene& scene) {
+  std::vector<Cell> cells;
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->cells != nullptr) kind->cells(scene, cells);
+  }
+  return cells;
+}
+
 }  // namespace springlab

@@ -201,6 +201,10 @@ void add_random_springs(Scene& scene, std::mt19937& rng, RandomStates states) {
 
 std::size_t count_springs(const Scene& scene) { return scene.get<Springs>().size(); }
 
+void spring_cells(const Scene& scene, std::vector<Cell>& out) {
+  for (const Spring& s : scene.get<Springs>()) out.push_back({.size = 2, .nodes = {s.i, s.j, 0, 0}});
+}
+
 }  // namespace
 
 const ElementKind& spring_kind() {
@@ -214,6 +218,7 @@ const ElementKind& spring_kind() {
       .write = write_springs,
       .make = make_spring_force,
       .energy = {.name = "spring", .always = true, .counts_with_spring = true},
+      .cells = spring_cells,
       .add_random = add_random_springs,
   };
   return kind;

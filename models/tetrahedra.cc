@@ -96,6 +96,10 @@ void add_random_tetrahedra(Scene& scene, std::mt19937& rng, RandomStates states)
 
 std::size_t count_tetrahedra(const Scene& scene) { return scene.get<Tetrahedra>().size(); }
 
+void tetrahedron_cells(const Scene& scene, std::vector<Cell>& out) {
+  for (const Tetrahedron& t : scene.get<Tetrahedra>()) out.push_back({.size = 4, .nodes = t.nodes});
+}
+
 }  // namespace
 
 const ElementKind& tetrahedron_kind() {
@@ -108,6 +112,7 @@ const ElementKind& tetrahedron_kind() {
       .write = write_tetrahedra,
       .make = make_tetrahedron_force,
       .energy = {.name = "elastic", .counts_with_spring = true},
+      .cells = tetrahedron_cells,
       .add_random = add_random_tetrahedra,
   };
   return kind;

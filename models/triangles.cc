@@ -82,6 +82,12 @@ void add_random_triangles(Scene& scene, std::mt19937& rng, RandomStates states) 
 
 std::size_t count_triangles(const Scene& scene) { return scene.get<Triangles>().size(); }
 
+void triangle_cells(const Scene& scene, std::vector<Cell>& out) {
+  for (const Triangle& t : scene.get<Triangles>()) {
+    out.push_back({.size = 3, .nodes = {t.nodes[0], t.nodes[1], t.nodes[2], 0}});
+  }
+}
+
 }  // namespace
 
 const ElementKind& triangle_kind() {
@@ -94,6 +100,7 @@ const ElementKind& triangle_kind() {
       .write = write_triangles,
       .make = make_triangle_force,
       .energy = {.name = "elastic", .counts_with_spring = true},
+      .cells = triangle_cells,
       .add_random = add_random_triangles,
   };
   return kind;

@@ -1,0 +1,58 @@
+// --vtk DIR: the run's output frames for ParaView (README "Output files").
+//
+// One VTK XML UnstructuredGrid file per output time, `DIR/<stem>_NNNNNN.vtu`
+// (points with their velocity and a `fixed` flag; springs as lines,
+// triangles and tetrahedra as cells; a particle no element joins as a
+// vertex), and `DIR/<stem>.pvd`, the series with each frame's time, which is
+// what ParaView opens. <stem> is the scene's name with anything but letters,
+// digits, '-', '_' and '.' made '_'.
+//
+// Written whole or not at all, like every output file (output_files.h): the
+// frames go to a temporary folder (`DIR.springlab-tmp.<pid>.<host>.XXXXXX`
+// beside DIR when DIR does not exist yet, `DIR/.springlab-tmp...` when it
+// does), which publish() renames to DIR, or whose files it moves into DIR
+// (the .pvd last; frames of an earlier, longer series of the same stem are
+// removed). A run that ends without publish(), or by a signal, leaves DIR as
+// it was.
+#pragma once
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "experiments/simulation.h"
+#include "models/element_kind.h"
+
+namespace springlab {
+
+class VtkSeries final : public Observer {
+ public:
+  // Throws std::runtime_error naming DIR when it cannot be written.
+  VtkSeries(const ElasticModel& model, const Scene& scene, std::string dir);
+  ~VtkSeries() override;
+  VtkSeries(const VtkSeries&) = delete;
+  VtkSeries& operator=(const VtkSeries&) = delete;
+
+  void observe(double t, const Vector& x, const Vector& v) override;
+  // Writes the .pvd and puts the series in DIR.
+  void publish();
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string frame_name(int k) const;
+  void remove_temporary();
+  [[noreturn]] void fail(const std::string& what, int error) const;
+
+  const ElasticModel& model_;
+  std::string dir_, temp_dir_, stem_;
+  bool dir_existed_ = false, published_ = false;
+  std::vector<unsigned char> fixed_;
+  std::string cells_xml_;  // the <Cells> block: the same in every frame
+  std::vector<double> times_;
+  std::atomic<int> frames_{0};
+};
+
+// The scene name as a file-name stem (see above); "scene" when empty.
+std::string vtk_stem(const std::string& scene_name);
+
+}  // namespace springlab
