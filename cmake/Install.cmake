@@ -1,0 +1,22 @@
+# Installation and the CMake package springlab (see CMakeLists.txt).
+include(CMakePackageConfigHelpers)
+
+install(TARGETS springlab_core springlab_cholmod EXPORT springlabTargets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/springlab)
+install(TARGETS springlab RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+foreach(dir models models/materials integrators experiments)
+  file(GLOB headers ${PROJECT_SOURCE_DIR}/${dir}/*.h)
+  install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/springlab/${dir})
+endforeach()
+
+set(SPRINGLAB_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/springlab)
+install(EXPORT springlabTargets NAMESPACE springlab:: DESTINATION ${SPRINGLAB_CMAKE_DIR})
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/springlabConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/springlabConfig.cmake INSTALL_DESTINATION ${SPRINGLAB_CMAKE_DIR})
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/springlabConfigVersion.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/springlabConfig.cmake
+              ${PROJECT_BINARY_DIR}/springlabConfigVersion.cmake
+        DESTINATION ${SPRINGLAB_CMAKE_DIR})

@@ -1,0 +1,22 @@
+# The CMake package end to end: install this build tree into a fresh prefix,
+# configure and build examples/consumer against it with find_package(springlab),
+# and run the result (which checks its hanging mass against m g / k).
+# Arguments: -DBINARY_DIR -DSOURCE_DIR -DWORK_DIR -DGENERATOR -DCXX
+file(REMOVE_RECURSE ${WORK_DIR})
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(NOT status EQUAL 0)
+    message(FATAL_ERROR "failed (${status}): ${ARGN}\n${out}")
+  endif()
+  message(STATUS "${out}")
+endfunction()
+run(${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${WORK_DIR}/prefix)
+foreach(file lib/cmake/springlab/springlabConfig.cmake include/springlab/models/scene.h bin/springlab)
+  if(NOT EXISTS ${WORK_DIR}/prefix/${file})
+    message(FATAL_ERROR "cmake --install did not put ${file} in place")
+  endif()
+endforeach()
+run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples/consumer -B ${WORK_DIR}/build -G ${GENERATOR}
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix)
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(${WORK_DIR}/build/hanging_spring)
