@@ -45,9 +45,6 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Rows one output file may hold (README, "Reliability"): about 1 GB of CSV.
-constexpr double kMaxOutputRows = 10'000'000;
-
 // Everything springlab prints on stdout goes through here, so that a write
 // error (a full disk, a closed pipe) is an error with exit status 1, not a
 // truncated file and exit 0.
@@ -221,7 +218,7 @@ struct CommonOptions {
 
   // Option values the method cannot take are refused (exit 1, before any
   // file is touched); options it does not read are named on stderr.
-  void check_against_method(const ElasticModel& model) const {
+  void check_against_method(const ElasticModel& model, std::ostream& notes = std::cerr) const {
     const auto integrator = make_integrator(run.integrator);
     if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
       throw UsageError(why);
@@ -234,8 +231,8 @@ struct CommonOptions {
       }
     }
     if (!ignored.empty()) {
-      std::cerr << "springlab: note: " << run.integrator << " does not use " << ignored
-                << " (ignored)" << std::endl;
+      notes << "springlab: note: " << run.integrator << " does not use " << ignored
+            << " (ignored)" << std::endl;
     }
   }
 };
@@ -616,6 +613,46 @@ Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>
   const std::string why = from_stdin || error == ENOENT ? "no such scene file or built-in scene"
                                                         : std::string("cannot open (") + std::strerror(error) + ")";
   throw SceneError(printable(scene_arg) + ": " + why + " (built-in scenes: " + builtin_list() + ")");
+}
+
+RunSettings run_settings_for(const ElasticModel& model, const std::string& integrator, double dt,
+                             double t_end, int every,
+                             const std::vector<std::pair<std::string, std::string>>& options,
+                             std::string* notes) {
+  CLI::App app{"springlab run"};
+  app.option_defaults()->always_capture_default();
+  CommonOptions common;
+  common.add_to(app);
+  app.add_option("--dt", common.run.dt)->required();
+  app.add_option("--every", common.run.every);
+  std::vector<std::string> args = {"springlab", "(scene)", "--integrator", integrator,
+                                   "--dt", format_number(dt), "--t-end", format_number(t_end),
+                                   "--every", std::to_string(every)};
+  for (const auto& [option, value] : options) {
+    if (option == "--json" || option == "-p") {
+      throw UsageError(option + ": not an option of a run from Python");
+    }
+    args.push_back(option);
+    if (!value.empty()) args.push_back(value);
+  }
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  try {
+    app.parse(static_cast<int>(argv.size()), argv.data());
+  } catch (const CLI::ParseError& e) {
+    std::string line = parse_error_line(e, app, static_cast<int>(argv.size()), argv.data());
+    if (const auto at = line.find("(springlab --help"); at != std::string::npos) {
+      line.replace(at, 17, "(springlab run --help");
+    }
+    throw UsageError(line);
+  }
+  common.validate();
+  require_positive("--dt", common.run.dt);
+  if (common.run.every < 1) throw UsageError("--every: must be >= 1");
+  std::ostringstream note_lines;
+  common.check_against_method(model, notes != nullptr ? note_lines : std::cerr);
+  if (notes != nullptr) *notes = note_lines.str();
+  return common.run;
 }
 
 int run_cli(int argc, char** argv) {

@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "experiments/simulation.h"
+#include "models/elastic_model.h"
 #include "models/scene.h"
 
 namespace springlab {
@@ -15,5 +17,21 @@ namespace springlab {
 Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>& parameters);
 
 int run_cli(int argc, char** argv);
+
+// `springlab run`'s options for a caller inside this process (the Python
+// module): `options` as typed on the command line, without the leading
+// dashes' meaning changed ({"--newton-tol", "1e-6"}, {"--stald", ""} for a
+// flag), parsed and checked exactly as `run` checks them, against the method
+// and the model too, so a bad value throws std::runtime_error with the same
+// one line the command line prints after "springlab: error: ". Options the
+// method does not read are named in `notes` (one line each, as `run` prints
+// them on stderr; on stderr when notes is nullptr).
+RunSettings run_settings_for(const ElasticModel& model, const std::string& integrator, double dt,
+                             double t_end, int every,
+                             const std::vector<std::pair<std::string, std::string>>& options,
+                             std::string* notes = nullptr);
+
+// Rows one output of a run may hold (README "Reliability"): about 1 GB of CSV.
+inline constexpr double kMaxOutputRows = 10'000'000;
 
 }  // namespace springlab

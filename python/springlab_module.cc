@@ -1,0 +1,282 @@
+// The Python module `springlab` (pybind11): scenes, runs and experiments
+// from a notebook, results as NumPy arrays (README "Python").
+//
+//   import springlab
+//   scene = springlab.load_scene("cloth", n=8)       # a built-in, a file, or a dict
+//   run = springlab.run(scene, "implicit-euler", dt=0.01, t_end=1.0, newton_tol=1e-6)
+//   run.t, run.x, run.v, run.energies["total"], run.stats["newton_iterations"]
+//
+// Everything goes through the library the command line uses: the same
+// scene checks, the same option checks (keyword `newton_tol` is `--newton-tol`),
+// the same messages. A bad input raises springlab.Error whose text is the one
+// line `springlab` prints after "springlab: error: ".
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "experiments/cli.h"
+#include "experiments/experiment_runner.h"
+#include "experiments/integrator_table.h"
+#include "experiments/simulation.h"
+#include "models/builtin_scenes.h"
+#include "models/elastic_model.h"
+#include "models/element_kind.h"
+#include "models/scene.h"
+
+namespace py = pybind11;
+using namespace springlab;
+
+namespace {
+
+// JSON text <-> Python objects, through Python's own json module.
+py::object from_json_text(const std::string& text) {
+  return py::module_::import("json").attr("loads")(text);
+}
+std::string to_json_text(const py::object& value) {
+  return py::module_::import("json").attr("dumps")(value).cast<std::string>();
+}
+
+// A keyword argument's value as typed on the command line.
+std::string option_text(const py::handle& value) {
+  if (py::isinstance<py::float_>(value)) {
+    return py::repr(value).cast<std::string>();  // shortest round trip
+  }
+  return py::str(value).cast<std::string>();
+}
+
+// The state at each output time, and the energies there.
+class Recorder final : public Observer {
+ public:
+  explicit Recorder(const ElasticModel& model) : model_(model) {}
+  void observe(double t, const Vector& x, const Vector& v) override {
+    t_.push_back(t);
+    x_.push_back(model_.scene_positions(x));
+    v_.push_back(model_.scene_velocities(v));
+    e_.push_back(model_.energies(x, v).values());
+  }
+  std::vector<double> t_;
+  std::vector<Eigen::MatrixXd> x_, v_;
+  std::vector<std::vector<double>> e_;
+
+ private:
+  const ElasticModel& model_;
+};
+
+py::array_t<double> stack(const std::vector<Eigen::MatrixXd>& frames, Eigen::Index rows,
+                          Eigen::Index cols) {
+  py::array_t<double> out({static_cast<py::ssize_t>(frames.size()), static_cast<py::ssize_t>(rows),
+                           static_cast<py::ssize_t>(cols)});
+  auto a = out.mutable_unchecked<3>();
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      for (Eigen::Index r = 0; r < cols; ++r) a(k, i, r) = frames[k](i, r);
+    }
+  }
+  return out;
+}
+
+Scene load_scene(const py::object& source, const py::kwargs& parameters) {
+  std::vector<std::string> p;
+  for (const auto& [key, value] : parameters) {
+    p.push_back(py::str(key).cast<std::string>() + "=" + option_text(value));
+  }
+  if (py::isinstance<py::dict>(source)) {
+    if (!p.empty()) throw SceneError("parameters apply to built-in scenes only, not to a dict");
+    return parse_scene(to_json_text(source), "<dict>");
+  }
+  std::string path = py::str(source).cast<std::string>();
+  return resolve_scene(path, p);
+}
+
+py::dict run_result(const ElasticModel& model, const RunResult& r, const Recorder& rec) {
+  py::dict out;
+  const Eigen::Index n = model.particle_count(), d = model.dimension();
+  py::array_t<double> t(static_cast<py::ssize_t>(rec.t_.size()));
+  std::copy(rec.t_.begin(), rec.t_.end(), t.mutable_data());
+  out["t"] = t;
+  out["x"] = stack(rec.x_, n, d);
+  out["v"] = stack(rec.v_, n, d);
+  py::dict energies;
+  const std::vector<std::string> columns = model.energy_columns();
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    py::array_t<double> column(static_cast<py::ssize_t>(rec.e_.size()));
+    for (std::size_t k = 0; k < rec.e_.size(); ++k) column.mutable_data()[k] = rec.e_[k][c];
+    energies[py::str(columns[c])] = column;
+  }
+  out["energies"] = energies;
+  const IntegratorStats& s = r.stats;
+  py::dict stats;
+  stats["steps"] = s.steps;
+  stats["rejected_steps"] = s.rejected_steps;
+  stats["force_evals"] = s.force_evals;
+  stats["jacobian_evals"] = s.jacobian_evals;
+  stats["linear_solves"] = s.linear_solves;
+  stats["linear_iterations"] = s.linear_iterations;
+  stats["newton_iterations"] = s.newton_iterations;
+  stats["factorizations"] = s.factorizations;
+  stats["nonlinear_failures"] = s.nonlinear_failures;
+  out["stats"] = stats;
+  out["integrator"] = r.integrator;
+  out["dt"] = r.dt;
+  out["t_end"] = r.t_end;
+  out["status"] = std::string(to_string(r.status));
+  out["diverged"] = r.diverged();
+  out["diverged_at"] = r.diverged_at ? py::object(py::float_(*r.diverged_at)) : py::object(py::none());
+  out["failure"] = r.failure.empty() ? py::object(py::none()) : py::object(py::str(r.failure));
+  out["t_final"] = r.t_final;
+  out["energy_scale"] = model.energy_scale();
+  out["wall_seconds"] = r.wall_seconds;
+  return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(springlab, m) {
+  m.doc() = "springlab: time integrators on mass-spring systems and finite elements";
+  static py::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const std::runtime_error& e) {
+      std::string what = e.what();
+      std::replace(what.begin(), what.end(), '\n', ' ');
+      error(what.c_str());
+    } catch (const std::invalid_argument& e) {
+      error(e.what());
+    }
+  });
+
+  py::class_<Scene>(m, "Scene", "a scene: particles and the elements between them")
+      .def_readonly("name", &Scene::name)
+      .def_readonly("dimension", &Scene::dimension)
+      .def_property_readonly("particle_count", [](const Scene& s) { return s.particles.size(); })
+      .def("to_dict", [](const Scene& s) { return from_json_text(scene_to_json(s)); },
+           "the scene as a scene file's JSON object")
+      .def("cells", [](const Scene& s) {
+            py::list out;
+            for (const Cell& c : scene_cells(s)) {
+              py::tuple nodes(c.size);
+              for (int a = 0; a < c.size; ++a) nodes[a] = c.nodes[a];
+              out.append(nodes);
+            }
+            return out;
+          }, "each element as a tuple of the particles it joins: springs (i, j), triangles, tetrahedra")
+      .def("__repr__", [](const Scene& s) {
+        std::string text = "<springlab.Scene " + s.name + ": " + std::to_string(s.particles.size()) + " particles";
+        for (const ElementCount& c : element_counts(s)) {
+          if (c.count > 0) text += ", " + std::to_string(c.count) + " " + std::string(c.key);
+        }
+        return text + ">";
+      });
+
+  m.def("load_scene", &load_scene, py::arg("source"),
+        "A scene from a built-in's name (its parameters as keywords: load_scene('cloth', n=8)),\n"
+        "a scene file's path, or a dict in the scene file format.");
+
+  m.def(
+      "run",
+      [](const Scene& scene, const std::string& integrator, double dt, double t_end, int every,
+         const py::kwargs& options) {
+        validate_scene(scene, scene.name);
+        std::vector<std::pair<std::string, std::string>> typed;
+        for (const auto& [key, value] : options) {
+          std::string option = "--" + py::str(key).cast<std::string>();
+          std::replace(option.begin(), option.end(), '_', '-');
+          if (py::isinstance<py::bool_>(value)) {
+            if (value.cast<bool>()) typed.emplace_back(option, "");
+          } else {
+            typed.emplace_back(option, option_text(value));
+          }
+        }
+        const ElasticModel model(scene);
+        std::string notes;
+        const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
+        for (std::size_t at = 0; at < notes.size();) {  // "springlab: note: ..." as Python warnings
+          const std::size_t end = notes.find('\n', at);
+          const std::string line = notes.substr(at, end - at);
+          PyErr_WarnEx(PyExc_UserWarning, line.substr(line.find("note: ") + 6).c_str(), 1);
+          at = end == std::string::npos ? notes.size() : end + 1;
+        }
+        const TimeGrid grid = make_time_grid(dt, t_end);
+        const double frames = 1.0 + std::floor(static_cast<double>(grid.steps) / every) + 1.0;
+        if (frames * static_cast<double>(scene.particles.size()) > kMaxOutputRows) {
+          throw std::runtime_error("every: the run would keep " +
+                                   std::to_string(static_cast<long long>(frames)) + " states of " +
+                                   std::to_string(scene.particles.size()) +
+                                   " particles, over the cap of 10000000 rows: keep every K-th step with every=K");
+        }
+        Recorder recorder(model);
+        RunResult r;
+        {
+          py::gil_scoped_release release;
+          r = simulate(model, settings, {&recorder});
+        }
+        return run_result(model, r, recorder);
+      },
+      py::arg("scene"), py::arg("integrator"), py::arg("dt"), py::arg("t_end"), py::arg("every") = 1,
+      "Runs a scene with one integrator, as `springlab run` does. Keywords are run's options\n"
+      "(newton_tol=1e-6 is --newton-tol 1e-6, stald=True is --stald). Returns a dict: t (frames,),\n"
+      "x and v (frames, particles, dimension), energies (column -> (frames,)), stats (the\n"
+      "statistics every integrator reports), status, diverged, diverged_at, failure, t_final,\n"
+      "energy_scale, wall_seconds. A divergence or a solver failure is a result, not an error.");
+
+  m.def("integrators", [] { return from_json_text(integrator_table_json()["integrators"].dump()); },
+        "every registered integrator as `springlab list --json` lists it: name, order, family,\n"
+        "stability, colour, marker, ...");
+  m.def("scenes", [] {
+        py::list out;
+        for (const BuiltinScene& s : builtin_scenes()) {
+          py::dict scene, parameters;
+          scene["name"] = s.name;
+          scene["description"] = s.description;
+          for (const SceneParameter& p : s.parameters) {
+            parameters[py::str(p.name)] = py::make_tuple(p.default_value, p.meaning);
+          }
+          scene["parameters"] = parameters;
+          out.append(scene);
+        }
+        return out;
+      }, "the built-in scenes with their parameters (name -> (default, meaning))");
+
+  m.def(
+      "experiment",
+      [](const py::object& source, const std::string& out, int jobs) {
+        // A dict is written to a temporary file first (removed after the run).
+        py::object temporary = py::none();
+        std::string definition;
+        if (py::isinstance<py::dict>(source)) {
+          temporary = py::module_::import("tempfile").attr("NamedTemporaryFile")(
+              py::arg("mode") = "w", py::arg("suffix") = ".json");
+          temporary.attr("write")(to_json_text(source));
+          temporary.attr("flush")();
+          definition = temporary.attr("name").cast<std::string>();
+        } else {
+          definition = py::str(source).cast<std::string>();
+        }
+        ExperimentRunOptions options;
+        options.out_dir = out;
+        options.jobs = jobs;
+        options.progress = false;
+        ExperimentRunSummary summary;
+        {
+          py::gil_scoped_release release;
+          summary = run_experiment(definition, options);
+        }
+        py::dict result;
+        result["tasks_total"] = summary.tasks_total;
+        result["tasks_done"] = summary.tasks_done;
+        result["out"] = out;
+        return result;
+      },
+      py::arg("definition"), py::arg("out"), py::arg("jobs") = 1,
+      "Runs an experiment definition (a path to one of experiments/*.json, or a dict in that\n"
+      "format) into the folder `out`, as `springlab experiment` does; its tables are CSV files\n"
+      "there. Returns {tasks_total, tasks_done, out}.");
+}

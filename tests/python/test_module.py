@@ -1,0 +1,152 @@
+"""The Python module `springlab` against the command line it wraps.
+
+Runs give the same numbers as `springlab run` (digit for digit: one
+library), bad input raises springlab.Error with the line the command line
+prints after "springlab: error: ", and experiments write the same tables.
+Run by ctest with SPRINGLAB (the executable) set and the module on PYTHONPATH.
+"""
+import csv
+import json
+import os
+import subprocess
+import tempfile
+import unittest
+import warnings
+
+import numpy as np
+
+import springlab
+
+SPRINGLAB = os.environ["SPRINGLAB"]
+TEST_DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+
+
+def cli(*args):
+    return subprocess.run([SPRINGLAB, *args], capture_output=True, text=True)
+
+
+def cli_error(*args):
+    r = cli(*args)
+    assert r.returncode == 1, r
+    line = r.stderr.strip()
+    assert line.startswith("springlab: error: "), line
+    return line[len("springlab: error: "):]
+
+
+class Runs(unittest.TestCase):
+    def test_run_equals_the_command_line_digit_for_digit(self):
+        scene = springlab.load_scene("cloth", n=6)
+        run = springlab.run(scene, "implicit-euler", dt=0.02, t_end=0.3, newton_tol=1e-6)
+        with tempfile.TemporaryDirectory() as tmp:
+            energy = os.path.join(tmp, "e.csv")
+            r = cli("run", "cloth", "-p", "n=6", "--integrator", "implicit-euler", "--dt", "0.02",
+                    "--t-end", "0.3", "--newton-tol", "1e-6", "--energy", energy, "--json")
+            summary = json.loads(r.stdout)
+            with open(energy) as f:
+                rows = list(csv.DictReader(f))
+        np.testing.assert_array_equal(run["x"][-1], np.array(summary["final_state"]["x"]))
+        np.testing.assert_array_equal(run["v"][-1], np.array(summary["final_state"]["v"]))
+        np.testing.assert_array_equal(run["t"], [float(row["t"]) for row in rows])
+        self.assertEqual(list(run["energies"]), summary["energy_columns"])
+        for column in summary["energy_columns"]:
+            np.testing.assert_array_equal(run["energies"][column], [float(row[column]) for row in rows])
+        for key in ("steps", "force_evals", "jacobian_evals", "linear_solves", "newton_iterations",
+                    "factorizations", "rejected_steps"):
+            self.assertEqual(run["stats"][key], summary[key], key)
+        self.assertEqual(run["status"], "completed")
+        self.assertEqual(run["x"].shape, (16, 36, 3))
+
+    def test_scene_sources_agree(self):
+        builtin = springlab.load_scene("chain", n=5)
+        from_dict = springlab.load_scene(builtin.to_dict())
+        with tempfile.NamedTemporaryFile("w", suffix=".json") as f:
+            json.dump(builtin.to_dict(), f)
+            f.flush()
+            from_file = springlab.load_scene(f.name)
+        runs = [springlab.run(s, "verlet", dt=0.01, t_end=0.5) for s in (builtin, from_dict, from_file)]
+        for other in runs[1:]:
+            np.testing.assert_array_equal(runs[0]["x"], other["x"])
+        self.assertEqual(builtin.cells(), [(i, i + 1) for i in range(4)])
+
+    def test_every_keeps_every_kth_state_and_the_last(self):
+        scene = springlab.load_scene("oscillator")
+        run = springlab.run(scene, "rk4", dt=0.1, t_end=1.05, every=4)
+        np.testing.assert_allclose(run["t"], [0, 0.4, 0.8, 1.05])
+
+    def test_divergence_is_a_result(self):
+        run = springlab.run(springlab.load_scene("cloth", n=6), "explicit-euler", dt=0.05, t_end=5)
+        self.assertTrue(run["diverged"])
+        self.assertEqual(run["t"][-1], run["t_final"])
+        self.assertLess(run["t_final"], 5)
+
+    def test_an_option_the_method_does_not_read_is_a_warning(self):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            springlab.run(springlab.load_scene("oscillator"), "rk4", dt=0.1, t_end=0.2, rtol=1e-3)
+        self.assertEqual([str(w.message) for w in caught], ["rk4 does not use --rtol (ignored)"])
+
+    def test_lists_match_the_command_line(self):
+        listed = json.loads(cli("list", "--json").stdout)
+        self.assertEqual(springlab.integrators(), listed["integrators"])
+        self.assertEqual([s["name"] for s in springlab.scenes()],
+                         [s["name"] for s in listed["scenes"]])
+
+
+class Errors(unittest.TestCase):
+    def assert_same_error(self, call, *cli_args):
+        expected = cli_error(*cli_args)
+        with self.assertRaises(springlab.Error) as caught:
+            call()
+        self.assertEqual(str(caught.exception), expected)
+
+    def test_option_errors(self):
+        scene = springlab.load_scene("oscillator")
+        base = ["run", "oscillator", "--integrator"]
+        self.assert_same_error(lambda: springlab.run(scene, "rk4", dt=-1, t_end=1),
+                               *base, "rk4", "--dt", "-1", "--t-end", "1")
+        self.assert_same_error(lambda: springlab.run(scene, "rk5", dt=0.1, t_end=1),
+                               *base, "rk5", "--dt", "0.1", "--t-end", "1")
+        self.assert_same_error(lambda: springlab.run(scene, "rk4", dt=0.1, t_end=1, bogus=1),
+                               *base, "rk4", "--dt", "0.1", "--t-end", "1", "--bogus", "1")
+        self.assert_same_error(lambda: springlab.run(scene, "ida", dt=0.1, t_end=1, max_order=6),
+                               *base, "ida", "--dt", "0.1", "--t-end", "1", "--max-order", "6")
+        self.assert_same_error(lambda: springlab.run(scene, "implicit-euler", dt=0.1, t_end=1, newton_tol="x"),
+                               *base, "implicit-euler", "--dt", "0.1", "--t-end", "1", "--newton-tol", "x")
+
+    def test_scene_errors(self):
+        self.assert_same_error(lambda: springlab.load_scene("cloth", n=1), "run", "cloth", "-p", "n=1",
+                               "--integrator", "rk4", "--dt", "0.1", "--t-end", "1")
+        self.assert_same_error(lambda: springlab.load_scene("no-such-scene"), "run", "no-such-scene",
+                               "--integrator", "rk4", "--dt", "0.1", "--t-end", "1")
+        bad = os.path.join(TEST_DATA, "..", "malformed", "scenes")
+        case = sorted(f for f in os.listdir(bad) if f.endswith(".json"))[0]
+        path = os.path.join(bad, case)
+        self.assert_same_error(lambda: springlab.load_scene(path), "run", path,
+                               "--integrator", "rk4", "--dt", "0.1", "--t-end", "1")
+
+
+class Experiments(unittest.TestCase):
+    def test_experiment_writes_the_tables_the_command_line_writes(self):
+        definition = os.path.join(TEST_DATA, "experiments", "energy.json")
+        with tempfile.TemporaryDirectory() as tmp:
+            ours, theirs = os.path.join(tmp, "py"), os.path.join(tmp, "cli")
+            summary = springlab.experiment(definition, ours)
+            self.assertEqual(summary["tasks_done"], summary["tasks_total"])
+            self.assertEqual(cli("experiment", definition, "--out", theirs, "--jobs", "1").returncode, 0)
+            tables = sorted(f for f in os.listdir(theirs) if f.endswith(".csv"))
+            self.assertTrue(tables)
+            self.assertEqual(sorted(f for f in os.listdir(ours) if f.endswith(".csv")), tables)
+            def read(path):  # every column but the wall-clock times
+                with open(path) as f:
+                    rows = list(csv.DictReader(f))
+                return [{k: v for k, v in row.items() if "wall" not in k} for row in rows]
+            for table in tables:
+                self.assertEqual(read(os.path.join(ours, table)), read(os.path.join(theirs, table)), table)
+            with open(definition) as f:
+                as_dict = json.load(f)
+            from_dict = springlab.experiment(as_dict, os.path.join(tmp, "dict"))
+            self.assertEqual(from_dict["tasks_done"], summary["tasks_done"])
+
+
+if __name__ == "__main__":
+    unittest.main()
