@@ -11,6 +11,7 @@ std::unique_ptr<Experiment> make_damping_budget_experiment(const DefinitionObjec
 std::unique_ptr<Experiment> make_cloth_showcase_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_stability_region_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_step_energy_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -22,6 +23,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"cloth-showcase", &make_cloth_showcase_experiment},
       {"stability-region", &make_stability_region_experiment},
       {"step-energy", &make_step_energy_experiment},
+      {"motion", &make_motion_experiment},
   };
   return kinds;
 }

@@ -31,6 +31,10 @@
 #include "run_process.h"
 #include "experiments/experiment.h"
 #include "experiments/experiment_runner.h"
+#include "experiments/simulation.h"
+#include "models/builtin_scenes.h"
+#include "models/elastic_model.h"
+#include "models/springs.h"
 
 namespace springlab {
 namespace {
@@ -127,7 +131,8 @@ TEST(ExperimentDefinition, TopLevelMustBeAnObjectWithAKind) {
 TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
-            "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy)");
+            "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
+            "motion)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -585,6 +590,65 @@ TEST(ExperimentDefinition, StepEnergyRefusesAnUnknownStiffness) {
       {"integrator": "linear-implicit-euler", "stiffness": "soft"}],
       "cases": [{"scene": "cloth", "dt": 0.1, "t_end": 1}]})")),
             "def.json: runs[0].stiffness: expected \"exact\" or \"definite\"");
+}
+
+TEST(ExperimentKinds, MotionRecordsEveryFrameAndTheFramesPastTheBlowUp) {
+  const int n = 4;
+  const LoadedExperiment loaded =
+      parse({{"experiment", "motion"},
+             {"integrators", {"explicit-euler", "implicit-euler"}},
+             {"cases", {{{"scene", "cloth"}, {"parameters", {{"n", n}}}, {"dt", 0.02}, {"t_end", 0.4},
+                         {"every", 2}}}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 2u);
+  const Scene scene = make_builtin_scene("cloth", {{"n", std::to_string(n)}});
+  EXPECT_EQ(loaded.experiment->settings().at("cases").at(0).at("cells").size(),
+            scene.get<Springs>().size());
+
+  // Implicit Euler: t = 0, 0.04, ..., 0.4, every particle, and its last frame
+  // is the run's final state exactly.
+  const auto implicit = run_task(loaded, 1);
+  ASSERT_EQ(implicit[1].size(), 11u);
+  ASSERT_EQ(implicit[0].size(), 11u * n * n);
+  for (std::size_t k = 0; k < 11; ++k) {
+    EXPECT_NEAR(number(implicit[1][k].at("t")), 0.04 * static_cast<double>(k), 1e-15);
+    EXPECT_EQ(implicit[1][k].at("past_blowup"), "0");
+  }
+  const ElasticModel model(scene);
+  RunSettings s;
+  s.integrator = "implicit-euler";
+  s.dt = 0.02;
+  s.t_end = 0.4;
+  const RunResult r = simulate(model, s);
+  const Eigen::MatrixXd x = model.scene_positions(r.x_final);
+  for (int i = 0; i < n * n; ++i) {
+    const Record& row = implicit[0][10 * n * n + i];
+    EXPECT_EQ(row.at("i"), std::to_string(i));
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(number(row.at(std::string(1, "xyz"[a]))), x(i, a));
+  }
+  EXPECT_EQ(number(implicit[1][10].at("energy")), r.energy_final);
+
+  // Explicit Euler diverges: its good frames end before diverged_at, then up
+  // to three frames past the blow-up bound, all finite.
+  const auto euler = run_task(loaded, 0);
+  ASSERT_EQ(euler[2][0].at("status"), "diverged");
+  const double diverged_at = number(euler[2][0].at("diverged_at"));
+  int past = 0;
+  for (const Record& f : euler[1]) {
+    const double t = number(f.at("t"));
+    if (f.at("past_blowup") == "1") {
+      ++past;
+      EXPECT_GE(t, diverged_at - 1e-12);
+      EXPECT_LE(t, diverged_at + 3 * 2 * 0.02 + 1e-12);
+    } else {
+      EXPECT_LT(t, diverged_at);
+    }
+  }
+  EXPECT_GE(past, 1);
+  EXPECT_LE(past, 3);
+  EXPECT_EQ(euler[0].size(), euler[1].size() * n * n);
+  for (const Record& row : euler[0]) {
+    for (const char* axis : {"x", "y", "z"}) EXPECT_TRUE(std::isfinite(number(row.at(axis))));
+  }
 }
 
 TEST(ExperimentKinds, ClothShowcaseKeepsTheLastGoodState) {

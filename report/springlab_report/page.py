@@ -30,6 +30,12 @@ table.kv th { font-weight: normal; color: #555; }
                 white-space: pre-wrap; font-family: monospace; }
 pre { background: #f7f7f7; padding: 0.6em; overflow-x: auto; font-size: 0.82em; max-height: 40em; }
 details { margin: 0.4em 0; overflow-x: auto; } summary { cursor: pointer; }
+.player-panels { display: flex; flex-wrap: wrap; gap: 6px; }
+.player-panel { border: 1px solid #ddd; background: #fff; }
+.player-panel canvas { display: block; }
+.player-label { font-size: 0.8em; padding: 0 4px 3px; max-width: 292px; }
+.player-value { color: #555; }
+.player-controls { margin: 0.3em 0; } .player-slider { width: 30em; vertical-align: middle; }
 #report-status { color: #888; font-size: 0.8em; margin-top: 3em; }
 """
 

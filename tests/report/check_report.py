@@ -10,8 +10,10 @@ data-images-total / data-images-broken and the element id="report-status".
 Fails (exit 1, naming the problem) when an image did not load, when the page
 has no images, when the page shows an error (an element with class
 "report-error", which the script also adds for a script error or a failed
-image), when the marker is missing (the script did not run), or when Chromium
-is not installed or fails. Prints "report OK: N images" on success.
+image), when the marker is missing (the script did not run), when a motion
+player did not advance at least 5 frames or left a panel's canvas empty (its
+data-frames-drawn, data-panels and data-nonempty-panels, which player.js
+computes from the canvas pixels), or when Chromium is not installed or fails. Prints "report OK: N images" on success.
 """
 
 import argparse
@@ -44,6 +46,7 @@ class DomScan(HTMLParser):
         self.status_text = []
         self.in_status = 0
         self.images = 0
+        self.players = []      # attributes of each <figure class="player">
         self.errors = []       # texts of .report-error elements
         self._error_depth = []  # stack of open elements; index of .report-error openings
         self._stack = []
@@ -54,6 +57,8 @@ class DomScan(HTMLParser):
             self.body_attrs = a
         if tag == "img":
             self.images += 1
+        if tag == "figure" and "player" in (a.get("class") or "").split():
+            self.players.append(a)
         if tag in VOID:
             return
         classes = (a.get("class") or "").split()
@@ -158,6 +163,24 @@ def check(args):
         if total_n != scan.images:
             problems.append("the script counted %d images but the DOM has %d <img>"
                             % (total_n, scan.images))
+    # The players (report/springlab_report/player.js) must have advanced and
+    # drawn something in every panel (read from their canvas pixels).
+    for p in scan.players:
+        name = p.get("id", "a player")
+        drawn, panels, nonempty = (p.get("data-frames-drawn"), p.get("data-panels"),
+                                   p.get("data-nonempty-panels"))
+        try:
+            drawn, panels, nonempty = int(drawn), int(panels), int(nonempty)
+        except (TypeError, ValueError):
+            problems.append("%s did not run (frames drawn %r, panels %r, non-empty %r)"
+                            % (name, drawn, panels, nonempty))
+            continue
+        if drawn < 5:
+            problems.append("%s drew %d frames, expected it to play" % (name, drawn))
+        if panels == 0 or nonempty != panels:
+            problems.append("%s: %d of %d panels are empty" % (name, panels - nonempty, panels))
+    if args.expect_players and not scan.players:
+        problems.append("the page has no player (figure.player)")
     if args.screenshot:
         shot = Path(args.screenshot).resolve()
         shot.parent.mkdir(parents=True, exist_ok=True)
@@ -170,7 +193,7 @@ def check(args):
             print("screenshot: %s" % shot)
     if problems:
         raise Fail("\n  ".join(["%s:" % page] + problems))
-    return scan.images
+    return scan.images, len(scan.players)
 
 
 def main(argv=None):
@@ -178,15 +201,17 @@ def main(argv=None):
     ap.add_argument("--html", required=True, help="the report page (OUTDIR/index.html)")
     ap.add_argument("--chromium", help="Chromium binary (default: chromium on PATH)")
     ap.add_argument("--screenshot", help="also write a 1400x3000 screenshot PNG here")
+    ap.add_argument("--expect-players", action="store_true",
+                    help="fail when the page has no motion player")
     ap.add_argument("--timeout", type=float, default=120.0,
                     help="seconds to allow each Chromium run (default 120)")
     args = ap.parse_args(argv)
     try:
-        n = check(args)
+        n, players = check(args)
     except Fail as exc:
         sys.stderr.write("%s: FAIL: %s\n" % (PROG, exc))
         return 1
-    print("report OK: %d images" % n)
+    print("report OK: %d images, %d players playing" % (n, players))
     return 0
 
 

@@ -36,4 +36,4 @@ foreach(output IN LISTS outputs)
   endif()
 endforeach()
 run_step("the report in Chromium" "${PYTHON}" "${SOURCE_DIR}/tests/report/check_report.py"
-         --html "${WORK_DIR}/report/index.html" --chromium "${CHROMIUM}")
+         --html "${WORK_DIR}/report/index.html" --chromium "${CHROMIUM}" --expect-players)

@@ -7,6 +7,7 @@ with report/ on PYTHONPATH. Each test builds a small data directory by hand,
 with known answers, and reads back the figures' labels or the page's
 sentences."""
 
+import base64
 import json
 import math
 import re
@@ -146,6 +147,74 @@ class EnergySentences(unittest.TestCase):
         render(self.s)
         second = {p.name: p.read_bytes() for p in (self.s.dir / "out").iterdir()}
         self.assertEqual(first, second)
+
+
+def motion_data(scratch):
+    """A motion experiment: two particles joined by a spring; implicit Euler
+    runs 3 frames, explicit Euler diverges after 1 good frame and records one
+    frame past the blow-up bound far away."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "scene", "integrator", "dt", "t", "past_blowup", "i", "x", "y", "z"]
+    fcols = ["task", "scene", "integrator", "dt", "t", "past_blowup", "energy"]
+    rcols = ["task", "scene", "integrator", "dt", "status", "diverged_at", "steps", "wall_seconds",
+             "energy_initial", "energy_scale", "failure"]
+    scene = {"name": "pair", "dimension": 2, "gravity": [0, -9.81],
+             "particles": [{"x": [0, 0], "fixed": True}, {"x": [1, 0]}],
+             "springs": [{"i": 0, "j": 1, "k": 10}]}
+    scratch.json("motion.json", {
+        "name": "motion", "experiment": "motion", "title": "Motion",
+        "integrators": ["implicit-euler", "explicit-euler"],
+        "cases": [{"scene": scene, "dt": 0.1, "t_end": 0.2, "every": 1, "cells": [[0, 1]]}],
+        "tables": [{"file": "motion.csv", "suffix": "", "columns": cols},
+                   {"file": "motion-frames.csv", "suffix": "frames", "columns": fcols},
+                   {"file": "motion-runs.csv", "suffix": "runs", "columns": rcols}]})
+    rows, frames = [",".join(cols)], [",".join(fcols)]
+    for t, y in ((0, 0.0), (0.1, -0.5), (0.2, -1.0)):
+        for i, x in ((0, 0.0), (1, 1.0)):
+            rows.append("0,pair,implicit-euler,0.1,%r,0,%d,%r,%r,0" % (t, i, x, y if i else 0.0))
+        frames.append("0,pair,implicit-euler,0.1,%r,0,%r" % (t, -2.0 * t))
+    rows += ["1,pair,explicit-euler,0.1,0,0,0,0,0,0", "1,pair,explicit-euler,0.1,0,0,1,1,0,0",
+             "1,pair,explicit-euler,0.1,0.1,1,0,0,0,0", "1,pair,explicit-euler,0.1,0.1,1,1,1000,0,0"]
+    frames += ["1,pair,explicit-euler,0.1,0,0,0", "1,pair,explicit-euler,0.1,0.1,1,1e9"]
+    scratch.write("motion.csv", "\n".join(rows) + "\n")
+    scratch.write("motion-frames.csv", "\n".join(frames) + "\n")
+    scratch.write("motion-runs.csv", "\n".join([
+        ",".join(rcols),
+        "0,pair,implicit-euler,0.1,completed,,2,0.001,0,2,",
+        "1,pair,explicit-euler,0.1,diverged,0.1,1,0.001,0,2,"]) + "\n")
+
+
+class Motion(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def player(self, page):
+        found = re.search(r'<script type="application/json" class="player-data">(.*?)</script>',
+                          page, re.S)
+        self.assertIsNotNone(found)
+        return json.loads(found.group(1))
+
+    def test_frames_bounds_and_sentences_follow_the_data(self):
+        motion_data(self.s)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        data = self.player(page)
+        by_name = {p["name"]: p for p in data["panels"]}
+        ie, ee = by_name["implicit-euler"], by_name["explicit-euler"]
+        self.assertEqual(ie["t"], [0, 0.1, 0.2])
+        x = np.frombuffer(base64.b64decode(ie["x"]), dtype="<f4").reshape(3, 2, 3)
+        np.testing.assert_array_equal(x[:, 1, 1], [0.0, -0.5, -1.0])
+        self.assertEqual(ee["past"], [0, 1])
+        # The camera frames the good frames only: the explosion (x = 1000) leaves the picture.
+        self.assertEqual(data["bounds"], [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+        self.assertTrue(data["planar"])
+        self.assertEqual(data["fixed"], [0])
+        self.assertIn("explicit-euler diverged at t = 0.1 s", page)
+        self.assertIn("implicit-euler ran to t = 0.2 s; energy change at its last good frame "
+                      "-0.2 E_s", page)
 
 
 class Reading(unittest.TestCase):

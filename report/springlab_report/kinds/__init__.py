@@ -3,10 +3,11 @@ name in the settings file's "experiment"), TITLE, ABOUT (what theory says to
 look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
-from . import (cloth_showcase, convergence, damping_budget, energy, stability, stability_region,
-               step_energy, work_precision)
+from . import (cloth_showcase, convergence, damping_budget, energy, motion, stability,
+               stability_region, step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
+    motion,
     energy,
     stability,
     stability_region,

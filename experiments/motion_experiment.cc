@@ -1,0 +1,125 @@
+// motion: the runs the report's player shows moving (README "The report's
+// player"). Every integrator runs every case; each output frame records
+// every particle's position and the total energy. A run that diverges also
+// records, from a rerun that only a non-finite state stops, its first frames
+// past the blow-up bound: the player draws the explosion until it leaves the
+// picture, then marks the run. One task per (case, integrator).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "experiments/experiment.h"
+#include "experiments/experiment_support.h"
+#include "models/element_kind.h"
+
+namespace springlab {
+namespace {
+
+// Output frames recorded past the blow-up bound of a diverged run.
+constexpr int kPastBlowupFrames = 3;
+
+class MotionRows final : public Observer {
+ public:
+  MotionRows(const ElasticModel& model, std::string prefix, TaskOutput& out)
+      : model_(model), prefix_(std::move(prefix)), out_(out) {}
+  void observe(double t, const Vector& x, const Vector& v) override {
+    if (t < from_ || !x.allFinite() || !v.allFinite()) return;
+    const Eigen::MatrixXd p = model_.scene_positions(x);
+    for (Eigen::Index i = 0; i < p.rows(); ++i) {
+      Row row;
+      row.raw(prefix_).add(t).add(past_blowup_).add(static_cast<long>(i));
+      for (int r = 0; r < 3; ++r) row.add(r < p.cols() ? p(i, r) : 0.0);
+      out_.rows[0].push_back(row.str());
+    }
+    Row frame;
+    frame.raw(prefix_).add(t).add(past_blowup_).add(model_.energies(x, v).total());
+    out_.rows[1].push_back(frame.str());
+  }
+  // From now on: only frames at t >= from, marked past the blow-up bound.
+  void past_blowup_from(double from) {
+    from_ = from;
+    past_blowup_ = 1;
+  }
+
+ private:
+  const ElasticModel& model_;
+  std::string prefix_;
+  TaskOutput& out_;
+  double from_ = -std::numeric_limits<double>::infinity();
+  int past_blowup_ = 0;
+};
+
+class MotionExperiment final : public TimedCasesExperiment {
+ public:
+  explicit MotionExperiment(const DefinitionObject& d) : TimedCasesExperiment(d) {
+    // Every frame holds every particle: rows = frames x (particles + 1).
+    const double integrators = static_cast<double>(definition_integrators(d, "integrators", "all").size());
+    double rows = 0.0;
+    for (std::size_t k = 0; k < cases().size(); ++k) {
+      const TimedCase& c = cases()[k];
+      const double steps = static_cast<double>(make_time_grid(c.dt, c.t_end).steps);
+      const double frames = std::floor(steps / c.every) + 2.0 + kPastBlowupFrames;
+      rows += integrators * (frames * (static_cast<double>(c.scene.particles.size()) + 1.0) + 1.0);
+      check_output_rows(d, "cases[" + std::to_string(k) + "]", rows);
+    }
+  }
+
+  std::vector<TableSpec> tables() const override {
+    return {{"", {"scene", "integrator", "dt", "t", "past_blowup", "i", "x", "y", "z"}},
+            {"frames", {"scene", "integrator", "dt", "t", "past_blowup", "energy"}},
+            {"runs", {"scene", "integrator", "dt", "status", "diverged_at", "steps", "wall_seconds",
+                      "energy_initial", "energy_scale", "failure"}}};
+  }
+
+  TaskOutput run_task(std::size_t index) const override {
+    const Task t = task(index);
+    const ElasticModel model(t.c.scene);
+    TaskOutput out;
+    out.rows.resize(3);
+    MotionRows rows(model, t.prefix, out);
+    const RunResult r = simulate(model, t.run, {&rows});
+    if (r.status == RunStatus::kDiverged && r.diverged_at) {
+      // The same steps again, stopped only by a non-finite state, for the
+      // first output frames past the divergence.
+      // It ends at the kPastBlowupFrames-th output time after the last
+      // good state (output times: every K-th step of the grid).
+      const TimeGrid grid = make_time_grid(t.run.dt, t.run.t_end);
+      const long good_steps = std::lround(r.t_final / t.run.dt);
+      const long every = t.run.every;
+      const long end = (good_steps / every + kPastBlowupFrames) * every;
+      RunSettings past = t.run;
+      past.blowup = std::numeric_limits<double>::infinity();
+      past.t_end = grid.at(std::min(end, grid.steps));
+      rows.past_blowup_from(r.t_final + 1e-9 * t.run.dt);
+      simulate(model, past, {&rows});
+    }
+    Row run;
+    run.raw(t.prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps)
+        .add(r.wall_seconds).add(r.energy_initial).add(model.energy_scale()).add(r.failure);
+    out.rows[2].push_back(run.str());
+    return out;
+  }
+
+  nlohmann::json settings() const override {
+    nlohmann::json s = TimedCasesExperiment::settings();
+    // What the player draws of each case's scene: each element's particles
+    // (springs as lines, triangles, tetrahedra), and which are fixed.
+    for (std::size_t k = 0; k < cases().size(); ++k) {
+      nlohmann::json cells = nlohmann::json::array();
+      for (const Cell& c : scene_cells(cases()[k].scene)) {
+        cells.push_back(std::vector<int>(c.nodes.begin(), c.nodes.begin() + c.size));
+      }
+      s["cases"][k]["cells"] = std::move(cells);
+    }
+    return s;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject& d) {
+  return std::make_unique<MotionExperiment>(d);
+}
+
+}  // namespace springlab

@@ -1,0 +1,200 @@
+"""motion: the runs played side by side. One player per case (scene): a
+panel per integrator on one clock, play/pause and a time slider, each
+panel's energy change shown as it plays, a diverging run drawn until it
+leaves the picture and then marked, a failed run marked with its message,
+one fixed camera for every panel. The player (player.js, written for this
+page) reads the frames embedded in the page: no network access."""
+
+import base64
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..data import DataError
+from ..figures import esc, facts_html, fmt, note_html
+from .common import runs_table
+
+KIND = "motion"
+TITLE = "See it move"
+ABOUT = (
+    "Each scene is stepped at a game's frame time by every method, played on one clock with the "
+    "same camera in every panel. Theory: the explicit methods blow up within a few frames at this "
+    "step (the panel shows the explosion leaving the picture, then marks the run); implicit Euler "
+    "stays calm because it damps the fast motion; implicit midpoint and the discrete gradient "
+    "method keep the motion going; the fast solvers approximate implicit Euler's step on "
+    "springs. Under each panel: the energy change (E - E(0)) / E_s over time, and its value now.")
+
+PLAYER_JS = Path(__file__).resolve().parent.parent / "player.js"
+
+
+def _float32_b64(a):
+    return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode("ascii")
+
+
+def case_data(exp, ctx, case_index, case, positions, frames, runs):
+    """The JSON one player reads: frames per integrator, cells, camera bounds."""
+    scene = case.get("scene") or {}
+    name = scene.get("name")
+    dt = case.get("dt")
+    particles = scene.get("particles") or []
+    n = len(particles)
+    cells = case.get("cells") or []
+    fixed = [j for j, p in enumerate(particles) if isinstance(p, dict) and p.get("fixed") is True]
+    g = scene.get("gravity")
+    up = 1
+    if isinstance(g, list) and any(isinstance(v, (int, float)) and v for v in g):
+        up = int(np.argmax(np.abs(g)))
+    panels, good = [], []
+    names = [k[1] for k in positions if k[0] == name and k[2] == dt]
+    for integ in ctx.integrators.sort(names):
+        idx = positions[(name, integ, dt)]
+        t = positions.table.num("t")[idx]
+        past = np.array(positions.table.text("past_blowup"))[idx] == "1"
+        order = np.lexsort((positions.table.num("i")[idx], past, t))
+        idx, t, past = idx[order], t[order], past[order]
+        if len(idx) % n:
+            raise DataError(positions.table.path, None, "%s/%s: %d position rows is not a whole "
+                            "number of %d-particle frames" % (name, integ, len(idx), n))
+        xyz = np.stack([positions.table.num(c)[idx] for c in ("x", "y", "z")], axis=1)
+        frame_t, frame_past = t[::n], past[::n]
+        xyz = xyz.reshape(len(frame_t), n, 3)
+        good.append(xyz[~frame_past].reshape(-1, 3))
+        fidx = frames.get((name, integ, dt))
+        energy = np.full(len(frame_t), np.nan)
+        if fidx is not None:
+            ft = frames.table.num("t")[fidx]
+            fpast = np.array(frames.table.text("past_blowup"))[fidx] == "1"
+            fe = frames.table.num("energy")[fidx]
+            lookup = {(float(a), bool(b)): e for a, b, e in zip(ft, fpast, fe)}
+            energy = np.array([lookup.get((float(a), bool(b)), np.nan)
+                               for a, b in zip(frame_t, frame_past)])
+        run = runs.get((name, integ, dt), {})
+        panels.append({
+            "name": integ, "colour": ctx.integrators.colour(integ),
+            "status": run.get("status", "completed"),
+            "stopped_at": run.get("diverged_at"), "failure": run.get("failure") or "",
+            "E0": run.get("energy_initial"), "Es": run.get("energy_scale"),
+            "t": [float(v) for v in frame_t], "past": [int(v) for v in frame_past],
+            "energy": [None if not np.isfinite(e) else float(e) for e in energy],
+            "x": _float32_b64(xyz)})
+    pts = np.concatenate(good) if good else np.zeros((1, 3))
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    if len(pts) == 0:
+        pts = np.zeros((1, 3))
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    flat = bool(np.all(np.abs(pts[:, 2]) == 0.0)) if len(pts) else True
+    # Planes (the ground) whose normal is a coordinate axis: drawn as a
+    # rectangle over the bounds (others are not drawn).
+    planes = []
+    for plane in scene.get("planes") or []:
+        if not isinstance(plane, dict):
+            continue
+        normal, point = plane.get("normal"), plane.get("point")
+        if not (isinstance(normal, list) and isinstance(point, list)) or len(normal) != len(point):
+            continue
+        axes = [a for a, v in enumerate(normal) if v]
+        if len(axes) == 1 and len(point) >= 2:
+            planes.append({"axis": axes[0], "at": float(point[axes[0]])})
+    return {"id": "player-%s-%d" % (exp.name, case_index), "scene": name, "dt": dt, "planes": planes,
+            "every": case.get("every", 1), "particles": n, "cells": cells, "fixed": fixed,
+            "up": up, "planar": flat, "bounds": [[float(a) for a in lo], [float(b) for b in hi]],
+            "t_end": case.get("t_end"), "panels": panels}
+
+
+class Grouped:
+    """Row indices of a table grouped by (scene, integrator, dt as a number)."""
+
+    def __init__(self, table):
+        self.table = table
+        scene, integ, dt = table.text("scene"), table.text("integrator"), table.num("dt")
+        groups = {}
+        for r in range(len(table)):
+            groups.setdefault((scene[r], integ[r], float(dt[r])), []).append(r)
+        self.groups = {k: np.array(v) for k, v in groups.items()}
+
+    def __getitem__(self, key):
+        return self.groups[key]
+
+    def get(self, key):
+        return self.groups.get(key)
+
+    def __iter__(self):
+        return iter(self.groups)
+
+
+def render(exp, ctx):
+    positions = exp.table().require("scene", "integrator", "dt", "t", "past_blowup", "i", "x",
+                                    "y", "z")
+    frames_t = exp.table("frames")
+    runs_t = exp.table("runs")
+    frames = Grouped(frames_t.require("scene", "integrator", "dt", "t", "past_blowup", "energy")) \
+        if frames_t is not None else {}
+    runs = {}
+    if runs_t is not None:
+        runs_t.require("scene", "integrator", "dt", "status", "diverged_at", "energy_initial",
+                       "energy_scale")
+        status = runs_t.status()
+        failure = runs_t.text("failure") if runs_t.has("failure") else [""] * len(runs_t)
+        for r in range(len(runs_t)):
+            d = runs_t.num("diverged_at")[r]
+            runs[(runs_t.text("scene")[r], runs_t.text("integrator")[r], float(runs_t.num("dt")[r]))] = {
+                "status": status[r], "diverged_at": None if np.isnan(d) else float(d),
+                "energy_initial": float(runs_t.num("energy_initial")[r]),
+                "energy_scale": float(runs_t.num("energy_scale")[r]), "failure": failure[r]}
+    grouped = Grouped(positions)
+    cases = exp.setting("cases")
+    if not isinstance(cases, list) or not cases:
+        return note_html("No cases in %s: nothing to play." % esc(exp.settings_path.name))
+    out = ['<script>%s</script>\n' % PLAYER_JS.read_text(encoding="utf-8")]
+    for k, case in enumerate(cases):
+        data = case_data(exp, ctx, k, case, grouped, frames, runs)
+        if not data["panels"]:
+            out.append(note_html("%s: no frames in the data." % esc(str(data["scene"]))))
+            continue
+        out.append(player_html(data))
+        out.append(facts_html(case_facts(data)))
+    if runs_t is not None:
+        out.append(runs_table(runs_t, ctx.integrators, "Runs", [
+            ("status", "status", None), ("diverged_at", "stopped at t [s]", 4),
+            ("steps", "steps", 6), ("wall_seconds", "wall [s]", 3), ("failure", "message", None)]))
+    return "".join(out)
+
+
+def case_facts(data):
+    """Sentences under a player, computed from its frames."""
+    facts = []
+    for p in data["panels"]:
+        e = [v for v, past in zip(p["energy"], p["past"]) if v is not None and not past]
+        es = p["Es"] if p["Es"] else None
+        change = "" if not e or not es else " energy change at its last good frame %s E_s" % fmt(
+            (e[-1] - e[0]) / es, 2)
+        if p["status"] == "diverged":
+            facts.append("%s diverged at t = %s s;%s" % (esc(p["name"]), fmt(p["stopped_at"]), change))
+        elif p["status"] == "failed":
+            facts.append("%s failed at t = %s s: %s" % (esc(p["name"]), fmt(p["stopped_at"]),
+                                                        esc(p["failure"])))
+        else:
+            facts.append("%s ran to t = %s s;%s" % (esc(p["name"]), fmt(p["t"][-1]), change))
+    return facts
+
+
+def player_html(data):
+    panels = "".join(
+        '<div class="player-panel"><canvas class="player-view" width="300" height="250"></canvas>'
+        '<canvas class="player-energy" width="300" height="46"></canvas>'
+        '<div class="player-label"><span class="sw" style="background:%s"></span>%s '
+        '<span class="player-value"></span></div></div>' % (esc(p["colour"]), esc(p["name"]))
+        for p in data["panels"])
+    return ('<figure class="player" id="%s" data-frames-drawn="0">\n'
+            '<div class="player-controls"><button type="button" class="player-play">Pause</button> '
+            '<input type="range" class="player-slider" min="0" max="1000" value="0"> '
+            '<span class="player-time">t = 0 s</span></div>\n'
+            '<div class="player-panels">%s</div>\n'
+            '<figcaption>%s, dt = %s s: every %s step%s shown, %s panels on one clock and one '
+            'camera. Under each panel, (E - E(0)) / E_s over time; the dot is now.</figcaption>\n'
+            '<script type="application/json" class="player-data">%s</script>\n</figure>\n'
+            % (esc(data["id"]), panels, esc(str(data["scene"])), fmt(data["dt"], 4),
+               esc(str(data["every"])), "" if data["every"] == 1 else "s",
+               len(data["panels"]),
+               json.dumps(data, separators=(",", ":")).replace("</", "<\\/")))
