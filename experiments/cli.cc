@@ -320,6 +320,11 @@ int command_run(CommonOptions& common, const std::string& energy_path,
                    std::to_string(static_cast<long long>(times)) + " output times");
   }
   if (!vtk_dir.empty()) {
+    if (times > kMaxVtkFrames) {
+      throw UsageError("--vtk: would write " + std::to_string(static_cast<long long>(times)) +
+                       " frames, over the cap of " + std::to_string(kMaxVtkFrames) +
+                       ": write every K-th step with --every");
+    }
     check_rows("--vtk", times * static_cast<double>(scene.particles.size()),
                std::to_string(scene.particles.size()) + " points x " +
                    std::to_string(static_cast<long long>(times)) + " frames");

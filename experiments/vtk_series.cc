@@ -28,10 +28,6 @@ int vtk_type(int size) {
   }
 }
 
-// Frames are numbered with six digits (the signal handler removes them by
-// name): at most this many per series.
-constexpr int kMaxFrames = 1'000'000;
-
 bool is_frame_of(const std::string& name, const std::string& stem) {
   if (name.size() != stem.size() + 11 || name.compare(0, stem.size() + 1, stem + "_") != 0) return false;
   for (std::size_t i = stem.size() + 1; i < stem.size() + 7; ++i) {
@@ -125,8 +121,8 @@ void VtkSeries::remove_temporary() {
 
 void VtkSeries::observe(double t, const Vector& x, const Vector& v) {
   const int k = frames_.load();
-  if (k >= kMaxFrames) {
-    throw std::runtime_error(printable(dir_) + ": over " + std::to_string(kMaxFrames) +
+  if (k >= kMaxVtkFrames) {
+    throw std::runtime_error(printable(dir_) + ": over " + std::to_string(kMaxVtkFrames) +
                              " frames: write every K-th step with --every");
   }
   // Points and velocities in 3-D (VTK's points have three coordinates; a

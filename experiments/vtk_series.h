@@ -52,6 +52,10 @@ class VtkSeries final : public Observer {
   std::atomic<int> frames_{0};
 };
 
+// Frames are numbered with six digits: at most this many per series (the
+// command line refuses more before the run starts).
+inline constexpr int kMaxVtkFrames = 1'000'000;
+
 // The scene name as a file-name stem (see above); "scene" when empty.
 std::string vtk_stem(const std::string& scene_name);
 

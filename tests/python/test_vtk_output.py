@@ -144,6 +144,16 @@ class VtkOutput(unittest.TestCase):
             with open(path) as f:
                 self.assertEqual(f.read(), "keep")
 
+    def test_over_a_million_frames_is_refused_before_the_run(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "frames")
+            r = springlab("run", "oscillator", "--integrator", "rk4", "--dt", "1e-7", "--t-end", "0.2",
+                          "--vtk", out, check=False)
+            self.assertEqual(r.returncode, 1)
+            self.assertEqual(r.stderr, "springlab: error: --vtk: would write 2000001 frames, over the "
+                             "cap of 1000000: write every K-th step with --every\n")
+            self.assertEqual(os.listdir(tmp), [])
+
     def test_an_existing_folder_gets_the_new_series_only(self):
         with tempfile.TemporaryDirectory() as tmp:
             out = os.path.join(tmp, "frames")
