@@ -117,18 +117,6 @@ Json rows(const Eigen::MatrixXd& m) {
   return out;
 }
 
-Json stats_json(const IntegratorStats& s) {
-  return Json{{"steps", s.steps},
-              {"rejected_steps", s.rejected_steps},
-              {"force_evals", s.force_evals},
-              {"jacobian_evals", s.jacobian_evals},
-              {"linear_solves", s.linear_solves},
-              {"linear_iterations", s.linear_iterations},
-              {"newton_iterations", s.newton_iterations},
-              {"factorizations", s.factorizations},
-              {"nonlinear_failures", s.nonlinear_failures}};
-}
-
 // The integrator options of `run` and `stability`, with the names a method
 // lists in Integrator::options_read().
 const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
@@ -658,6 +646,18 @@ RunSettings run_settings_for(const ElasticModel& model, const std::string& integ
   common.check_against_method(model, notes != nullptr ? note_lines : std::cerr);
   if (notes != nullptr) *notes = note_lines.str();
   return common.run;
+}
+
+Json stats_json(const IntegratorStats& s) {
+  return Json{{"steps", s.steps},
+              {"rejected_steps", s.rejected_steps},
+              {"force_evals", s.force_evals},
+              {"jacobian_evals", s.jacobian_evals},
+              {"linear_solves", s.linear_solves},
+              {"linear_iterations", s.linear_iterations},
+              {"newton_iterations", s.newton_iterations},
+              {"factorizations", s.factorizations},
+              {"nonlinear_failures", s.nonlinear_failures}};
 }
 
 int run_cli(int argc, char** argv) {

@@ -2,6 +2,7 @@
 // commands' pieces can be reused by later tools (experiments, bindings).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,6 +31,9 @@ RunSettings run_settings_for(const ElasticModel& model, const std::string& integ
                              double t_end, int every,
                              const std::vector<std::pair<std::string, std::string>>& options,
                              std::string* notes = nullptr);
+
+// The statistics every integrator reports, by the names of `run --json`.
+nlohmann::ordered_json stats_json(const IntegratorStats& s);
 
 // Rows one output of a run may hold (README "Reliability"): about 1 GB of CSV.
 inline constexpr double kMaxOutputRows = 10'000'000;

@@ -25,7 +25,6 @@
 #include "experiments/experiment_runner.h"
 #include "experiments/integrator_table.h"
 #include "experiments/simulation.h"
-#include "models/builtin_scenes.h"
 #include "models/elastic_model.h"
 #include "models/element_kind.h"
 #include "models/scene.h"
@@ -111,18 +110,7 @@ py::dict run_result(const ElasticModel& model, const RunResult& r, const Recorde
     energies[py::str(columns[c])] = column;
   }
   out["energies"] = energies;
-  const IntegratorStats& s = r.stats;
-  py::dict stats;
-  stats["steps"] = s.steps;
-  stats["rejected_steps"] = s.rejected_steps;
-  stats["force_evals"] = s.force_evals;
-  stats["jacobian_evals"] = s.jacobian_evals;
-  stats["linear_solves"] = s.linear_solves;
-  stats["linear_iterations"] = s.linear_iterations;
-  stats["newton_iterations"] = s.newton_iterations;
-  stats["factorizations"] = s.factorizations;
-  stats["nonlinear_failures"] = s.nonlinear_failures;
-  out["stats"] = stats;
+  out["stats"] = from_json_text(stats_json(r.stats).dump());
   out["integrator"] = r.integrator;
   out["dt"] = r.dt;
   out["t_end"] = r.t_end;
@@ -230,20 +218,9 @@ PYBIND11_MODULE(springlab, m) {
   m.def("integrators", [] { return from_json_text(integrator_table_json()["integrators"].dump()); },
         "every registered integrator as `springlab list --json` lists it: name, order, family,\n"
         "stability, colour, marker, ...");
-  m.def("scenes", [] {
-        py::list out;
-        for (const BuiltinScene& s : builtin_scenes()) {
-          py::dict scene, parameters;
-          scene["name"] = s.name;
-          scene["description"] = s.description;
-          for (const SceneParameter& p : s.parameters) {
-            parameters[py::str(p.name)] = py::make_tuple(p.default_value, p.meaning);
-          }
-          scene["parameters"] = parameters;
-          out.append(scene);
-        }
-        return out;
-      }, "the built-in scenes with their parameters (name -> (default, meaning))");
+  m.def("scenes", [] { return from_json_text(integrator_table_json()["scenes"].dump()); },
+        "the built-in scenes as `springlab list --json` lists them: name, description and\n"
+        "parameters (each name, default, meaning)");
 
   m.def(
       "experiment",
