@@ -240,6 +240,14 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
     if (check.diverged(x, v, x_next, v_next)) {
       result.status = RunStatus::kDiverged;
       result.diverged_at = t;
+      // A finite state of infinite energy (a barrier's gap closed): say where.
+      if (model.has_forbidden_states() && x.allFinite()) {
+        const std::string where = model.forbidden_state(x);
+        if (!where.empty()) {
+          result.failure = where + "; use an implicit method (implicit-euler keeps every gap "
+                                   "open) or a smaller --dt";
+        }
+      }
       break;
     }
     t_good = t;

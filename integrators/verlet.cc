@@ -35,6 +35,8 @@ StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half
     return StepResult::success();
   }
 
+  if (dependence == VelocityDependence::kNonlinear) return nonlinear_closing_kick(t, h, v_half);
+
   // F(t, x, v) = F(t, x, 0) + D v with D = dF/dv(t, x).
   eval_force(t, x_, Vector::Zero(x_.size()), f0_);
   eval_jacobians(t, x_, v_half, nullptr, &dfdv_);
@@ -58,6 +60,36 @@ StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half
   }
   a_ = (f0_ + dfdv_ * v_).cwiseQuotient(m);
   return StepResult::success();
+}
+
+StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vector& v_half) {
+  const Vector& m = system().mass();
+  v_ = v_half;
+  for (int iteration = 0; iteration < options().max_newton; ++iteration) {
+    eval_force(t, x_, v_, f0_);
+    rhs_ = 0.5 * h * f0_ - m.cwiseProduct(v_ - v_half);  // -r(v)
+    eval_jacobians(t, x_, v_, nullptr, &dfdv_);
+    lhs_ = -0.5 * h * dfdv_;
+    lhs_.diagonal() += m;
+    ++mutable_stats().newton_iterations;
+    ++mutable_stats().factorizations;
+    if (!solver_.factorize(lhs_, MatrixKind::kPositiveDefinite)) {
+      return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
+    }
+    ++mutable_stats().linear_solves;
+    if (!solver_.solve(rhs_, dv_) || !dv_.allFinite()) {
+      return StepResult::failure("verlet: closing half-kick solve gave a non-finite velocity");
+    }
+    v_ += dv_;
+    if (dv_.lpNorm<Eigen::Infinity>() <= options().newton_tol) {
+      eval_force(t, x_, v_, f0_);
+      a_ = f0_.cwiseQuotient(m);
+      return StepResult::success();
+    }
+  }
+  return StepResult::failure("verlet: the closing half-kick's Newton did not converge in " +
+                             std::to_string(options().max_newton) +
+                             " iterations; try a smaller --dt or a larger --max-newton");
 }
 
 }  // namespace springlab

@@ -5,12 +5,16 @@
 //   v_{n+1}   = v_{n+1/2} + h/2 M^-1 F(t_{n+1}, x_{n+1}, v_{n+1})
 //
 // The closing half-kick is implicit in v_{n+1} when F depends on v (drag,
-// spring damping, wind). Every such force here is affine in v,
-// F(t, x, v) = F(t, x, 0) + dF/dv(x) v, so it is solved exactly:
+// spring damping, wind, friction). Where the forces are affine in v,
+// F(t, x, v) = F(t, x, 0) + dF/dv(x) v, it is solved exactly:
 //   (M - h/2 dF/dv) v_{n+1} = M v_{n+1/2} + h/2 F(t_{n+1}, x_{n+1}, 0)
 // (an element-wise division when dF/dv is diagonal, a sparse SPD solve with
-// spring damping). The end-of-step acceleration is reused by the next step,
-// so a step costs one force evaluation.
+// spring damping). Coulomb friction is not affine in v: there Newton solves
+//   r(v) = M (v - v_{n+1/2}) - h/2 F(t_{n+1}, x_{n+1}, v) = 0
+// with the matrix M - h/2 dF/dv(v) (SPD: friction's dF/dv is symmetric
+// negative semidefinite) to ||dv||_inf <= --newton-tol. The end-of-step
+// acceleration is reused by the next step, so a step costs one force
+// evaluation (affine) or one per Newton iteration.
 //
 // Order 2. Symplectic and time-reversible when F depends on x only: energy
 // stays bounded. On the undamped oscillator it is stable for w h <= 2.
@@ -32,9 +36,11 @@ class VelocityVerlet final : public Integrator {
  private:
   // Sets v_ from the closing half-kick and a_ to the acceleration at the new state.
   StepResult closing_kick(double t, double h, const Vector& v_half);
+  // The same by Newton, for forces that are not affine in v.
+  StepResult nonlinear_closing_kick(double t, double h, const Vector& v_half);
 
   bool have_acceleration_ = false;
-  Vector a_, f0_, rhs_, v_half_;
+  Vector a_, f0_, rhs_, v_half_, dv_;
   SparseMatrix dfdv_, lhs_;
   SparseDirectSolver solver_;
 };

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 
+#include "models/contact.h"
 #include "models/drag.h"
 #include "models/gravity.h"
 #include "models/springs.h"
@@ -19,6 +20,8 @@ namespace springlab {
 Scene build_beam(const std::map<std::string, double>& p);
 Scene build_membrane(const std::map<std::string, double>& p);
 Scene build_block(const std::map<std::string, double>& p);
+// builtin_contact.cc: the friction scene.
+Scene build_slope(const std::map<std::string, double>& p);
 
 namespace {
 
@@ -189,6 +192,17 @@ Scene build_cloth(const Values& p) {
     for (int c = 0; c + 2 < n; ++c) join(index(r, c), index(r, c + 2), k_bend);
   for (int r = 0; r + 2 < n; ++r)
     for (int c = 0; c < n; ++c) join(index(r, c), index(r + 2, c), k_bend);
+  if (p.at("ground") > 0.0) {
+    // The ground: the plane y = -ground under the hanging cloth, which
+    // swings down onto it and folds there (README "Contact with planes").
+    Plane plane;
+    plane.point = {0.0, -p.at("ground"), 0.0};
+    plane.friction = p.at("friction");
+    scene.block<Planes>().push_back(plane);
+    Contact& contact = scene.block<Contact>();
+    contact.model = p.at("contact") == 1.0 ? ContactModel::kBarrier : ContactModel::kPenalty;
+    contact.stiffness = p.at("contact_stiffness");
+  }
   return scene;
 }
 
@@ -294,7 +308,16 @@ const std::vector<Generator>& generators() {
                 Range::kPositive),
           param("size", 1, "side length [m]", Range::kPositive),
           param("drag", 0, "drag coefficient per particle [kg/s]", Range::kNonNegative),
-          param("wind", 0, "mean wind speed along +z, 0 for no wind [m/s]", Range::kAny)},
+          param("wind", 0, "mean wind speed along +z, 0 for no wind [m/s]", Range::kAny),
+          param("ground", 0,
+                "depth of a ground plane below the fixed corners, 0 for none [m] (the cloth "
+                "swings down onto it)",
+                Range::kNonNegative),
+          param("friction", 0.3, "Coulomb coefficient mu of the ground", Range::kNonNegative),
+          param("contact", 0, "ground contact: 0 penalty, 1 barrier (IPC)", Range::kZeroOrOne),
+          param("contact_stiffness", 1e4,
+                "penalty k_c or barrier kappa [N/m] (barrier distance 0.01 m)",
+                Range::kPositive)},
          build_cloth, cloth_counts, "n"},
         {{"membrane",
           "the cloth's set-up made of membrane triangles (in-plane stretch and shear, no "
@@ -317,6 +340,22 @@ const std::vector<Generator>& generators() {
                 Range::kNonNegative),
           param("amplitude", 0.1, "initial stretch beyond the rest length [m]", Range::kAny)},
          build_oscillator},
+        {{"slope",
+          "one particle resting on (or launched down) an inclined plane with Coulomb friction: "
+          "sticks when tan(angle) < friction, else slides at g (sin - friction cos)",
+          {}},
+         {param("angle", 30, "inclination of the plane [degrees], in [0, 90)", Range::kAny),
+          param("friction", 0.5, "Coulomb coefficient mu of the plane", Range::kNonNegative),
+          param("speed", 0, "initial speed down the slope [m/s]", Range::kAny),
+          param("mass", 1, "mass of the particle [kg]", Range::kPositive),
+          param("length", 10,
+                "length of the slope [m]: a fixed particle marks its foot (it sets the scene's "
+                "size in the energy scale E_s)",
+                Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("contact_stiffness", 1e5, "penalty stiffness k_c [N/m]", Range::kPositive),
+          param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
+         build_slope},
         {{"spring",
           "the course's example: a mass hanging from a fixed point by one spring, with gravity and "
           "drag",

@@ -1,7 +1,7 @@
 // Contact in a scene (README "Contact with planes"): the blocks of scene data of the "contact"
 // kind (contact_kind.cc: how contact is modelled) and the "plane" kind
 // (planes.cc: the half-spaces free particles must not enter, and their
-// force).
+// force; friction_force.cc: Coulomb friction along them).
 #pragma once
 
 #include <Eigen/Core>
@@ -15,7 +15,7 @@ namespace springlab {
 struct Plane {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
-  double friction = 0.0;  // Coulomb mu >= 0 (README "Contact with planes"; only 0 is accepted so far)
+  double friction = 0.0;  // Coulomb mu >= 0 (README "Contact with planes"; friction_force.cc)
 };
 using Planes = std::vector<Plane>;
 

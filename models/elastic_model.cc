@@ -178,6 +178,17 @@ double ElasticModel::position_potential(double t, const Vector& x) const {
   return sum;
 }
 
+std::string ElasticModel::forbidden_state(const Vector& x) const {
+  x_all_.head(dofs()) = x;
+  const Configuration c = stored_configuration(0.0);
+  for (const auto& term : terms_) {
+    if (!term->forbids_states()) continue;
+    std::string why = term->forbidden_state(c);
+    if (!why.empty()) return why;
+  }
+  return {};
+}
+
 double ElasticModel::velocity_potential(double t, const Vector& v) const {
   if (!derives_from_potentials_ || !reads_velocity_) return 0.0;  // no term has a W
   v_all_.head(dofs()) = v;

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "models/energies.h"
@@ -44,6 +45,9 @@ class ElasticModel final : public MechanicalSystem {
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
   bool has_forbidden_states() const override;
+  // Why x is a forbidden state (a barrier's gap closed), naming the element
+  // in scene terms; empty when it is not one.
+  std::string forbidden_state(const Vector& x) const;
   bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }

@@ -20,6 +20,7 @@ const ElementKind& triangle_kind();        // triangles.cc
 const ElementKind& tetrahedron_kind();     // tetrahedra.cc
 const ElementKind& contact_kind();         // contact_kind.cc
 const ElementKind& plane_kind();           // planes.cc
+const ElementKind& friction_kind();        // friction_force.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -33,6 +34,7 @@ const std::vector<const ElementKind*>& element_kinds() {
       &tetrahedron_kind(),
       &contact_kind(),
       &plane_kind(),
+      &friction_kind(),
   };
   return kinds;
 }

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
@@ -147,6 +148,10 @@ class ForceTerm {
   // Whether potential_energy can be +infinity (MechanicalSystem::
   // has_forbidden_states).
   virtual bool forbids_states() const { return false; }
+  // Where the configuration is forbidden (potential +infinity), one phrase
+  // naming the element in scene terms ("particle 3 is through plane 0 ...");
+  // empty where it is not.
+  virtual std::string forbidden_state(const Configuration&) const { return {}; }
   // A stiff conservative term that is a set of distance constraints
   // (MechanicalSystem::distance_constraints) appends them with internal
   // particle indices (b may be fixed: the model ties it to its place) and

@@ -17,13 +17,14 @@ namespace springlab {
 using Vector = Eigen::VectorXd;
 using SparseMatrix = Eigen::SparseMatrix<double>;  // column-major (CSC)
 
-// How F depends on v. Every force here is affine in v:
+// How F depends on v. Up to kCoupled, F is affine in v:
 // F(t, x, v) = F(t, x, 0) + dF/dv(t, x) v, which is what lets velocity Verlet
-// solve its closing half-kick exactly.
+// solve its closing half-kick in one linear solve.
 enum class VelocityDependence {
-  kNone,      // F depends on (t, x) only
-  kDiagonal,  // dF/dv is diagonal (drag, wind)
-  kCoupled,   // dF/dv couples particles (spring damping)
+  kNone,       // F depends on (t, x) only
+  kDiagonal,   // dF/dv is diagonal (drag, wind)
+  kCoupled,    // dF/dv couples particles (spring damping)
+  kNonlinear,  // F is not affine in v (Coulomb friction): dF/dv depends on v
 };
 
 // Which forces to evaluate. IMEX methods treat the stiff part (springs,

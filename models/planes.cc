@@ -1,46 +1,24 @@
 // The "plane" kind: a scene's "planes" (README "Contact with planes"), half-spaces the free
 // particles must not enter, and the contact force that keeps them out. With
 // d = n.(x_i - point) the gap of particle i to a plane, each pair stores
-//   penalty:  phi(d) = k_c/2 min(d, 0)^2                      (any d)
-//   barrier:  phi(d) = kappa b(d), b(d) = -(d - dhat)^2 ln(d / dhat)
-//             for 0 < d < dhat, 0 beyond, +infinity for d <= 0
-//             (IPC, Li et al. 2020: an implicit solver's line search on the
-//             incremental potential then never lets a gap close)
+// the penalty or barrier potential phi(d) of contact_potential.h (with the
+// barrier, an implicit solver's line search on the incremental potential
+// never lets a gap close)
 // so F_i = -phi'(d) n and dF_i/dx_i = -phi''(d) n n^T; phi'' >= 0 in both,
 // so dF/dx is already negative semidefinite (its definite part is itself).
 // The energy is the "contact" column.
 #include <cmath>
 #include <algorithm>
-#include <limits>
 #include <memory>
+#include <sstream>
+#include <string>
 
 #include "models/contact.h"
+#include "models/contact_potential.h"
 #include "models/element_kind.h"
 
 namespace springlab {
 namespace {
-
-struct Phi {
-  double value, slope, curvature;  // phi, phi', phi''
-};
-
-Phi penalty(double k, double d) {
-  if (d >= 0.0) return {0.0, 0.0, 0.0};
-  return {0.5 * k * d * d, k * d, k};
-}
-
-// b = -(d - h)^2 ln(d/h); b' = -2 (d - h) ln(d/h) - (d - h)^2 / d;
-// b'' = -2 ln(d/h) - 4 (d - h)/d + (d - h)^2 / d^2.
-Phi barrier(double kappa, double h, double d) {
-  if (d >= h) return {0.0, 0.0, 0.0};
-  if (!(d > 0.0)) {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    return {std::numeric_limits<double>::infinity(), nan, nan};
-  }
-  const double e = d - h, l = std::log(d / h);
-  return {-kappa * e * e * l, kappa * (-2.0 * e * l - e * e / d),
-          kappa * (-2.0 * l - 4.0 * e / d + e * e / (d * d))};
-}
 
 Planes unit_normals(Planes planes) {
   for (Plane& p : planes) p.normal.normalize();
@@ -49,23 +27,42 @@ Planes unit_normals(Planes planes) {
 
 class PlaneContactForce final : public ForceTerm {
  public:
-  PlaneContactForce(const Planes& planes, const Contact& contact, int dim, int free_particles)
-      : planes_(unit_normals(planes)), model_(contact.model), stiffness_(contact.stiffness_or_default()),
-        distance_(contact.distance_or_default()), dim_(dim), free_particles_(free_particles) {}
+  PlaneContactForce(const Planes& planes, const Contact& contact, const ParticleOrder& order)
+      : planes_(unit_normals(planes)), law_(contact), dim_(order.dim),
+        free_particles_(order.free_particles), scene_of_internal_(order.scene_of_internal) {}
 
   std::string_view name() const override { return "contact"; }
   bool conservative() const override { return true; }
-  bool forbids_states() const override { return model_ == ContactModel::kBarrier; }
+  bool forbids_states() const override { return law_.model == ContactModel::kBarrier; }
 
   void add_force(const Configuration& c, double* f) const override {
-    for_each_contact(c, [&](int i, const Plane& p, const Phi& phi) {
+    for_each_contact(c, [&](int i, const Plane& p, const ContactPhi& phi) {
       for (int r = 0; r < dim_; ++r) f[i * dim_ + r] -= phi.slope * p.normal[r];
     });
   }
 
+  // The barrier is +infinity at d <= 0: the first particle (in the model's
+  // order) through a plane.
+  std::string forbidden_state(const Configuration& c) const override {
+    if (law_.model != ContactModel::kBarrier) return {};
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      for (int i = 0; i < free_particles_; ++i) {
+        const double d = gap(c, planes_[k], i);
+        if (!(d > 0.0)) {
+          std::ostringstream why;
+          why << "particle " << scene_of_internal_[static_cast<std::size_t>(i)]
+              << " stepped through plane " << k << " (gap " << d
+              << " m), where the barrier's energy is infinite";
+          return why.str();
+        }
+      }
+    }
+    return {};
+  }
+
   double potential_energy(const Configuration& c) const override {
     double sum = 0.0;
-    for_each_contact(c, [&](int, const Plane&, const Phi& phi) { sum += phi.value; });
+    for_each_contact(c, [&](int, const Plane&, const ContactPhi& phi) { sum += phi.value; });
     return sum;
   }
 
@@ -76,7 +73,7 @@ class PlaneContactForce final : public ForceTerm {
 
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx == nullptr) return;
-    for_each_contact(c, [&](int i, const Plane& p, const Phi& phi) {
+    for_each_contact(c, [&](int i, const Plane& p, const ContactPhi& phi) {
       const BlockSlot& slot = slots_[static_cast<std::size_t>(i)];
       for (int col = 0; col < dim_; ++col) {
         for (int row = 0; row < dim_; ++row) {
@@ -93,37 +90,36 @@ class PlaneContactForce final : public ForceTerm {
   void for_each_contact(const Configuration& c, Visit visit) const {
     for (const Plane& p : planes_) {
       for (int i = 0; i < free_particles_; ++i) {
-        double d = 0.0;
-        for (int r = 0; r < dim_; ++r) d += p.normal[r] * (c.x[i * dim_ + r] - p.point[r]);
-        const Phi phi = model_ == ContactModel::kPenalty ? penalty(stiffness_, d)
-                                                         : barrier(stiffness_, distance_, d);
+        const ContactPhi phi = law_(gap(c, p, i));
         if (phi.value != 0.0 || phi.slope != 0.0) visit(i, p, phi);
       }
     }
   }
 
+  // d = n.(x_i - point)
+  double gap(const Configuration& c, const Plane& p, int i) const {
+    double d = 0.0;
+    for (int r = 0; r < dim_; ++r) d += p.normal[r] * (c.x[i * dim_ + r] - p.point[r]);
+    return d;
+  }
+
   Planes planes_;
-  ContactModel model_;
-  double stiffness_, distance_;
+  ContactLaw law_;
   int dim_, free_particles_;
+  std::vector<int> scene_of_internal_;
   std::vector<BlockSlot> slots_;
 };
 
 std::unique_ptr<ForceTerm> make_plane_force(const Scene& scene, const ParticleOrder& order) {
   const Planes& planes = scene.get<Planes>();
   if (planes.empty()) return nullptr;
-  return std::make_unique<PlaneContactForce>(planes, scene.get<Contact>(), order.dim,
-                                             order.free_particles);
+  return std::make_unique<PlaneContactForce>(planes, scene.get<Contact>(), order);
 }
 
 void check_plane(const Reporter& r, const std::string& where, const Plane& p, int dimension) {
   check_vector(r, field(where, "point"), p.point, dimension);
   check_vector(r, field(where, "normal"), p.normal, dimension);
   check_nonnegative(r, field(where, "friction"), p.friction);
-  if (p.friction != 0.0) {
-    r.fail(field(where, "friction"),
-           "Coulomb friction is not available yet: give 0 or leave it out");
-  }
 }
 
 void read_planes(const Json& document, const Reporter& r, Scene& scene) {

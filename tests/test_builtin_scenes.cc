@@ -100,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin, ::testing::ValuesIn(builtin_scen
 TEST(BuiltinScenesTest, AreTheSpecsSortedByName) {
   EXPECT_EQ(names_of(builtin_scenes()),
             (std::vector<std::string>{"beam", "block", "chain", "cloth", "membrane", "oscillator",
-                                      "spring"}));
+                                      "slope", "spring"}));
   EXPECT_FALSE(is_builtin_scene("xyz"));
   EXPECT_FALSE(is_builtin_scene("Chain"));
 }
@@ -126,7 +126,7 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
 
 TEST(BuiltinScenesTest, ExactMessages) {
   EXPECT_EQ(build_error("xyz", {}),
-            "unknown built-in scene 'xyz' (built-in scenes: beam, block, chain, cloth, membrane, oscillator, spring)");
+            "unknown built-in scene 'xyz' (built-in scenes: beam, block, chain, cloth, membrane, oscillator, slope, spring)");
   EXPECT_EQ(build_error("chain", {{"foo", "1"}}),
             "scene 'chain': unknown parameter 'foo' (parameters: n, k, mass, length, drag, g, "
             "horizontal, stretch)");

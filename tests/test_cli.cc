@@ -605,7 +605,7 @@ INSTANTIATE_TEST_SUITE_P(
 // ------------------------------------------------ 8. scene NAME round trip
 
 TEST_F(CliScene, EveryBuiltinRoundTripsThroughAFile) {
-  for (const char* name : {"chain", "cloth", "oscillator", "spring"}) {
+  for (const char* name : {"chain", "cloth", "oscillator", "slope", "spring"}) {
     SCOPED_TRACE(name);
     Json s = scene(name);
     EXPECT_TRUE(s.contains("dimension"));
@@ -632,7 +632,7 @@ TEST_F(CliList, NamesEveryIntegratorAndScene) {
   const Output o = run_ok({"list"});
   for (const char* name : {"explicit-euler", "symplectic-euler", "verlet", "rk4", "implicit-euler",
                            "linear-implicit-euler", "implicit-midpoint", "chain", "cloth",
-                           "oscillator", "spring"}) {
+                           "oscillator", "slope", "spring"}) {
     EXPECT_TRUE(contains(o.out, name)) << name << " not in\n" << o.out;
   }
 }

@@ -1,12 +1,18 @@
 // Contact with planes (README "Contact with planes"), checked against closed forms: the penalty's
 // resting gap, the explicit methods' stability limit with the contact
-// stiffness, energy through a bounce, and the barrier's positive gaps.
+// stiffness, energy through a bounce, the barrier's positive gaps, and
+// Coulomb friction on the `slope` scene under every integrator (stick,
+// slide, stopping distance, the work it dissipates).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "experiments/simulation.h"
+#include "integrators/registry.h"
+#include "models/builtin_scenes.h"
+#include "registry_suite.h"
 #include "experiments/stability.h"
 #include "models/contact.h"
 #include "models/elastic_model.h"
@@ -144,7 +150,175 @@ TEST(Contact, BarrierKeepsEveryGapPositiveForImplicitMethods) {
   s.integrator = "explicit-euler";
   s.dt = 1.0 / 30.0;
   s.t_end = 1.0;
-  EXPECT_EQ(simulate(model, s).status, RunStatus::kDiverged);
+  const RunResult r = simulate(model, s);
+  EXPECT_EQ(r.status, RunStatus::kDiverged);
+  // The divergence names the particle and the plane it stepped through.
+  EXPECT_NE(r.failure.find("particle 0 stepped through plane 0"), std::string::npos) << r.failure;
+}
+
+// The smallest height (coordinate 1) of any free particle at any output.
+class LowestHeight final : public Observer {
+ public:
+  explicit LowestHeight(int dim) : dim_(dim) {}
+  void observe(double, const Vector& x, const Vector&) override {
+    for (Eigen::Index k = 1; k < x.size(); k += dim_) lowest = std::min(lowest, x[k]);
+  }
+  double lowest = 1e300;
+
+ private:
+  int dim_;
+};
+
+// The barrier on the built-in scenes at dt = 1/30: the tetrahedral block
+// dropped on the ground (y = 0) and the cloth swinging onto a ground 0.6 m
+// below its corners (with friction 0.3). Every accepted state of every
+// implicit method keeps every gap positive; a method that cannot continue
+// stops with a result (failed, or diverged for the one linearized step),
+// never with a closed gap.
+TEST(Contact, BarrierKeepsTheBlockAndTheClothAboveTheGround) {
+  struct Case {
+    const char* scene;
+    std::vector<std::pair<std::string, std::string>> parameters;
+    double ground;
+    std::vector<const char*> integrators;
+  };
+  const std::vector<Case> cases = {
+      {"block", {{"contact", "1"}}, 0.0,
+       {"implicit-euler", "implicit-midpoint", "discrete-gradient", "linear-implicit-euler"}},
+      {"cloth", {{"n", "8"}, {"ground", "0.6"}, {"contact", "1"}}, -0.6,
+       {"implicit-euler", "implicit-midpoint", "discrete-gradient", "linear-implicit-euler",
+        "cvode-bdf", "ida"}},
+  };
+  for (const Case& c : cases) {
+    const ElasticModel model(make_builtin_scene(c.scene, c.parameters));
+    for (const char* name : c.integrators) {
+      RunSettings s;
+      s.integrator = name;
+      s.dt = 1.0 / 30.0;
+      s.t_end = 1.5;
+      LowestHeight height(model.dimension());
+      const RunResult r = simulate(model, s, {&height});
+      EXPECT_GT(height.lowest, c.ground) << c.scene << ", " << name;
+      if (std::string(name) == "implicit-euler") {
+        EXPECT_EQ(r.status, RunStatus::kCompleted) << c.scene << ": " << r.failure;
+        EXPECT_LT(height.lowest, c.ground + 0.01) << c.scene << ": it reached the barrier";
+      }
+    }
+  }
+}
+
+// Coulomb friction on the built-in `slope` (one particle on a plane inclined
+// at theta, g = 9.81, friction mu, smoothing eps_v = 1e-3 m/s), under every
+// registered integrator at a step of 1e-4 s. The fast solvers refuse contact
+// planes with a message; they are skipped.
+class Friction : public testing::RegistryTest {
+ protected:
+  static constexpr double kG = 9.81, kEps = 1e-3;
+  // Runs slope with `parameters`; false (and the test skipped) when the
+  // method refuses the scene.
+  bool run(const std::vector<std::pair<std::string, std::string>>& parameters, double t_end,
+           RunResult& r, Observer* observer = nullptr) {
+    const ElasticModel model(make_builtin_scene("slope", parameters));
+    RunSettings s = settings(1e-4, t_end);
+    s.options.newton_tol = 1e-10;
+    std::vector<Observer*> observers;
+    if (observer != nullptr) observers.push_back(observer);
+    r = simulate(model, s, observers);
+    if (r.status == RunStatus::kFailed && r.failure.find("does not solve yet") != std::string::npos) {
+      return false;
+    }
+    EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+    return r.status == RunStatus::kCompleted;
+  }
+  static double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
+};
+
+// Records the particle's speed at two times.
+class SpeedAt final : public Observer {
+ public:
+  SpeedAt(double t1, double t2) : t1_(t1), t2_(t2) {}
+  void observe(double t, const Vector&, const Vector& v) override {
+    if (std::abs(t - t1_) < 1e-9) v1 = v.head(2).norm();
+    if (std::abs(t - t2_) < 1e-9) v2 = v.head(2).norm();
+  }
+  double v1 = -1.0, v2 = -1.0;
+
+ private:
+  double t1_, t2_;
+};
+
+// tan(theta) < mu: the particle sticks. Smoothed friction balances the
+// weight's slope component m g sin(theta) = mu m g cos(theta) f1(y) at the
+// creep speed y with f1(y) = tan(theta) / mu, so
+//   y = eps_v (1 - sqrt(1 - tan(theta) / mu)) < eps_v:
+// it creeps at most eps_v t (README "Contact with planes"), and at this
+// speed within 1 %.
+TEST_P(Friction, SticksWhenTheSlopeIsBelowTheFrictionAngle) {
+  const double theta = radians(20.0), mu = 0.5, t = 2.0;
+  RunResult r;
+  const ElasticModel start(make_builtin_scene("slope", {{"angle", "20"}, {"friction", "0.5"}}));
+  if (!run({{"angle", "20"}, {"friction", "0.5"}}, t, r)) GTEST_SKIP() << r.failure;
+  const double creep = (r.x_final - start.initial_positions()).head(2).norm();
+  EXPECT_LE(creep, kEps * t);
+  const double y = kEps * (1.0 - std::sqrt(1.0 - std::tan(theta) / mu));
+  EXPECT_NEAR(creep / t, y, 0.01 * y);
+}
+
+// tan(theta) > mu: it slides with acceleration g (sin(theta) - mu cos(theta))
+// (within 1 %, from the speeds at t = 1 s and 2 s).
+TEST_P(Friction, SlidesWithTheCoulombAcceleration) {
+  const double theta = radians(30.0), mu = 0.3;
+  RunResult r;
+  SpeedAt speed(1.0, 2.0);
+  if (!run({{"angle", "30"}, {"friction", "0.3"}}, 2.0, r, &speed)) GTEST_SKIP() << r.failure;
+  const double a = kG * (std::sin(theta) - mu * std::cos(theta));
+  EXPECT_NEAR(speed.v2 - speed.v1, a, 0.01 * a);
+}
+
+// Launched at v0 along a level floor, it stops after v0^2 / (2 mu g)
+// (within 2 %), and stays stopped.
+TEST_P(Friction, StopsAfterTheCoulombDistance) {
+  const double mu = 0.4, v0 = 2.0, distance = v0 * v0 / (2.0 * mu * kG);
+  RunResult r;
+  if (!run({{"angle", "0"}, {"friction", "0.4"}, {"speed", "2"}}, 1.0, r)) {
+    GTEST_SKIP() << r.failure;
+  }
+  EXPECT_NEAR(r.x_final[0], distance, 0.02 * distance);
+  EXPECT_LT(std::abs(r.v_final[0]), kEps);
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, Friction, ::testing::ValuesIn(integrator_names()),
+                         testing::registry_test_name);
+
+// Friction's work is dissipation, like drag's: the mechanical energy falls
+// by the work of the nonconservative forces, integral of F.v (trapezoid
+// rule on the output grid; the sliding particle at 1e-4 s, implicit Euler's
+// own dissipation being O(h)), within 1 % of the energy lost.
+class PowerIntegral final : public Observer {
+ public:
+  explicit PowerIntegral(const ElasticModel& m) : model(m) {}
+  void observe(double t, const Vector& x, const Vector& v) override {
+    const double p = model.nonconservative_power(t, x, v);
+    if (t > 0.0) work += 0.5 * (t - t_last) * (p + p_last);
+    t_last = t;
+    p_last = p;
+  }
+  const ElasticModel& model;
+  double work = 0.0, t_last = 0.0, p_last = 0.0;
+};
+
+TEST(Contact, FrictionWorkIsTheEnergyLost) {
+  const ElasticModel model(make_builtin_scene("slope", {{"angle", "30"}, {"friction", "0.3"}}));
+  RunSettings s;
+  s.integrator = "rk4";
+  s.dt = 1e-4;
+  s.t_end = 1.0;
+  PowerIntegral power(model);
+  const RunResult r = simulate(model, s, {&power});
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  const double lost = r.energy_final - r.energy_initial;
+  ASSERT_LT(power.work, 0.0);
+  EXPECT_NEAR(lost, power.work, 0.01 * std::abs(power.work));
 }
 
 }  // namespace

@@ -1,0 +1,53 @@
+// The contact potential phi(d) of a particle at gap d = n.(x - point) from
+// a plane (README "Contact with planes"), with its first two derivatives:
+//   penalty:  phi(d) = k_c/2 min(d, 0)^2                      (any d)
+//   barrier:  phi(d) = kappa b(d), b(d) = -(d - dhat)^2 ln(d / dhat)
+//             for 0 < d < dhat, 0 beyond, +infinity for d <= 0
+//             (IPC, Li et al. 2020, eq. 6)
+// The plane's force on the particle is -phi'(d) n (planes.cc); its normal
+// magnitude f_n = -phi'(d) >= 0 is what Coulomb friction scales with
+// (friction_force.cc).
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include "models/contact.h"
+
+namespace springlab {
+
+struct ContactPhi {
+  double value, slope, curvature;  // phi, phi', phi''
+};
+
+inline ContactPhi penalty_phi(double k, double d) {
+  if (d >= 0.0) return {0.0, 0.0, 0.0};
+  return {0.5 * k * d * d, k * d, k};
+}
+
+// b = -(d - h)^2 ln(d/h); b' = -2 (d - h) ln(d/h) - (d - h)^2 / d;
+// b'' = -2 ln(d/h) - 4 (d - h)/d + (d - h)^2 / d^2.
+inline ContactPhi barrier_phi(double kappa, double h, double d) {
+  if (d >= h) return {0.0, 0.0, 0.0};
+  if (!(d > 0.0)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {std::numeric_limits<double>::infinity(), nan, nan};
+  }
+  const double e = d - h, l = std::log(d / h);
+  return {-kappa * e * e * l, kappa * (-2.0 * e * l - e * e / d),
+          kappa * (-2.0 * l - 4.0 * e / d + e * e / (d * d))};
+}
+
+// phi of the scene's contact model (its stiffness and distance resolved).
+struct ContactLaw {
+  ContactModel model = ContactModel::kPenalty;
+  double stiffness = 0.0, distance = 0.0;
+  explicit ContactLaw(const Contact& c)
+      : model(c.model), stiffness(c.stiffness_or_default()), distance(c.distance_or_default()) {}
+  ContactPhi operator()(double d) const {
+    return model == ContactModel::kPenalty ? penalty_phi(stiffness, d)
+                                           : barrier_phi(stiffness, distance, d);
+  }
+};
+
+}  // namespace springlab

@@ -1,0 +1,193 @@
+// The "friction" element kind: Coulomb friction of the planes (README
+// "Contact with planes"). It has no scene key of its own: it reads each
+// plane's "friction" mu (planes.cc) and the contact's "smoothing" eps_v
+// (contact_kind.cc).
+//
+// A free particle in contact with a plane (phi'(d) != 0, contact_potential.h)
+// is pushed out with the normal force magnitude f_n = -phi'(d) >= 0. Friction
+// opposes its tangential velocity v_t = T v, T = I - n n^T, with magnitude
+// mu f_n, smoothed below the speed eps_v as in IPC (Li et al. 2020, sec. 5.2):
+//   F = -mu f_n f1(y) v_t / y,   y = |v_t|,
+//   f1(y) = 2 y / eps_v - y^2 / eps_v^2 for y < eps_v, 1 beyond,
+// so F = -mu f_n g(y) v_t with g(y) = f1(y) / y = 2/eps_v - y/eps_v^2 (y < eps_v)
+// or 1/y. f1 is C^1 (f1'(eps_v) = 0) and f1(0) = 0: a particle that sticks
+// (|F_tangential| < mu f_n) creeps at the speed y where f1(y) = |F| / (mu f_n)
+// < 1, so below eps_v.
+// Jacobians (blocks of the particle with itself):
+//   dF/dv = -mu f_n (g T + (g'(y) / y) v_t v_t^T)   symmetric, negative
+//           semidefinite (g' / y = -1/(eps_v^2 y) or -1/y^3)
+//   dF/dx = -mu g v_t (df_n/dx)^T = mu g phi''(d) v_t n^T   (NOT symmetric)
+//
+// The normal force is not lagged: friction is a force of (x, v) like spring
+// damping, evaluated where every other force is, so the same closed forms
+// hold for every integrator. An implicit method therefore solves friction at
+// the step's end with f_n at the step's end; F then derives from no
+// potential, and Newton works on ||r|| with sparse LU (newton_velocity_
+// solver.h). IPC instead freezes f_n and the tangent basis at the step's start, which
+// makes friction a dissipation potential of v; that needs the step's start
+// inside the model, which models/ does not know. Friction's work F.v <= 0
+// is dissipation, counted with drag's in the damping budget.
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "models/contact.h"
+#include "models/contact_potential.h"
+#include "models/element_kind.h"
+
+namespace springlab {
+
+const ElementKind& plane_kind();  // planes.cc: a random plane for the instance
+
+namespace {
+
+// A plane with friction, its normal made unit.
+struct FrictionPlane {
+  Eigen::Vector3d point, normal;
+  double mu;
+};
+
+class FrictionForce final : public ForceTerm {
+ public:
+  FrictionForce(std::vector<FrictionPlane> planes, const Contact& contact, int dim,
+                int free_particles)
+      : planes_(std::move(planes)), law_(contact), eps_(contact.smoothing), dim_(dim),
+        free_particles_(free_particles) {}
+
+  std::string_view name() const override { return "friction"; }
+  bool conservative() const override { return false; }
+  VelocityDependence velocity_dependence() const override { return VelocityDependence::kNonlinear; }
+  bool symmetric_jacobians() const override { return false; }
+
+  void add_force(const Configuration& c, double* f) const override {
+    if (dim_ == 2) add_force_d<2>(c, f); else add_force_d<3>(c, f);
+  }
+
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    slots_.clear();
+    for (int i = 0; i < free_particles_; ++i) slots_.push_back(find_block_slot(pattern, dim_, i, i));
+  }
+
+  void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
+    if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
+  }
+
+ private:
+  // One particle in contact with one plane: what both the force and the
+  // Jacobians need.
+  template <int D>
+  struct Sliding {
+    double n[D], vt[D];
+    double y;           // |v_t|
+    double g;           // f1(y) / y
+    double g_over_y;    // g'(y) / y (0 at y = 0, where v_t v_t^T = 0)
+    ContactPhi phi;
+  };
+
+  // Calls visit(particle, mu, sliding) for every free particle in contact
+  // with a plane that has friction.
+  template <int D, typename Visit>
+  void for_each_contact(const Configuration& c, Visit visit) const {
+    for (const FrictionPlane& p : planes_) {
+      for (int i = 0; i < free_particles_; ++i) {
+        Sliding<D> s;
+        double d = 0.0, vn = 0.0;
+        for (int r = 0; r < D; ++r) {
+          s.n[r] = p.normal[r];
+          d += s.n[r] * (c.x[i * D + r] - p.point[r]);
+          vn += s.n[r] * c.v[i * D + r];
+        }
+        s.phi = law_(d);
+        if (s.phi.value == 0.0 && s.phi.slope == 0.0) continue;  // not in contact
+        double y2 = 0.0;
+        for (int r = 0; r < D; ++r) {
+          s.vt[r] = c.v[i * D + r] - vn * s.n[r];
+          y2 += s.vt[r] * s.vt[r];
+        }
+        s.y = std::sqrt(y2);
+        if (s.y < eps_) {
+          s.g = 2.0 / eps_ - s.y / (eps_ * eps_);
+          s.g_over_y = s.y > 0.0 ? -1.0 / (eps_ * eps_ * s.y) : 0.0;
+        } else {
+          s.g = 1.0 / s.y;
+          s.g_over_y = -1.0 / (y2 * s.y);
+        }
+        visit(i, p.mu, s);
+      }
+    }
+  }
+
+  template <int D>
+  void add_force_d(const Configuration& c, double* f) const {
+    for_each_contact<D>(c, [&](int i, double mu, const Sliding<D>& s) {
+      const double f_n = -s.phi.slope;
+      for (int r = 0; r < D; ++r) f[i * D + r] -= mu * f_n * s.g * s.vt[r];
+    });
+  }
+
+  template <int D>
+  void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
+    for_each_contact<D>(c, [&](int i, double mu, const Sliding<D>& s) {
+      const BlockSlot& slot = slots_[static_cast<std::size_t>(i)];
+      const double f_n = -s.phi.slope;
+      if (dfdv != nullptr) {
+        double B[D][D];
+        for (int r = 0; r < D; ++r) {
+          for (int q = 0; q < D; ++q) {
+            const double T_rq = (r == q ? 1.0 : 0.0) - s.n[r] * s.n[q];
+            B[r][q] = -mu * f_n * (s.g * T_rq + s.g_over_y * s.vt[r] * s.vt[q]);
+          }
+        }
+        add_block<D>(dfdv, slot, B, 1.0);
+      }
+      if (dfdx != nullptr) {
+        double B[D][D];
+        for (int r = 0; r < D; ++r) {
+          for (int q = 0; q < D; ++q) B[r][q] = mu * s.g * s.phi.curvature * s.vt[r] * s.n[q];
+        }
+        add_block<D>(dfdx, slot, B, 1.0);
+      }
+    });
+  }
+
+  std::vector<FrictionPlane> planes_;
+  ContactLaw law_;
+  double eps_;
+  int dim_, free_particles_;
+  std::vector<BlockSlot> slots_;
+};
+
+std::unique_ptr<ForceTerm> make_friction_force(const Scene& scene, const ParticleOrder& order) {
+  std::vector<FrictionPlane> planes;
+  for (const Plane& p : scene.get<Planes>()) {
+    if (p.friction > 0.0) planes.push_back({p.point, p.normal.normalized(), p.friction});
+  }
+  if (planes.empty()) return nullptr;
+  return std::make_unique<FrictionForce>(std::move(planes), scene.get<Contact>(), order.dim,
+                                         order.free_particles);
+}
+
+// Gives every plane a friction coefficient (adding a random plane when the
+// scene has none) and a smoothing speed comparable to the random
+// velocities, so that particles both stick (y < eps_v) and slide.
+void add_random_friction(Scene& scene, std::mt19937& rng, RandomStates states) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  if (scene.get<Planes>().empty()) plane_kind().add_random(scene, rng, states);
+  for (Plane& p : scene.block<Planes>()) p.friction = 0.2 + 0.6 * u(rng);
+  scene.block<Contact>().smoothing = 0.4 + 0.6 * u(rng);
+}
+
+}  // namespace
+
+const ElementKind& friction_kind() {
+  static const ElementKind kind = {
+      .name = "friction",
+      .refers_to_particles = true,
+      .make = make_friction_force,
+      .add_random = add_random_friction,
+  };
+  return kind;
+}
+
+}  // namespace springlab
