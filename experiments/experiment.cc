@@ -13,7 +13,7 @@
 namespace springlab {
 
 Row& Row::add(const std::string& text) {
-  if (!text_.empty()) text_ += ',';
+  separate();
   // Names here never contain commas or quotes, but a scene file's name might.
   if (text.find_first_of(",\"\n") != std::string::npos) {
     text_ += '"';
@@ -26,25 +26,25 @@ Row& Row::add(const std::string& text) {
 }
 
 Row& Row::add(double value) {
-  if (!text_.empty()) text_ += ',';
+  separate();
   text_ += format_number(value);
   return *this;
 }
 
 Row& Row::add(long value) {
-  if (!text_.empty()) text_ += ',';
+  separate();
   text_ += std::to_string(value);
   return *this;
 }
 
 Row& Row::raw(const std::string& csv_fields) {
-  if (!text_.empty()) text_ += ',';
+  separate();
   text_ += csv_fields;
   return *this;
 }
 
 Row& Row::add_empty() {
-  text_ += ',';
+  separate();
   return *this;
 }
 

@@ -43,7 +43,14 @@ class Row {
   const std::string& str() const { return text_; }
 
  private:
+  // A comma before every field but the first (which may be empty: an
+  // unnamed scene).
+  void separate() {
+    if (started_) text_ += ',';
+    started_ = true;
+  }
   std::string text_;
+  bool started_ = false;
 };
 
 class Experiment {

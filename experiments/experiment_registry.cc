@@ -12,6 +12,7 @@ std::unique_ptr<Experiment> make_cloth_showcase_experiment(const DefinitionObjec
 std::unique_ptr<Experiment> make_stability_region_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_step_energy_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -24,6 +25,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"stability-region", &make_stability_region_experiment},
       {"step-energy", &make_step_energy_experiment},
       {"motion", &make_motion_experiment},
+      {"contact", &make_contact_experiment},
   };
   return kinds;
 }

@@ -64,10 +64,15 @@ StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half
 
 StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vector& v_half) {
   const Vector& m = system().mass();
+  // r(v) = M (v - v_half) - h/2 F(t, x', v); returns ||r||.
+  auto residual = [&](const Vector& v, Vector& f, Vector& r) {
+    eval_force(t, x_, v, f);
+    r = m.cwiseProduct(v - v_half) - 0.5 * h * f;
+    return r.norm();
+  };
   v_ = v_half;
+  double r_norm = residual(v_, f0_, rhs_);
   for (int iteration = 0; iteration < options().max_newton; ++iteration) {
-    eval_force(t, x_, v_, f0_);
-    rhs_ = 0.5 * h * f0_ - m.cwiseProduct(v_ - v_half);  // -r(v)
     eval_jacobians(t, x_, v_, nullptr, &dfdv_);
     lhs_ = -0.5 * h * dfdv_;
     lhs_.diagonal() += m;
@@ -77,12 +82,26 @@ StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vect
       return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
     }
     ++mutable_stats().linear_solves;
-    if (!solver_.solve(rhs_, dv_) || !dv_.allFinite()) {
+    if (!solver_.solve(-rhs_, dv_) || !dv_.allFinite()) {
       return StepResult::failure("verlet: closing half-kick solve gave a non-finite velocity");
     }
-    v_ += dv_;
-    if (dv_.lpNorm<Eigen::Infinity>() <= options().newton_tol) {
-      eval_force(t, x_, v_, f0_);
+    // Backtracking on ||r||: friction's smoothing makes r only C^1, and a
+    // full Newton update can overshoot the kink at |v_t| = eps_v and cycle.
+    // The update descends ||r||^2 (J is r's exact Jacobian), so some
+    // fraction of it lowers ||r||.
+    double alpha = 1.0, r_try = 0.0;
+    for (int halving = 0; halving < 40; ++halving, alpha *= 0.5) {
+      v_try_ = v_ + alpha * dv_;
+      r_try = residual(v_try_, f_try_, r_try_);
+      if (r_try < r_norm) break;
+    }
+    const double update = alpha * dv_.lpNorm<Eigen::Infinity>();
+    if (!(r_try < r_norm) && update > options().newton_tol) break;  // no descent left
+    v_.swap(v_try_);
+    f0_.swap(f_try_);
+    rhs_.swap(r_try_);
+    r_norm = r_try;
+    if (update <= options().newton_tol) {
       a_ = f0_.cwiseQuotient(m);
       return StepResult::success();
     }

@@ -12,7 +12,8 @@
 // spring damping). Coulomb friction is not affine in v: there Newton solves
 //   r(v) = M (v - v_{n+1/2}) - h/2 F(t_{n+1}, x_{n+1}, v) = 0
 // with the matrix M - h/2 dF/dv(v) (SPD: friction's dF/dv is symmetric
-// negative semidefinite) to ||dv||_inf <= --newton-tol. The end-of-step
+// negative semidefinite) and a backtracking search on ||r||, to
+// ||dv||_inf <= --newton-tol. The end-of-step
 // acceleration is reused by the next step, so a step costs one force
 // evaluation (affine) or one per Newton iteration.
 //
@@ -40,7 +41,7 @@ class VelocityVerlet final : public Integrator {
   StepResult nonlinear_closing_kick(double t, double h, const Vector& v_half);
 
   bool have_acceleration_ = false;
-  Vector a_, f0_, rhs_, v_half_, dv_;
+  Vector a_, f0_, rhs_, v_half_, dv_, v_try_, f_try_, r_try_;
   SparseMatrix dfdv_, lhs_;
   SparseDirectSolver solver_;
 };

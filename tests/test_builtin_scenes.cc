@@ -120,8 +120,12 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
   EXPECT_EQ(parameter_names("oscillator"), (Names{"k", "mass", "rest", "amplitude"}));
   EXPECT_EQ(parameter_names("chain"),
             (Names{"n", "k", "mass", "length", "drag", "g", "horizontal", "stretch"}));
+  // The spec's parameters first, then the ground's (README "Built-in scenes").
   EXPECT_EQ(parameter_names("cloth"),
-            (Names{"n", "k", "k_shear", "k_bend", "mass", "size", "drag", "wind"}));
+            (Names{"n", "k", "k_shear", "k_bend", "mass", "size", "drag", "wind", "ground",
+                   "friction", "contact", "contact_stiffness"}));
+  EXPECT_EQ(parameter_names("slope"), (Names{"angle", "friction", "speed", "mass", "length", "g",
+                                             "contact_stiffness", "smoothing"}));
 }
 
 TEST(BuiltinScenesTest, ExactMessages) {

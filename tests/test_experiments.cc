@@ -132,7 +132,7 @@ TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
-            "motion)");
+            "motion, contact)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -590,6 +590,66 @@ TEST(ExperimentDefinition, StepEnergyRefusesAnUnknownStiffness) {
       {"integrator": "linear-implicit-euler", "stiffness": "soft"}],
       "cases": [{"scene": "cloth", "dt": 0.1, "t_end": 1}]})")),
             "def.json: runs[0].stiffness: expected \"exact\" or \"definite\"");
+}
+
+// A row's first field may be empty (an unnamed scene): it still counts.
+TEST(ExperimentRows, AnEmptyFirstFieldKeepsItsComma) {
+  EXPECT_EQ(Row().add("").add("rk4").add(0.5).str(), ",rk4,0.5");
+  EXPECT_EQ(Row().add_empty().add(2L).add_empty().str(), ",2,");
+  EXPECT_EQ(Row().raw("a,b").add("c").str(), "a,b,c");
+}
+
+// contact: the closed form of each case is read off its scene (the slope's
+// angle, friction and smoothing; the drop's height, mass and stiffness), and
+// a run's measurement is compared with it: implicit Euler at 1e-3 s sticks,
+// slides and stops within 1 %, and the bounce of RK4 at 1e-4 s reaches the
+// energy-balance depth within 1 %. A case without planes is refused.
+TEST(ExperimentKinds, ContactMeasuresEachCaseAgainstItsClosedForm) {
+  const double g = 9.81, pi = 3.14159265358979323846;
+  const Json drop = {{"dimension", 2}, {"gravity", {0, -g}},
+                     {"contact", {{"stiffness", 1e4}}},
+                     {"planes", {{{"point", {0, 0}}, {"normal", {0, 1}}}}},
+                     {"particles", {{{"x", {0, 0.1}}, {"mass", 2}}, {{"x", {0, 0}}, {"fixed", true}}}},
+                     {"springs", Json::array()}};
+  const ScratchDir dir("contact");
+  const std::string drop_file = dir.write("drop.json", drop);
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "contact"},
+       {"integrators", {"implicit-euler", "rk4"}},
+       {"cases",
+        {{{"scene", "slope"}, {"parameters", {{"angle", 20}, {"friction", 0.5}}}, {"dt", 1e-3},
+          {"t_end", 1}},
+         {{"scene", "slope"}, {"parameters", {{"angle", 30}, {"friction", 0.3}}}, {"dt", 1e-3},
+          {"t_end", 1}},
+         {{"scene", "slope"}, {"parameters", {{"angle", 0}, {"friction", 0.4}, {"speed", 2}}},
+          {"dt", 1e-3}, {"t_end", 1}},
+         {{"scene", drop_file}, {"dt", 1e-4}, {"t_end", 0.5}}}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 8u);
+  const Json cases = loaded.experiment->settings().at("cases");
+  const double t20 = std::tan(20 * pi / 180);
+  EXPECT_EQ(cases[0].at("regime"), "stick");
+  EXPECT_NEAR(cases[0].at("theory").get<double>(), 1e-3 * (1 - std::sqrt(1 - t20 / 0.5)), 1e-15);
+  EXPECT_EQ(cases[1].at("regime"), "slide");
+  EXPECT_NEAR(cases[1].at("theory").get<double>(),
+              g * (std::sin(30 * pi / 180) - 0.3 * std::cos(30 * pi / 180)), 1e-12);
+  EXPECT_EQ(cases[2].at("regime"), "stop");
+  EXPECT_NEAR(cases[2].at("theory").get<double>(), 4.0 / (2 * 0.4 * g), 1e-12);
+  const double w = 2 * g;  // m g
+  EXPECT_EQ(cases[3].at("regime"), "bounce");
+  EXPECT_NEAR(cases[3].at("theory").get<double>(), (w + std::sqrt(w * w + 2e4 * w * 0.1)) / 1e4,
+              1e-15);
+  for (std::size_t task : {0u, 2u, 4u, 7u}) {  // implicit Euler on the slope, RK4 on the drop
+    const auto rows = run_task(loaded, task);
+    ASSERT_EQ(rows[0].size(), 1u);
+    const Record& row = rows[0][0];
+    EXPECT_EQ(row.at("status"), "completed") << task;
+    const double theory = number(row.at("theory"));
+    EXPECT_NEAR(number(row.at("measured")), theory, 0.01 * theory) << row.at("regime");
+  }
+  EXPECT_EQ(definition_error({{"experiment", "contact"},
+                              {"cases", {{{"scene", "spring"}, {"dt", 0.01}, {"t_end", 1}}}}}),
+            "def.json: cases: case 0: the scene has no planes, and the contact experiment "
+            "measures contact");
 }
 
 TEST(ExperimentKinds, MotionRecordsEveryFrameAndTheFramesPastTheBlowUp) {

@@ -217,6 +217,62 @@ class Motion(unittest.TestCase):
                       "-0.2 E_s", page)
 
 
+def contact_data(scratch):
+    """A contact experiment: the slide case (theory a = 2) over three steps,
+    implicit Euler within 1 % at every step, symplectic Euler only at the
+    smallest, explicit Euler failing at the largest; a soft and a stiff
+    bounce for the cost sentence."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "case", "scene", "integrator", "dt", "status", "t_final", "regime", "measured",
+            "theory", "min_gap", "energy_change", "steps", "newton_iterations", "wall_seconds",
+            "failure"]
+    scratch.json("contact.json", {"name": "contact", "experiment": "contact", "title": "Contact",
+                                  "tables": [{"file": "contact.csv", "suffix": "",
+                                              "columns": cols}]})
+    rows = [",".join(cols)]
+    measured = {"implicit-euler": (2.0, 2.001, 1.99), "symplectic-euler": (2.01, 2.5, 3.0),
+                "explicit-euler": (2.01, 2.2, None)}
+    task = 0
+    for k, dt in enumerate((0.001, 0.01, 0.1)):
+        for name, values in measured.items():
+            value = values[k]
+            status = "completed" if value is not None else "failed"
+            rows.append("%d,%d,slope,%s,%r,%s,%s,slide,%s,2,-1e-4,-1,%d,%d,0.01,%s" % (
+                task, k, name, dt, status, "1" if value is not None else "0.5",
+                repr(value) if value is not None else "nan", round(1 / dt), 0,
+                "" if value is not None else "no convergence"))
+            task += 1
+    for k, (scene, work) in enumerate((("bounce-soft", 100), ("bounce-stiff", 300))):
+        for name in measured:
+            rows.append("%d,%d,%s,%s,0.01,completed,1,bounce,0.0015,0.0015,-0.0015,0,%d,0,0.01,"
+                        % (task, 3 + k, scene, name, work))
+            task += 1
+    scratch.write("contact.csv", "\n".join(rows) + "\n")
+
+
+class Contact(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_sentences_follow_the_sweep(self):
+        contact_data(self.s)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        facts = re.findall(r"<li>([^<]*)</li>", page)
+        self.assertIn("slope: slides above the friction angle (acceleration) — within 1 % at "
+                      "every step of the sweep (up to 0.1 s): implicit-euler; within 1 % at every "
+                      "step up to: explicit-euler (0.001 s), symplectic-euler (0.001 s).", facts)
+        self.assertIn("Work on the stiff floor relative to the soft one, at the largest step (or "
+                      "output interval) both runs completed: explicit-euler 3 x (dt = 0.01 s), "
+                      "implicit-euler 3 x (dt = 0.01 s), symplectic-euler 3 x (dt = 0.01 s).",
+                      facts)
+        self.assertTrue((self.s.dir / "out" / "contact.png").is_file())
+        self.assertTrue((self.s.dir / "out" / "contact-cost.png").is_file())
+
+
 class Reading(unittest.TestCase):
     def setUp(self):
         self.s = Scratch()

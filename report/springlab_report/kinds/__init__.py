@@ -3,7 +3,7 @@ name in the settings file's "experiment"), TITLE, ABOUT (what theory says to
 look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
-from . import (cloth_showcase, convergence, damping_budget, energy, motion, stability,
+from . import (cloth_showcase, contact, convergence, damping_budget, energy, motion, stability,
                stability_region, step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
@@ -14,6 +14,7 @@ KINDS = {m.KIND: m for m in (
     convergence,
     work_precision,
     damping_budget,
+    contact,
     cloth_showcase,
     step_energy,
 )}
