@@ -41,6 +41,9 @@ constexpr double kArmijo = 1e-4;
 constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();
 // The longest update tried along a direction of negative curvature, m/s.
 constexpr double kMaxEscape = 10.0;
+// The line search starts at this fraction of the step that would close a
+// barrier's first gap (IPC's step cap: short of contact, never at it).
+constexpr double kGapCap = 0.9;
 
 }  // namespace
 
@@ -421,6 +424,20 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       x_end_ = x_ + s.end * (xs_ - x_);
       return std::isfinite(system().position_potential(t_ + h, x_end_));
     };
+    // The fraction of dv at which the first gap of the stage -- or, for the
+    // midpoint methods, of the step's end -- would close (+infinity: none
+    // closes; MechanicalSystem::admissible_fraction).
+    auto gap_fraction = [&] {
+      x_cap_ = x_ + h * (s.a * v_ + s.b * v);
+      dx_cap_ = (h * s.b) * dv_;
+      double fraction = system().admissible_fraction(x_cap_, dx_cap_);
+      if (s.end != 1.0) {
+        x_cap_ = x_ + s.end * (x_cap_ - x_);
+        dx_cap_ *= s.end;
+        fraction = std::min(fraction, system().admissible_fraction(x_cap_, dx_cap_));
+      }
+      return fraction;
+    };
     auto accept = [&](double alpha) {
       const double r_try_norm = r_try_.norm();
       if (!std::isfinite(r_try_norm) || !end_allowed()) return false;
@@ -472,7 +489,11 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       // A tolerance below the round-off of v is met at that round-off.
       const double floor =
           kRoundoff * (v.lpNorm<Eigen::Infinity>() + v_.lpNorm<Eigen::Infinity>());
-      if (remaining <= tol || update <= floor) {
+      // Where states are forbidden, the last update must not end in one
+      // (a barrier's gap closed by it): then it is searched like any other,
+      // from the step cap.
+      const bool small = remaining <= tol || update <= floor;
+      if (small && (!forbidden_states || gap_fraction() > 1.0)) {
         alpha = update > 0.0 ? tol / update : 1.0;
         if (!ls.negative_curvature || !expand(alpha)) {
           ++mutable_stats().newton_iterations;
@@ -495,6 +516,18 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       return fail("the Newton update does not descend the incremental potential");
     }
 
+    // IPC's step cap (Li et al. 2020): where a barrier forbids states, the
+    // search starts at kGapCap of the fraction of dv at which the first gap
+    // of the stage -- or, for the midpoint methods, of the step's end --
+    // would close, instead of finding the closed gap by halving.
+    if (!accepted && forbidden_states) {
+      const double cap = gap_fraction();
+      // A cap below the search's own floor means the iterate is pinned at a
+      // gap: search from the full step as without a cap, which ends in the
+      // line search's failure (the step's equations have no solution that
+      // keeps the gaps open).
+      if (kGapCap * cap >= 1.0 / 1024.0) alpha = std::min(alpha, kGapCap * cap);
+    }
     // With a descent direction of the potential the search cannot fail but
     // to round-off; otherwise give up at 1/1024 and try the definite matrix.
     const double alpha_min = minimize && definite ? 1e-12 : 1.0 / 1024.0;

@@ -171,6 +171,7 @@ class ImplicitIntegrator : public Integrator {
   // On the potential path the coefficient is frozen for each iteration
   // (r is then the gradient of the midpoint's potential + c |D|^2).
   Vector x_end_;  // a trial's step end (has_forbidden_states)
+  Vector x_cap_, dx_cap_;  // the step cap's state and step (has_forbidden_states)
   bool frozen_ = false;
   double frozen_c_ = 0.0;
   // The step's second attempt (solve_velocity): the definite matrix only.

@@ -1,6 +1,7 @@
 #include "models/elastic_model.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <vector>
 
@@ -187,6 +188,21 @@ std::string ElasticModel::forbidden_state(const Vector& x) const {
     if (!why.empty()) return why;
   }
   return {};
+}
+
+double ElasticModel::admissible_fraction(const Vector& x, const Vector& dx) const {
+  double fraction = std::numeric_limits<double>::infinity();
+  if (!has_forbidden_states()) return fraction;
+  x_all_.head(dofs()) = x;
+  dx_all_.setZero(x_all_.size());
+  dx_all_.head(dofs()) = dx;
+  const Configuration c = stored_configuration(0.0);
+  for (const auto& term : terms_) {
+    if (term->forbids_states()) {
+      fraction = std::min(fraction, term->admissible_fraction(c, dx_all_.data()));
+    }
+  }
+  return fraction;
 }
 
 double ElasticModel::velocity_potential(double t, const Vector& v) const {

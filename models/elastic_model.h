@@ -48,6 +48,7 @@ class ElasticModel final : public MechanicalSystem {
   // Why x is a forbidden state (a barrier's gap closed), naming the element
   // in scene terms; empty when it is not one.
   std::string forbidden_state(const Vector& x) const;
+  double admissible_fraction(const Vector& x, const Vector& dx) const override;
   bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
@@ -95,6 +96,7 @@ class ElasticModel final : public MechanicalSystem {
   // The energy column each term's potential goes to (a position in the
   // layout), or -1 when its kind stores no energy.
   std::vector<long> term_column_;
+  mutable Vector dx_all_;  // admissible_fraction's step, all particles
   std::shared_ptr<const EnergyLayout> energy_layout_;
   SparseMatrix pattern_;
   bool symmetric_ = true;

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -152,6 +153,11 @@ class ForceTerm {
   // naming the element in scene terms ("particle 3 is through plane 0 ...");
   // empty where it is not.
   virtual std::string forbidden_state(const Configuration&) const { return {}; }
+  // MechanicalSystem::admissible_fraction for this term; dx has the layout
+  // of c.x (fixed particles: 0).
+  virtual double admissible_fraction(const Configuration&, const double* /*dx*/) const {
+    return std::numeric_limits<double>::infinity();
+  }
   // A stiff conservative term that is a set of distance constraints
   // (MechanicalSystem::distance_constraints) appends them with internal
   // particle indices (b may be fixed: the model ties it to its place) and

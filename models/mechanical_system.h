@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <limits>
 #include <vector>
 
 namespace springlab {
@@ -113,6 +114,13 @@ class MechanicalSystem {
   // state it accepts, including a step's end when the forces are evaluated
   // elsewhere (the midpoint), where the energy is finite.
   virtual bool has_forbidden_states() const { return false; }
+  // The largest alpha (+infinity when there is none) such that x + a dx is
+  // allowed for every 0 <= a < alpha, where the forbidden states are known
+  // in closed form (a barrier's gap d + a n.dx stays positive while
+  // a < d / (-n.dx)): the step cap of IPC's line search (Li et al. 2020).
+  virtual double admissible_fraction(const Vector& /*x*/, const Vector& /*dx*/) const {
+    return std::numeric_limits<double>::infinity();
+  }
 
   // The fast solvers' view (README "Fast solvers"): the stiff conservative forces as
   // distance constraints, and F minus their forces (gravity, drag, wind,

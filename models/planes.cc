@@ -8,6 +8,7 @@
 // so dF/dx is already negative semidefinite (its definite part is itself).
 // The energy is the "contact" column.
 #include <cmath>
+#include <limits>
 #include <algorithm>
 #include <memory>
 #include <sstream>
@@ -58,6 +59,21 @@ class PlaneContactForce final : public ForceTerm {
       }
     }
     return {};
+  }
+
+  // The barrier's gap d + a n.dx_i closes at a = d / (-n.dx_i) where the
+  // particle approaches the plane (n.dx_i < 0).
+  double admissible_fraction(const Configuration& c, const double* dx) const override {
+    double fraction = std::numeric_limits<double>::infinity();
+    if (law_.model != ContactModel::kBarrier) return fraction;
+    for (const Plane& p : planes_) {
+      for (int i = 0; i < free_particles_; ++i) {
+        double approach = 0.0;
+        for (int r = 0; r < dim_; ++r) approach += p.normal[r] * dx[i * dim_ + r];
+        if (approach < 0.0) fraction = std::min(fraction, gap(c, p, i) / -approach);
+      }
+    }
+    return std::max(fraction, 0.0);
   }
 
   double potential_energy(const Configuration& c) const override {

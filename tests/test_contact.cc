@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -108,6 +109,30 @@ TEST(Contact, BounceUnderImplicitMidpointKeepsTheEnergy) {
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT(r.x_final[1], 0.1);  // it moved (and came back up: bounces)
   EXPECT_NEAR(r.energy_final, r.energy_initial, 0.01 * std::abs(r.energy_initial));
+}
+
+// IPC's step cap: with the barrier, the fraction of a step dx at which the
+// first gap closes is d / (-n.dx) of the particle that approaches fastest
+// relative to its gap; moving away, or with the penalty (no forbidden
+// states), nothing closes.
+TEST(Contact, AdmissibleFractionIsWhereTheFirstGapCloses) {
+  Scene s = drop(1.0, 0.2, 9.81, ContactModel::kBarrier, 1e3, 0.01);
+  Particle second;
+  second.x = {1.0, 0.05, 0.0};
+  s.particles.push_back(second);
+  const ElasticModel barrier(s);
+  const Vector x = barrier.initial_positions();
+  Vector dx(4);
+  dx << 0.0, -0.4, 0.0, -0.2;  // gaps 0.2 and 0.05: closed at 0.5 and 0.25
+  EXPECT_DOUBLE_EQ(barrier.admissible_fraction(x, dx), 0.25);
+  dx << 0.3, -0.4, 0.0, 0.2;  // the second moves away
+  EXPECT_DOUBLE_EQ(barrier.admissible_fraction(x, dx), 0.5);
+  dx << 0.0, 0.1, 0.0, 0.2;
+  EXPECT_EQ(barrier.admissible_fraction(x, dx), std::numeric_limits<double>::infinity());
+  s.block<Contact>().model = ContactModel::kPenalty;
+  const ElasticModel penalty(s);
+  dx << 0.0, -0.4, 0.0, -0.2;
+  EXPECT_EQ(penalty.admissible_fraction(x, dx), std::numeric_limits<double>::infinity());
 }
 
 // Records the smallest gap seen at any output time.

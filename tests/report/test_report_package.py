@@ -273,6 +273,51 @@ class Contact(unittest.TestCase):
         self.assertTrue((self.s.dir / "out" / "contact-cost.png").is_file())
 
 
+class MotionCases(unittest.TestCase):
+    """Two cases with the same scene name and step (the cloth with and
+    without the ground): each player shows its own case's runs."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_each_case_plays_its_own_runs(self):
+        motion_data(self.s)
+        settings = json.loads((self.s.dir / "motion.json").read_text())
+        settings["cases"].append(dict(settings["cases"][0]))
+        self.s.json("motion.json", settings)
+        rows = (self.s.dir / "motion.csv").read_text().splitlines()
+        frames = (self.s.dir / "motion-frames.csv").read_text().splitlines()
+        runs = (self.s.dir / "motion-runs.csv").read_text().splitlines()
+        # The second case: tasks 2 and 3, implicit Euler falls twice as far.
+        for t, y in ((0, 0.0), (0.1, -1.0), (0.2, -2.0)):
+            for i, x in ((0, 0.0), (1, 1.0)):
+                rows.append("2,pair,implicit-euler,0.1,%r,0,%d,%r,%r,0" % (t, i, x, y if i else 0))
+            frames.append("2,pair,implicit-euler,0.1,%r,0,%r" % (t, -4.0 * t))
+        rows += ["3,pair,explicit-euler,0.1,0,0,0,0,0,0", "3,pair,explicit-euler,0.1,0,0,1,1,0,0"]
+        frames += ["3,pair,explicit-euler,0.1,0,0,0"]
+        runs += ["2,pair,implicit-euler,0.1,completed,,2,0.001,0,2,",
+                 "3,pair,explicit-euler,0.1,failed,0,0,0.001,0,2,no way"]
+        self.s.write("motion.csv", "\n".join(rows) + "\n")
+        self.s.write("motion-frames.csv", "\n".join(frames) + "\n")
+        self.s.write("motion-runs.csv", "\n".join(runs) + "\n")
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        players = [json.loads(m) for m in re.findall(
+            r'<script type="application/json" class="player-data">(.*?)</script>', page, re.S)]
+        self.assertEqual(len(players), 2)
+        ys = []
+        for data in players:
+            ie = {p["name"]: p for p in data["panels"]}["implicit-euler"]
+            x = np.frombuffer(base64.b64decode(ie["x"]), dtype="<f4").reshape(3, 2, 3)
+            ys.append(float(x[2, 1, 1]))
+        self.assertEqual(ys, [-1.0, -2.0])
+        ee = {p["name"]: p for p in players[1]["panels"]}["explicit-euler"]
+        self.assertEqual((ee["status"], ee["failure"]), ("failed", "no way"))
+
+
 class Reading(unittest.TestCase):
     def setUp(self):
         self.s = Scratch()

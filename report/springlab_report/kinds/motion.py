@@ -46,9 +46,9 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
     if isinstance(g, list) and any(isinstance(v, (int, float)) and v for v in g):
         up = int(np.argmax(np.abs(g)))
     panels, good = [], []
-    names = [k[1] for k in positions if k[0] == name and k[2] == dt]
+    names = [k[1] for k in positions if k[0] == case_index]
     for integ in ctx.integrators.sort(names):
-        idx = positions[(name, integ, dt)]
+        idx = positions[(case_index, integ)]
         t = positions.table.num("t")[idx]
         past = np.array(positions.table.text("past_blowup"))[idx] == "1"
         order = np.lexsort((positions.table.num("i")[idx], past, t))
@@ -60,7 +60,7 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
         frame_t, frame_past = t[::n], past[::n]
         xyz = xyz.reshape(len(frame_t), n, 3)
         good.append(xyz[~frame_past].reshape(-1, 3))
-        fidx = frames.get((name, integ, dt))
+        fidx = frames.get((case_index, integ))
         energy = np.full(len(frame_t), np.nan)
         if fidx is not None:
             ft = frames.table.num("t")[fidx]
@@ -69,7 +69,7 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
             lookup = {(float(a), bool(b)): e for a, b, e in zip(ft, fpast, fe)}
             energy = np.array([lookup.get((float(a), bool(b)), np.nan)
                                for a, b in zip(frame_t, frame_past)])
-        run = runs.get((name, integ, dt), {})
+        run = runs.get((case_index, integ), {})
         panels.append({
             "name": integ, "colour": ctx.integrators.colour(integ),
             "status": run.get("status", "completed"),
@@ -102,15 +102,22 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
             "t_end": case.get("t_end"), "panels": panels}
 
 
-class Grouped:
-    """Row indices of a table grouped by (scene, integrator, dt as a number)."""
+def case_of(task, integrators):
+    """The case a task ran: tasks go case by case, one per integrator (two
+    cases may share a scene's name and step, like the cloth with and
+    without the ground)."""
+    return int(task) // max(1, integrators)
 
-    def __init__(self, table):
+
+class Grouped:
+    """Row indices of a table grouped by (case, integrator)."""
+
+    def __init__(self, table, integrators):
         self.table = table
-        scene, integ, dt = table.text("scene"), table.text("integrator"), table.num("dt")
+        task, integ = table.num("task"), table.text("integrator")
         groups = {}
         for r in range(len(table)):
-            groups.setdefault((scene[r], integ[r], float(dt[r])), []).append(r)
+            groups.setdefault((case_of(task[r], integrators), integ[r]), []).append(r)
         self.groups = {k: np.array(v) for k, v in groups.items()}
 
     def __getitem__(self, key):
@@ -128,21 +135,23 @@ def render(exp, ctx):
                                     "y", "z")
     frames_t = exp.table("frames")
     runs_t = exp.table("runs")
-    frames = Grouped(frames_t.require("scene", "integrator", "dt", "t", "past_blowup", "energy")) \
-        if frames_t is not None else {}
+    listed = exp.setting("integrators")
+    integrators = len(listed) if isinstance(listed, list) else 1
+    frames = Grouped(frames_t.require("task", "scene", "integrator", "dt", "t", "past_blowup",
+                                      "energy"), integrators) if frames_t is not None else {}
     runs = {}
     if runs_t is not None:
-        runs_t.require("scene", "integrator", "dt", "status", "diverged_at", "energy_initial",
+        runs_t.require("task", "scene", "integrator", "dt", "status", "diverged_at", "energy_initial",
                        "energy_scale")
         status = runs_t.status()
         failure = runs_t.text("failure") if runs_t.has("failure") else [""] * len(runs_t)
         for r in range(len(runs_t)):
             d = runs_t.num("diverged_at")[r]
-            runs[(runs_t.text("scene")[r], runs_t.text("integrator")[r], float(runs_t.num("dt")[r]))] = {
+            runs[(case_of(runs_t.num("task")[r], integrators), runs_t.text("integrator")[r])] = {
                 "status": status[r], "diverged_at": None if np.isnan(d) else float(d),
                 "energy_initial": float(runs_t.num("energy_initial")[r]),
                 "energy_scale": float(runs_t.num("energy_scale")[r]), "failure": failure[r]}
-    grouped = Grouped(positions)
+    grouped = Grouped(positions.require("task"), integrators)
     cases = exp.setting("cases")
     if not isinstance(cases, list) or not cases:
         return note_html("No cases in %s: nothing to play." % esc(exp.settings_path.name))
