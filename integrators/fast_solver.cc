@@ -7,9 +7,10 @@ StepResult FastSolver::do_initialize() {
   if (dim_ < 1 || !system().distance_constraints(constraints_)) {
     return StepResult::failure(
         name() + ": this scene has stiff forces that are not distance constraints (finite "
-                 "elements, contact planes), which " + name() +
+                 "elements), which " + name() +
         " does not solve yet; use implicit-euler, or an explicit method at a small --dt");
   }
+  system().plane_constraints(planes_);
   const Eigen::Index n = system().dofs() / dim_;
   inv_particle_mass_.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) inv_particle_mass_[i] = inv_mass()[i * dim_];

@@ -1,8 +1,9 @@
 // What the two fast solvers of README "Fast solvers" share (projective_dynamics.cc,
 // xpbd.cc): the system's stiff forces as distance constraints
 // (MechanicalSystem::distance_constraints), the other forces applied
-// explicitly, a refusal where the system has no such form, and the gap of
-// one constraint.
+// explicitly, the contact planes (MechanicalSystem::plane_constraints), a
+// refusal where the system has no such form, and the gap of one
+// constraint.
 #pragma once
 
 #include <string>
@@ -28,6 +29,7 @@ class FastSolver : public Integrator {
 
   int dim_ = 2;
   std::vector<DistanceConstraint> constraints_;
+  std::vector<PlaneConstraint> planes_;  // contact planes (xpbd solves them)
   Vector inv_particle_mass_;  // 1/m per free particle
 };
 

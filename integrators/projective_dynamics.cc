@@ -23,6 +23,13 @@ ProjectiveDynamics::ProjectiveDynamics()
 StepResult ProjectiveDynamics::do_initialize() {
   StepResult base = FastSolver::do_initialize();
   if (!base.ok) return base;
+  if (!planes_.empty()) {
+    // A plane's projection enters the global matrix only where it is
+    // active, which would need a new factorization whenever contacts change.
+    return StepResult::failure(
+        "projective-dynamics: this scene has contact planes, which projective-dynamics does not "
+        "solve yet; use xpbd or implicit-euler, or an explicit method at a small --dt");
+  }
   const Eigen::Index n = inv_particle_mass_.size();
   std::vector<Eigen::Triplet<double>> entries;
   for (const DistanceConstraint& c : constraints_) {

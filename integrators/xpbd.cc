@@ -1,5 +1,6 @@
 #include "integrators/xpbd.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace springlab {
@@ -23,11 +24,26 @@ Xpbd::Xpbd()
                                     "nonlinear springs can gain energy; damping, drag and wind "
                                     "are explicit"}) {}
 
+StepResult Xpbd::do_initialize() {
+  StepResult base = FastSolver::do_initialize();
+  if (!base.ok) return base;
+  for (const PlaneConstraint& plane : planes_) {
+    if (!(plane.stiffness > 0.0)) {
+      return StepResult::failure(
+          "xpbd: this scene's contact is the barrier, whose energy is infinite where a "
+          "projection puts a particle (on the plane); use the penalty contact with xpbd, or "
+          "implicit-euler with the barrier");
+    }
+  }
+  return StepResult::success();
+}
+
 StepResult Xpbd::do_step(double h) {
   const int substeps = options().substeps > 0 ? options().substeps : kDefaultSubsteps;
   const int iterations = options().iterations > 0 ? options().iterations : kDefaultIterations;
   const double hs = h / substeps;
   lambda_.resize(static_cast<Eigen::Index>(constraints_.size()));
+  lambda_planes_.resize(static_cast<Eigen::Index>(planes_.size()) * inv_particle_mass_.size());
   for (int s = 0; s < substeps; ++s) {
     const double t = t_ + s * hs;
     eval_external_force(t, x_, v_, f_);
@@ -35,6 +51,7 @@ StepResult Xpbd::do_step(double h) {
     x_prev_ = x_;
     x_ += hs * v_;
     lambda_.setZero();
+    lambda_planes_.setZero();
     for (int it = 0; it < iterations; ++it) {
       for (std::size_t k = 0; k < constraints_.size(); ++k) {
         const DistanceConstraint& c = constraints_[k];
@@ -55,11 +72,68 @@ StepResult Xpbd::do_step(double h) {
         }
         lambda_[static_cast<Eigen::Index>(k)] += dlambda;
       }
+      project_planes(hs);
       ++mutable_stats().newton_iterations;
     }
     v_ = (x_ - x_prev_) / hs;
+    apply_friction(hs);
   }
   return StepResult::success();
+}
+
+void Xpbd::project_planes(double hs) {
+  const Eigen::Index n = inv_particle_mass_.size();
+  for (std::size_t p = 0; p < planes_.size(); ++p) {
+    const PlaneConstraint& plane = planes_[p];
+    const double compliance = plane.stiffness > 0.0 ? 1.0 / (plane.stiffness * hs * hs) : 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double& lambda = lambda_planes_[static_cast<Eigen::Index>(p) * n + i];
+      double gap = -plane.offset;
+      for (int r = 0; r < dim_; ++r) gap += plane.normal[r] * x_[i * dim_ + r];
+      if (gap >= 0.0 && lambda == 0.0) continue;  // apart, and never pushed this substep
+      const double w = inv_particle_mass_[i];
+      // The inequality: lambda + dlambda >= 0.
+      const double dlambda =
+          std::max((-gap - compliance * lambda) / (w + compliance), -lambda);
+      for (int r = 0; r < dim_; ++r) x_[i * dim_ + r] += w * dlambda * plane.normal[r];
+      lambda += dlambda;
+      // Static friction: the tangential displacement of the substep is
+      // undone when the force that takes, |dx_t| / (w h_s^2), is within
+      // mu f_n = mu lambda / h_s^2.
+      if (!(plane.friction > 0.0) || !(lambda > 0.0)) continue;
+      Eigen::Vector3d dx = Eigen::Vector3d::Zero();
+      double dn = 0.0;
+      for (int r = 0; r < dim_; ++r) {
+        dx[r] = x_[i * dim_ + r] - x_prev_[i * dim_ + r];
+        dn += plane.normal[r] * dx[r];
+      }
+      const Eigen::Vector3d dx_t = dx - dn * plane.normal;
+      if (dx_t.norm() <= plane.friction * w * lambda) {
+        for (int r = 0; r < dim_; ++r) x_[i * dim_ + r] -= dx_t[r];
+      }
+    }
+  }
+}
+
+void Xpbd::apply_friction(double hs) {
+  const Eigen::Index n = inv_particle_mass_.size();
+  for (std::size_t p = 0; p < planes_.size(); ++p) {
+    const PlaneConstraint& plane = planes_[p];
+    if (!(plane.friction > 0.0)) continue;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double lambda = lambda_planes_[static_cast<Eigen::Index>(p) * n + i];
+      if (!(lambda > 0.0)) continue;
+      double vn = 0.0;
+      for (int r = 0; r < dim_; ++r) vn += plane.normal[r] * v_[i * dim_ + r];
+      Eigen::Vector3d vt = Eigen::Vector3d::Zero();
+      for (int r = 0; r < dim_; ++r) vt[r] = v_[i * dim_ + r] - vn * plane.normal[r];
+      const double speed = vt.norm();
+      if (!(speed > 0.0)) continue;
+      // |dv| = h_s mu f_n / m with f_n = lambda / h_s^2, at most the speed.
+      const double dv = std::min(plane.friction * lambda * inv_particle_mass_[i] / hs, speed);
+      for (int r = 0; r < dim_; ++r) v_[i * dim_ + r] -= dv * vt[r] / speed;
+    }
+  }
 }
 
 }  // namespace springlab

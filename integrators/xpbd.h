@@ -13,6 +13,18 @@
 //               x_a += w_a dlambda n,  x_b -= w_b dlambda n,  lambda_c += dlambda
 //               (w = 1/m, n = (x_a - x_b)/|x_a - x_b|),
 //   and sets    v = (x - x_prev) / h_s.
+// Contact planes (MechanicalSystem::plane_constraints) are inequality
+// constraints C = n.x_i - offset >= 0 of every free particle, projected
+// after the springs in each iteration with compliance 1/k_c (the penalty)
+// and lambda kept >= 0 (they push, never pull). The barrier is refused: its
+// energy is infinite at d <= 0, where a projection puts a particle (use
+// implicit-euler, or the penalty). Coulomb friction as in Mueller et al., "Detailed rigid body
+// simulation with extended position based dynamics" (SCA 2020, sec. 3.5-3.6),
+// with f_n = lambda / h_s^2 the contact's normal force: static, in each
+// projection, the substep's tangential displacement dx_t is undone where
+// the force that takes, |dx_t| / (w h_s^2), is at most mu f_n; dynamic,
+// after the substep, v_t loses min(h_s mu f_n / m, |v_t|) along -v_t/|v_t|.
+// Exact Coulomb friction, without the smoothing: a particle sticks exactly.
 // On a spring of rest length 0 one iteration is exactly implicit Euler's
 // substep (tests/test_fast_solvers.cc), so S substeps of one iteration are S
 // implicit Euler steps of h/S; more iterations converge toward it on
@@ -31,10 +43,17 @@ class Xpbd final : public FastSolver {
   static constexpr int kDefaultIterations = 1;
 
  protected:
+  StepResult do_initialize() override;
   StepResult do_step(double h) override;
 
  private:
+  // Projects the plane constraints once (lambda_planes_ accumulates).
+  void project_planes(double hs);
+  // Coulomb friction on v after the substep.
+  void apply_friction(double hs);
+
   Vector f_, x_prev_, lambda_;
+  Vector lambda_planes_;  // per (plane, free particle)
 };
 
 }  // namespace springlab

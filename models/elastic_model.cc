@@ -296,7 +296,9 @@ bool ElasticModel::has_forbidden_states() const {
 bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) const {
   out.clear();
   std::vector<DistanceConstraint> all;
+  std::vector<PlaneConstraint> planes;
   for (const auto& term : terms_) {
+    if (term->plane_constraints(planes)) continue;           // plane_constraints
     if (!term->conservative() || !term->stiff()) continue;  // external: explicit
     if (!term->distance_constraints(all)) return false;
   }
@@ -315,13 +317,20 @@ bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) co
   return true;
 }
 
+void ElasticModel::plane_constraints(std::vector<PlaneConstraint>& out) const {
+  out.clear();
+  for (const auto& term : terms_) term->plane_constraints(out);
+}
+
 void ElasticModel::external_force(double t, const Vector& x, const Vector& v, Vector& f) const {
   const Configuration c = configure(t, x, v);
   if (constraint_terms_.empty()) {
     std::vector<DistanceConstraint> probe;
+    std::vector<PlaneConstraint> planes;
     for (const auto& term : terms_) {
-      constraint_terms_.push_back(term->conservative() && term->stiff() &&
-                                  term->distance_constraints(probe));
+      constraint_terms_.push_back(
+          term->plane_constraints(planes) ||
+          (term->conservative() && term->stiff() && term->distance_constraints(probe)));
     }
   }
   f_all_.setZero(x_all_.size());

@@ -50,6 +50,7 @@ class ElasticModel final : public MechanicalSystem {
   std::string forbidden_state(const Vector& x) const;
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
   bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
+  void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
 

@@ -166,6 +166,10 @@ class ForceTerm {
     return false;
   }
   virtual double velocity_potential(const Configuration&) const { return 0.0; }
+  // A term the fast solvers see as contact planes (MechanicalSystem::
+  // plane_constraints) appends them and returns true; so does friction,
+  // which they solve with the planes (appending none).
+  virtual bool plane_constraints(std::vector<PlaneConstraint>& /*out*/) const { return false; }
 };
 
 }  // namespace springlab

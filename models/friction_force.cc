@@ -60,6 +60,9 @@ class FrictionForce final : public ForceTerm {
   VelocityDependence velocity_dependence() const override { return VelocityDependence::kNonlinear; }
   bool symmetric_jacobians() const override { return false; }
 
+  // The fast solvers apply friction with the planes' constraints.
+  bool plane_constraints(std::vector<PlaneConstraint>&) const override { return true; }
+
   void add_force(const Configuration& c, double* f) const override {
     if (dim_ == 2) add_force_d<2>(c, f); else add_force_d<3>(c, f);
   }

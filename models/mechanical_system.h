@@ -45,6 +45,18 @@ struct DistanceConstraint {
   double length = 0.0;
 };
 
+// A half-space n.x >= offset that free particles must not enter, as the
+// fast solvers see a contact plane (README "Fast solvers", "Contact with
+// planes"): with the penalty, a constraint of compliance 1/stiffness active
+// where the gap is negative; the barrier has stiffness 0 (xpbd refuses it).
+// `friction` is the plane's Coulomb mu.
+struct PlaneConstraint {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  // unit
+  double offset = 0.0;                                // n.point
+  double stiffness = 0.0;                             // k_c; 0: the barrier
+  double friction = 0.0;
+};
+
 class MechanicalSystem {
  public:
   virtual ~MechanicalSystem() = default;
@@ -125,10 +137,14 @@ class MechanicalSystem {
   // The fast solvers' view (README "Fast solvers"): the stiff conservative forces as
   // distance constraints, and F minus their forces (gravity, drag, wind,
   // spring damping: treated explicitly). False when some stiff force has no
-  // such form (finite elements, contact): those solvers refuse the system.
+  // such form (finite elements): those solvers refuse the system.
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
     return false;
   }
+  // The contact planes as constraints (empty without planes). Their forces,
+  // and friction's, are not in external_force: a fast solver that reads
+  // distance_constraints must solve these too, or refuse the system.
+  virtual void plane_constraints(std::vector<PlaneConstraint>& out) const { out.clear(); }
   virtual void external_force(double /*t*/, const Vector& /*x*/, const Vector& /*v*/,
                               Vector& /*f*/) const {}
   // Particle count of the free particles and the dimension (dofs = both).

@@ -76,6 +76,18 @@ class PlaneContactForce final : public ForceTerm {
     return std::max(fraction, 0.0);
   }
 
+  bool plane_constraints(std::vector<PlaneConstraint>& out) const override {
+    for (const Plane& p : planes_) {
+      PlaneConstraint c;
+      c.normal = p.normal;
+      c.offset = p.normal.dot(p.point);
+      c.stiffness = law_.model == ContactModel::kPenalty ? law_.stiffness : 0.0;
+      c.friction = p.friction;
+      out.push_back(c);
+    }
+    return true;
+  }
+
   double potential_energy(const Configuration& c) const override {
     double sum = 0.0;
     for_each_contact(c, [&](int, const Plane&, const ContactPhi& phi) { sum += phi.value; });
