@@ -1,5 +1,6 @@
 #include "integrators/projective_dynamics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -23,13 +24,15 @@ ProjectiveDynamics::ProjectiveDynamics()
 StepResult ProjectiveDynamics::do_initialize() {
   StepResult base = FastSolver::do_initialize();
   if (!base.ok) return base;
-  if (!planes_.empty()) {
-    // A plane's projection enters the global matrix only where it is
-    // active, which would need a new factorization whenever contacts change.
-    return StepResult::failure(
-        "projective-dynamics: this scene has contact planes, which projective-dynamics does not "
-        "solve yet; use xpbd or implicit-euler, or an explicit method at a small --dt");
+  for (const PlaneConstraint& plane : planes_) {
+    if (!(plane.stiffness > 0.0)) {
+      return StepResult::failure(
+          "projective-dynamics: this scene's contact is the barrier, which is not a projective "
+          "constraint (its energy is infinite on the plane); use the penalty contact with "
+          "projective-dynamics, or implicit-euler with the barrier");
+    }
   }
+  contacts_.clear();
   const Eigen::Index n = inv_particle_mass_.size();
   std::vector<Eigen::Triplet<double>> entries;
   for (const DistanceConstraint& c : constraints_) {
@@ -54,6 +57,9 @@ bool ProjectiveDynamics::factor(double h, std::string& error) {
   if (std::abs(h - factored_h_) <= 1e-12 * h) return true;
   SparseMatrix a = (h * h) * laplacian_;
   for (Eigen::Index i = 0; i < a.rows(); ++i) a.coeffRef(i, i) += 1.0 / inv_particle_mass_[i];
+  for (const ContactPair& c : contacts_) {
+    a.coeffRef(c.particle, c.particle) += h * h * planes_[c.plane].stiffness;
+  }
   ++mutable_stats().factorizations;
   if (!solver_.factorize(a, MatrixKind::kPositiveDefinite)) {
     error = solver_.error();
@@ -63,14 +69,66 @@ bool ProjectiveDynamics::factor(double h, std::string& error) {
   return true;
 }
 
+double ProjectiveDynamics::gap(const PlaneConstraint& plane, const Vector& x,
+                               Eigen::Index i) const {
+  double d = -plane.offset;
+  for (int r = 0; r < dim_; ++r) d += plane.normal[r] * x[i * dim_ + r];
+  return d;
+}
+
+bool ProjectiveDynamics::update_contacts() {
+  std::vector<ContactPair> now;
+  const Eigen::Index n = inv_particle_mass_.size();
+  for (std::size_t p = 0; p < planes_.size(); ++p) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (gap(planes_[p], x_, i) < 0.0 || gap(planes_[p], y_, i) < 0.0) now.push_back({i, p});
+    }
+  }
+  if (now == contacts_) return false;
+  contacts_.swap(now);
+  return true;
+}
+
+void ProjectiveDynamics::apply_friction(double h) {
+  for (const ContactPair& c : contacts_) {
+    const PlaneConstraint& plane = planes_[c.plane];
+    const double depth = -gap(plane, x_new_, c.particle);
+    if (!(plane.friction > 0.0) || !(depth > 0.0)) continue;
+    const Eigen::Index i = c.particle;
+    const double w = inv_particle_mass_[i];
+    const double limit = plane.friction * plane.stiffness * depth;  // mu f_n
+    Eigen::Vector3d dx = Eigen::Vector3d::Zero();
+    for (int r = 0; r < dim_; ++r) dx[r] = x_new_[i * dim_ + r] - x_[i * dim_ + r];
+    Eigen::Vector3d dx_t = dx - dx.dot(plane.normal) * plane.normal;
+    // Static: undo the tangential displacement if mu f_n can.
+    if (dx_t.norm() <= limit * w * h * h) {
+      for (int r = 0; r < dim_; ++r) {
+        x_new_[i * dim_ + r] -= dx_t[r];
+        v_[i * dim_ + r] = (x_new_[i * dim_ + r] - x_[i * dim_ + r]) / h;
+      }
+      continue;
+    }
+    // Dynamic: slow the tangential velocity by h mu f_n / m.
+    double vn = 0.0;
+    for (int r = 0; r < dim_; ++r) vn += plane.normal[r] * v_[i * dim_ + r];
+    Eigen::Vector3d vt = Eigen::Vector3d::Zero();
+    for (int r = 0; r < dim_; ++r) vt[r] = v_[i * dim_ + r] - vn * plane.normal[r];
+    const double speed = vt.norm();
+    if (!(speed > 0.0)) continue;
+    const double dv = std::min(h * limit * w, speed);
+    for (int r = 0; r < dim_; ++r) v_[i * dim_ + r] -= dv * vt[r] / speed;
+  }
+}
+
 StepResult ProjectiveDynamics::do_step(double h) {
   std::string error;
-  if (!factor(h, error)) {
-    return StepResult::failure(name() + ": the matrix M + h^2 L is singular (" + error + ")");
-  }
   const int iterations = options().iterations > 0 ? options().iterations : kDefaultIterations;
   eval_external_force(t_, x_, v_, f_);
   y_ = x_ + h * v_ + (h * h) * f_.cwiseProduct(inv_mass());
+  if (!planes_.empty() && update_contacts()) factored_h_ = 0.0;  // a new matrix
+  if (!factor(h, error)) {
+    return StepResult::failure(name() + ": the matrix M + h^2 L is singular (" + error + ")");
+  }
   x_new_ = y_;
   const Eigen::Index n = inv_particle_mass_.size();
   for (int it = 0; it < iterations; ++it) {
@@ -93,6 +151,15 @@ StepResult ProjectiveDynamics::do_step(double h) {
         }
       }
     }
+    // Contacts: the projection P(x_i) onto the plane's half-space.
+    for (const ContactPair& c : contacts_) {
+      const PlaneConstraint& plane = planes_[c.plane];
+      const double d = std::min(gap(plane, x_new_, c.particle), 0.0);
+      const double w = h * h * plane.stiffness;
+      for (int r = 0; r < dim_; ++r) {
+        rhs_[c.particle * dim_ + r] += w * (x_new_[c.particle * dim_ + r] - d * plane.normal[r]);
+      }
+    }
     // The global step, coordinate by coordinate with the one factor.
     coordinate_.resize(n);
     Vector solution;
@@ -107,6 +174,7 @@ StepResult ProjectiveDynamics::do_step(double h) {
     ++mutable_stats().newton_iterations;
   }
   v_ = (x_new_ - x_) / h;
+  if (!planes_.empty()) apply_friction(h);
   x_.swap(x_new_);
   return StepResult::success();
 }

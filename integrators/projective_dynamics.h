@@ -16,6 +16,18 @@
 // convergence: N fixed, so it is implicit Euler only approximately (exactly,
 // after one iteration, on springs of rest length 0). Iterations count as
 // newton_iterations.
+//
+// Contact planes (penalty only; the barrier is refused): the penalty
+// k_c/2 min(d, 0)^2 is k_c/2 |x_i - P(x_i)|^2 with P the projection onto the
+// half-space, a projective constraint (Bouaziz et al. 2014) whose local step
+// is P and whose matrix term is k_c on particle i's diagonal -- the same for
+// every coordinate, so one factor still serves x, y and z. It enters the
+// matrix only for the pairs (particle, plane) in contact at the step's start
+// or at y: the matrix is factored again whenever that set changes. Coulomb
+// friction, with f_n = k_c (-d) at the new positions: static, the step's
+// tangential displacement is undone where that takes at most mu f_n (force
+// |dx_t| m / h^2); dynamic, v_t loses min(h mu f_n / m, |v_t|) (as in xpbd.h,
+// Mueller et al. 2020): exact Coulomb friction, without the smoothing.
 #pragma once
 
 #include "integrators/fast_solver.h"
@@ -35,6 +47,19 @@ class ProjectiveDynamics final : public FastSolver {
 
  private:
   bool factor(double h, std::string& error);
+  // The (particle, plane) pairs in contact at x_n or at y; true when they
+  // changed (the matrix must be factored again).
+  bool update_contacts();
+  double gap(const PlaneConstraint& plane, const Vector& x, Eigen::Index i) const;
+  // Friction of the planes on (x_, x_new_, v_) after the iterations.
+  void apply_friction(double h);
+
+  struct ContactPair {
+    Eigen::Index particle;
+    std::size_t plane;
+    bool operator==(const ContactPair&) const = default;
+  };
+  std::vector<ContactPair> contacts_;
 
   SparseMatrix laplacian_;  // L, free particles x free particles
   SparseDirectSolver solver_;

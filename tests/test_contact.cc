@@ -210,9 +210,9 @@ TEST(Contact, BarrierKeepsTheBlockAndTheClothAboveTheGround) {
   const std::vector<Case> cases = {
       {"block", {{"contact", "1"}}, 0.0,
        {"implicit-euler", "implicit-midpoint", "discrete-gradient", "linear-implicit-euler"}},
-      {"cloth", {{"n", "8"}, {"ground", "0.6"}, {"contact", "1"}}, -0.6,
+      {"cloth", {{"n", "5"}, {"ground", "0.6"}, {"contact", "1"}}, -0.6,
        {"implicit-euler", "implicit-midpoint", "discrete-gradient", "linear-implicit-euler",
-        "cvode-bdf", "ida"}},
+        "cvode-bdf", "ida", "arkode-dirk", "arkode-imex"}},
   };
   for (const Case& c : cases) {
     const ElasticModel model(make_builtin_scene(c.scene, c.parameters));
@@ -285,9 +285,9 @@ TEST_P(Friction, SticksWhenTheSlopeIsBelowTheFrictionAngle) {
   if (!run({{"angle", "20"}, {"friction", "0.5"}}, t, r)) GTEST_SKIP() << r.failure;
   const double creep = (r.x_final - start.initial_positions()).head(2).norm();
   EXPECT_LE(creep, kEps * t);
-  if (GetParam() == "xpbd") {
-    // XPBD's friction is Coulomb's without the smoothing (xpbd.h): it does
-    // not creep at all.
+  if (GetParam() == "xpbd" || GetParam() == "projective-dynamics") {
+    // The fast solvers' friction is Coulomb's without the smoothing (xpbd.h,
+    // projective_dynamics.h): they do not creep at all.
     EXPECT_LT(creep, 1e-12);
     return;
   }
@@ -318,24 +318,37 @@ TEST_P(Friction, StopsAfterTheCoulombDistance) {
   EXPECT_LT(std::abs(r.v_final[0]), kEps);
 }
 
-// XPBD's plane constraint has compliance 1/k_c: at rest on the penalty
-// plane a particle sinks to d = -m g / k_c like implicit Euler's, whatever
-// the substeps and iterations (the constraint is linear in x).
-TEST(Contact, XpbdRestingGapIsWeightOverStiffness) {
+// The fast solvers' plane constraint is the penalty (XPBD: compliance
+// 1/k_c; projective dynamics: weight k_c): at rest on the plane a particle
+// sinks to d = -m g / k_c like implicit Euler's, whatever the substeps and
+// iterations.
+TEST(Contact, FastSolversRestingGapIsWeightOverStiffness) {
   const double m = 2.0, g = 9.81, k = 5e4;
   const ElasticModel model(drop(m, 0.0, g, ContactModel::kPenalty, k));
-  for (int substeps : {1, 10}) {
-    for (int iterations : {1, 3}) {
-      RunSettings s;
-      s.integrator = "xpbd";
-      s.dt = 0.01;
-      s.t_end = 20.0;
-      s.options.substeps = substeps;
-      s.options.iterations = iterations;
-      const RunResult r = simulate(model, s);
-      ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
-      EXPECT_NEAR(r.x_final[1], -m * g / k, 1e-6 * m * g / k) << substeps << " x " << iterations;
+  for (const char* name : {"xpbd", "projective-dynamics"}) {
+    for (int substeps : {1, 10}) {
+      for (int iterations : {1, 3}) {
+        RunSettings s;
+        s.integrator = name;
+        s.dt = 0.01;
+        s.t_end = 20.0;
+        s.options.substeps = std::string(name) == "xpbd" ? substeps : 0;
+        s.options.iterations = iterations;
+        const RunResult r = simulate(model, s);
+        ASSERT_EQ(r.status, RunStatus::kCompleted) << name << ": " << r.failure;
+        EXPECT_NEAR(r.x_final[1], -m * g / k, 1e-6 * m * g / k)
+            << name << ", " << substeps << " x " << iterations;
+      }
     }
+  }
+  // The barrier is refused by both, with a message that says what to use.
+  const ElasticModel barrier(drop(m, 0.1, g, ContactModel::kBarrier, 1e3, 0.01));
+  for (const char* name : {"xpbd", "projective-dynamics"}) {
+    RunSettings s;
+    s.integrator = name;
+    const RunResult r = simulate(barrier, s);
+    EXPECT_EQ(r.status, RunStatus::kFailed) << name;
+    EXPECT_NE(r.failure.find("use the penalty contact with"), std::string::npos) << r.failure;
   }
 }
 
