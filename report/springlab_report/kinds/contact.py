@@ -1,8 +1,8 @@
 """contact: every integrator against the closed forms of contact and friction
 over a sweep of steps (README "Contact with planes"). One panel per case: the
 relative error of the measured quantity (creep speed, sliding acceleration,
-stopping distance, deepest bounce) against the step; then the work each
-method does on the soft and the stiff bounce. The sentences under the
+stopping distance, deepest bounce) against the step; then, on the soft and
+the stiff bounce, the energy each method keeps and the work it does. The sentences under the
 figures are computed from the rows."""
 
 import numpy as np
@@ -35,7 +35,8 @@ FLOOR = 1e-8    # and from 1e-8 (round-off of the measurement) up
 
 def render(exp, ctx):
     db = Columns(exp.table(), numbers=("case", "dt", "measured", "theory", "steps",
-                                       "newton_iterations", "t_final", "min_gap"),
+                                       "newton_iterations", "t_final", "min_gap",
+                                       "energy_change"),
                  texts=("scene", "integrator", "regime", "status", "failure"))
     # Methods that refused every run (at t = 0: the fast solvers do not
     # solve contact planes yet) are named, not drawn.
@@ -144,32 +145,72 @@ def within_sentence(title, quantity, within, dts):
     return "%s (%s) — %s." % (title, quantity, "; ".join(parts))
 
 
+def drop_energy(exp, case):
+    """m |g| h of a bounce case's falling particle, from its scene in the
+    settings file (None when the scene does not say)."""
+    cases = exp.setting("cases")
+    try:
+        scene = cases[case]["scene"]
+        g = np.asarray(scene["gravity"], dtype=float)
+        plane = scene["planes"][0]
+        n = np.asarray(plane["normal"], dtype=float)
+        n = n / np.linalg.norm(n)
+        point = np.asarray(plane["point"], dtype=float)
+        for p in scene["particles"]:
+            if not p.get("fixed"):
+                gap = float(n.dot(np.asarray(p["x"], dtype=float) - point))
+                return float(p.get("mass", 1.0)) * float(np.linalg.norm(g)) * gap
+    except (KeyError, IndexError, TypeError, ValueError):
+        return None
+    return None
+
+
 def cost_figure(exp, ctx, db, bounces):
+    """The bounces: the energy each run lost or gained (a fraction of the
+    drop's m g h), and the work it took."""
     integ = ctx.integrators
-    fig = new_figure(13.5, 4.3)
-    axes = fig.subplots(1, len(bounces), squeeze=False)[0]
+    fig = new_figure(13.5, 8.4)
+    axes = fig.subplots(2, len(bounces), squeeze=False)
     facts = []
     costs = {}
     titles = []
-    for ax, ((title, _, _), rows) in zip(axes, bounces.items()):
+    for col, ((title, _, _), rows) in enumerate(bounces.items()):
         titles.append(title)
         series = by_integrator(db, rows)
+        e_drop = drop_energy(exp, int(db["case"][rows[0]]))
+        kept = []
         for name in integ.sort(series):
             idx = series[name]
             ok = np.array([db["status"][r] == "completed" for r in idx])
             idx = idx[ok]
             work = (db["steps"][idx] + db["newton_iterations"][idx]) / db["t_final"][idx]
-            ax.plot(db["dt"][idx], work, ms=6, mfc="none", mew=1.3, lw=1.3, label=name,
-                    **integ.style(name))
+            axes[1, col].plot(db["dt"][idx], work, ms=6, mfc="none", mew=1.3, lw=1.3, label=name,
+                              **integ.style(name))
             costs.setdefault(name, {})[title] = dict(zip(db["dt"][idx], work))
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("step dt [s] (adaptive methods: output interval)")
-        ax.set_ylabel("(steps + Newton iterations) per simulated second")
-        ax.set_title(title, loc="left", fontweight="bold", fontsize=10)
-        ax.grid(True, which="major", alpha=0.3)
-    legend_outside(axes[-1])
-    saved = ctx.figs.save(fig, exp.name + "-cost.png")
+            if e_drop:
+                change = np.abs(db["energy_change"][idx]) / e_drop
+                axes[0, col].plot(db["dt"][idx], np.maximum(change, FLOOR), ms=6, mfc="none",
+                                  mew=1.3, lw=1.3, label=name, **integ.style(name))
+                good = idx[np.abs(db["energy_change"][idx]) <= 0.01 * e_drop]
+                if len(idx) and len(good) == len(idx):
+                    kept.append(name)
+        for row, label in ((0, "|E(T) − E(0)| / (m g h)"),
+                           (1, "(steps + Newton iterations) per simulated second")):
+            ax = axes[row, col]
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("step dt [s] (adaptive methods: output interval)")
+            ax.set_ylabel(label)
+            ax.set_title(title + (" — energy kept" if row == 0 else " — work"), loc="left",
+                         fontweight="bold", fontsize=10)
+            ax.grid(True, which="major", alpha=0.3)
+        if e_drop:
+            axes[0, col].axhline(0.01, color="0.5", lw=0.8, ls=":")
+            facts.append("%s: the drop's energy m g h is %s J; the runs that keep the energy "
+                         "within 1 %% of it at every step they completed: %s." % (
+                             title, fmt(e_drop, 3), names_list(kept) if kept else "none"))
+    legend_outside(axes[0, -1])
+    saved = ctx.figs.save(fig, exp.name + "-bounce.png")
     if len(titles) == 2:
         soft, stiff = titles
         ratios = []
@@ -185,8 +226,11 @@ def cost_figure(exp, ctx, db, bounces):
                          "(or output interval) both runs completed: %s." % ", ".join(
                              "%s %s x (dt = %s s)" % (n, fmt(q, 3), fmt(dt, 3))
                              for q, n, dt in ratios))
-    caption = ("Work per simulated second (steps plus Newton iterations) on the soft and the stiff "
-               "bounce: fixed-step methods pay 1/dt steps plus their Newton iterations, adaptive "
-               "ones choose their steps from the stiffness. Runs that failed or diverged are not "
+    caption = ("The bounces without friction, where the physics keeps the energy: above, how much "
+               "each run lost or gained by its end, as a fraction of the drop's m g h (dotted: "
+               "1 %); below, the work per simulated second (steps plus Newton iterations): "
+               "fixed-step methods pay 1/dt steps plus their Newton iterations, adaptive ones "
+               "choose their steps from the stiffness. Runs that failed or diverged are not "
                "drawn.")
-    return figure_html(saved, "contact: cost", esc(caption)) + facts_html(facts)
+    return figure_html(saved, "contact: bounce energy and cost", esc(caption)) + \
+        facts_html(facts)
