@@ -271,6 +271,14 @@ bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vecto
 
 StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitScheme& s,
                                               Vector& v) {
+  // Friction's normal forces from the step's start while the step is
+  // solved (MechanicalSystem::lag_normal_forces): friction then derives
+  // from a dissipation potential, and Newton minimizes.
+  struct Lag {
+    const MechanicalSystem& system;
+    Lag(const MechanicalSystem& m, const Vector& x) : system(m) { system.lag_normal_forces(&x); }
+    ~Lag() { system.lag_normal_forces(nullptr); }
+  } lag(system(), x_);
   StepResult result = newton(h, s, v);
   if (!result.ok && system().jacobian_symmetric()) {
     // Projected Newton from the step's start: every update from the definite

@@ -317,6 +317,18 @@ bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) co
   return true;
 }
 
+void ElasticModel::lag_normal_forces(const Vector* x_lag) const {
+  if (x_lag != nullptr) x_all_.head(dofs()) = *x_lag;
+  const Configuration c = stored_configuration(0.0);
+  symmetric_ = true;
+  derives_from_potentials_ = true;
+  for (const auto& term : terms_) {
+    term->lag(x_lag != nullptr ? &c : nullptr);
+    symmetric_ = symmetric_ && term->symmetric_jacobians();
+    derives_from_potentials_ = derives_from_potentials_ && term->derives_from_potentials();
+  }
+}
+
 void ElasticModel::plane_constraints(std::vector<PlaneConstraint>& out) const {
   out.clear();
   for (const auto& term : terms_) term->plane_constraints(out);

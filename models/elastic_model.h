@@ -51,6 +51,7 @@ class ElasticModel final : public MechanicalSystem {
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
   bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
+  void lag_normal_forces(const Vector* x_lag) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
 
@@ -100,8 +101,9 @@ class ElasticModel final : public MechanicalSystem {
   mutable Vector dx_all_;  // admissible_fraction's step, all particles
   std::shared_ptr<const EnergyLayout> energy_layout_;
   SparseMatrix pattern_;
-  bool symmetric_ = true;
-  bool derives_from_potentials_ = true;
+  // What every term says now (friction's answers change while it lags).
+  mutable bool symmetric_ = true;
+  mutable bool derives_from_potentials_ = true;
   VelocityDependence velocity_dependence_ = VelocityDependence::kNone;
   double energy_scale_ = 0.0;
 

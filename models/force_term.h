@@ -170,6 +170,9 @@ class ForceTerm {
   // plane_constraints) appends them and returns true; so does friction,
   // which they solve with the planes (appending none).
   virtual bool plane_constraints(std::vector<PlaneConstraint>& /*out*/) const { return false; }
+  // MechanicalSystem::lag_normal_forces: c the lagged configuration, or
+  // nullptr to evaluate live again. Only friction lags.
+  virtual void lag(const Configuration* /*c*/) {}
 };
 
 }  // namespace springlab

@@ -18,15 +18,19 @@
 //           semidefinite (g' / y = -1/(eps_v^2 y) or -1/y^3)
 //   dF/dx = -mu g v_t (df_n/dx)^T = mu g phi''(d) v_t n^T   (NOT symmetric)
 //
-// The normal force is not lagged: friction is a force of (x, v) like spring
-// damping, evaluated where every other force is, so the same closed forms
-// hold for every integrator. An implicit method therefore solves friction at
-// the step's end with f_n at the step's end; F then derives from no
-// potential, and Newton works on ||r|| with sparse LU (newton_velocity_
-// solver.h). IPC instead freezes f_n and the tangent basis at the step's start, which
-// makes friction a dissipation potential of v; that needs the step's start
-// inside the model, which models/ does not know. Friction's work F.v <= 0
-// is dissipation, counted with drag's in the damping budget.
+// Lagging. Evaluated live, friction is a force of (x, v) like spring
+// damping, with the normal force where every other force is, so the same
+// closed forms hold for every integrator; it then derives from no
+// potential, and Newton would have to work on ||r|| with sparse LU. So the
+// hand-written implicit methods lag f_n (MechanicalSystem::
+// lag_normal_forces) from the step's start during their solve, as IPC does
+// (the plane's tangent projection T is constant, so only f_n needs it):
+// friction is then F = -dW/dv of W(v) = sum mu f_n0 f0(|v_t|), f0' = f1,
+// and Newton minimizes the incremental potential with the symmetric
+// definite matrix. On a body resting or sliding on a plane f_n does not
+// change, and the closed forms are the same. Explicit and adaptive methods
+// evaluate it live. Friction's work F.v <= 0 is dissipation, counted with
+// drag's in the damping budget.
 #include <cmath>
 #include <memory>
 #include <random>
@@ -58,7 +62,43 @@ class FrictionForce final : public ForceTerm {
   std::string_view name() const override { return "friction"; }
   bool conservative() const override { return false; }
   VelocityDependence velocity_dependence() const override { return VelocityDependence::kNonlinear; }
-  bool symmetric_jacobians() const override { return false; }
+  // Live, dF/dx = mu g phi'' v_t n^T is not symmetric and F has no
+  // potential; lagged, F = -dW/dv with
+  //   W(v) = sum mu f_n0 f0(|v_t|),  f0(y) = y^2/eps_v - y^3/(3 eps_v^2) (y < eps_v),
+  //   y - eps_v/3 beyond  (f0' = f1; IPC's D(v), Li et al. 2020, eq. 15),
+  // and dF/dx = 0.
+  bool symmetric_jacobians() const override { return lagged_; }
+  bool derives_from_potentials() const override { return lagged_; }
+  double velocity_potential(const Configuration& c) const override {
+    if (!lagged_) return 0.0;
+    double sum = 0.0;
+    auto f0 = [&](double y) {
+      return y < eps_ ? y * y / eps_ - y * y * y / (3.0 * eps_ * eps_) : y - eps_ / 3.0;
+    };
+    if (dim_ == 2) {
+      for_each_contact<2>(c, [&](int, double mu, const Sliding<2>& s) { sum += mu * s.f_n * f0(s.y); });
+    } else {
+      for_each_contact<3>(c, [&](int, double mu, const Sliding<3>& s) { sum += mu * s.f_n * f0(s.y); });
+    }
+    return sum;
+  }
+  void lag(const Configuration* c) override {
+    lagged_ = false;
+    if (c == nullptr) return;
+    lagged_fn_.assign(planes_.size() * static_cast<std::size_t>(free_particles_), 0.0);
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      for (int i = 0; i < free_particles_; ++i) {
+        double d = 0.0;
+        for (int r = 0; r < dim_; ++r) {
+          d += planes_[k].normal[r] * (c->x[i * dim_ + r] - planes_[k].point[r]);
+        }
+        const ContactPhi phi = law_(d);
+        lagged_fn_[k * static_cast<std::size_t>(free_particles_) + static_cast<std::size_t>(i)] =
+            phi.slope != 0.0 ? -phi.slope : 0.0;
+      }
+    }
+    lagged_ = true;
+  }
 
   // The fast solvers apply friction with the planes' constraints.
   bool plane_constraints(std::vector<PlaneConstraint>&) const override { return true; }
@@ -85,14 +125,16 @@ class FrictionForce final : public ForceTerm {
     double y;           // |v_t|
     double g;           // f1(y) / y
     double g_over_y;    // g'(y) / y (0 at y = 0, where v_t v_t^T = 0)
-    ContactPhi phi;
+    double f_n;         // the normal force: -phi'(d), or the lagged one
+    double curvature;   // phi''(d) (0 when lagged: f_n does not depend on x)
   };
 
   // Calls visit(particle, mu, sliding) for every free particle in contact
   // with a plane that has friction.
   template <int D, typename Visit>
   void for_each_contact(const Configuration& c, Visit visit) const {
-    for (const FrictionPlane& p : planes_) {
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      const FrictionPlane& p = planes_[k];
       for (int i = 0; i < free_particles_; ++i) {
         Sliding<D> s;
         double d = 0.0, vn = 0.0;
@@ -101,8 +143,17 @@ class FrictionForce final : public ForceTerm {
           d += s.n[r] * (c.x[i * D + r] - p.point[r]);
           vn += s.n[r] * c.v[i * D + r];
         }
-        s.phi = law_(d);
-        if (s.phi.value == 0.0 && s.phi.slope == 0.0) continue;  // not in contact
+        if (lagged_) {
+          s.f_n = lagged_fn_[k * static_cast<std::size_t>(free_particles_) +
+                             static_cast<std::size_t>(i)];
+          s.curvature = 0.0;
+          if (s.f_n == 0.0) continue;  // not in contact at the lagged state
+        } else {
+          const ContactPhi phi = law_(d);
+          if (phi.value == 0.0 && phi.slope == 0.0) continue;  // not in contact
+          s.f_n = -phi.slope;
+          s.curvature = phi.curvature;
+        }
         double y2 = 0.0;
         for (int r = 0; r < D; ++r) {
           s.vt[r] = c.v[i * D + r] - vn * s.n[r];
@@ -124,8 +175,7 @@ class FrictionForce final : public ForceTerm {
   template <int D>
   void add_force_d(const Configuration& c, double* f) const {
     for_each_contact<D>(c, [&](int i, double mu, const Sliding<D>& s) {
-      const double f_n = -s.phi.slope;
-      for (int r = 0; r < D; ++r) f[i * D + r] -= mu * f_n * s.g * s.vt[r];
+      for (int r = 0; r < D; ++r) f[i * D + r] -= mu * s.f_n * s.g * s.vt[r];
     });
   }
 
@@ -133,7 +183,7 @@ class FrictionForce final : public ForceTerm {
   void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
     for_each_contact<D>(c, [&](int i, double mu, const Sliding<D>& s) {
       const BlockSlot& slot = slots_[static_cast<std::size_t>(i)];
-      const double f_n = -s.phi.slope;
+      const double f_n = s.f_n;
       if (dfdv != nullptr) {
         double B[D][D];
         for (int r = 0; r < D; ++r) {
@@ -144,10 +194,10 @@ class FrictionForce final : public ForceTerm {
         }
         add_block<D>(dfdv, slot, B, 1.0);
       }
-      if (dfdx != nullptr) {
+      if (dfdx != nullptr && s.curvature != 0.0) {
         double B[D][D];
         for (int r = 0; r < D; ++r) {
-          for (int q = 0; q < D; ++q) B[r][q] = mu * s.g * s.phi.curvature * s.vt[r] * s.n[q];
+          for (int q = 0; q < D; ++q) B[r][q] = mu * s.g * s.curvature * s.vt[r] * s.n[q];
         }
         add_block<D>(dfdx, slot, B, 1.0);
       }
@@ -157,6 +207,8 @@ class FrictionForce final : public ForceTerm {
   std::vector<FrictionPlane> planes_;
   ContactLaw law_;
   double eps_;
+  bool lagged_ = false;
+  std::vector<double> lagged_fn_;  // per (plane, free particle) while lagged
   int dim_, free_particles_;
   std::vector<BlockSlot> slots_;
 };

@@ -141,6 +141,15 @@ class MechanicalSystem {
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
     return false;
   }
+  // Lagged normal forces (README "Contact with planes"): with x_lag, Coulomb
+  // friction takes its normal force f_n from x_lag instead of from the
+  // evaluated state, which makes it the gradient of a dissipation potential
+  // of v (IPC's lagging, Li et al. 2020); nullptr: from the evaluated state
+  // again. An implicit method lags at the step's start for the duration of
+  // its solve (then derives_from_potentials and jacobian_symmetric may
+  // change) and clears it after; every other evaluation sees friction live.
+  virtual void lag_normal_forces(const Vector* /*x_lag*/) const {}
+
   // The contact planes as constraints (empty without planes). Their forces,
   // and friction's, are not in external_force: a fast solver that reads
   // distance_constraints must solve these too, or refuse the system.

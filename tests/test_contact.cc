@@ -13,6 +13,7 @@
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
+#include "random_scenes.h"
 #include "registry_suite.h"
 #include "experiments/stability.h"
 #include "models/contact.h"
@@ -133,6 +134,52 @@ TEST(Contact, AdmissibleFractionIsWhereTheFirstGapCloses) {
   const ElasticModel penalty(s);
   dx << 0.0, -0.4, 0.0, -0.2;
   EXPECT_EQ(penalty.admissible_fraction(x, dx), std::numeric_limits<double>::infinity());
+}
+
+// Lagged friction (the hand-written implicit methods, during a step): with
+// f_n taken from x_lag, friction is -dW/dv of its dissipation potential W(v),
+// dF/dv is symmetric, and the model says so; cleared, it is live again
+// (no potential, dF/dx not symmetric). At random states of the friction
+// kind's own random instance (planes, penalty or barrier), 2-D and 3-D.
+TEST(Contact, LaggedFrictionIsTheGradientOfItsDissipationPotential) {
+  for (int dim : {2, 3}) {
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      const ElasticModel model(
+          testing::random_scene({&testing::kind_named("friction")}, dim, seed));
+      ASSERT_FALSE(model.derives_from_potentials());
+      ASSERT_FALSE(model.jacobian_symmetric());
+      const Vector x = model.initial_positions(), v = model.initial_velocities();
+      Vector f_live;
+      model.force(0.0, x, v, f_live);
+      model.lag_normal_forces(&x);
+      EXPECT_TRUE(model.derives_from_potentials());
+      EXPECT_TRUE(model.jacobian_symmetric());
+      Vector f;
+      model.force(0.0, x, v, f);
+      EXPECT_LT((f - f_live).norm(), 1e-12 * (1.0 + f.norm()));  // at x_lag itself: the same
+      EXPECT_GT(std::abs(model.velocity_potential(0.0, v)), 0.0);
+      SparseMatrix dfdv;
+      model.jacobians(0.0, x, v, nullptr, &dfdv);
+      const Eigen::MatrixXd K(dfdv);
+      EXPECT_LT((K - K.transpose()).norm(), 1e-12 * (1.0 + K.norm()));
+      const double eps = 1e-6;
+      for (Eigen::Index k = 0; k < v.size(); ++k) {
+        Vector vp = v, vm = v;
+        vp[k] += eps;
+        vm[k] -= eps;
+        const double dW =
+            (model.velocity_potential(0.0, vp) - model.velocity_potential(0.0, vm)) / (2 * eps);
+        const double dV =
+            (model.position_potential(0.0, x + eps * Vector::Unit(x.size(), k)) -
+             model.position_potential(0.0, x - eps * Vector::Unit(x.size(), k))) / (2 * eps);
+        EXPECT_NEAR(f[k], -dV - dW, 1e-6 * (1.0 + std::abs(f[k])))
+            << dim << "-D, seed " << seed << ", coordinate " << k;
+      }
+      model.lag_normal_forces(nullptr);
+      EXPECT_FALSE(model.derives_from_potentials());
+      EXPECT_FALSE(model.jacobian_symmetric());
+    }
+  }
 }
 
 // Records the smallest gap seen at any output time.
