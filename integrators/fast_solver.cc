@@ -11,6 +11,16 @@ StepResult FastSolver::do_initialize() {
         " does not solve yet; use implicit-euler, or an explicit method at a small --dt");
   }
   system().plane_constraints(planes_);
+  for (const PlaneConstraint& plane : planes_) {
+    if (!(plane.stiffness > 0.0)) {
+      // A projection puts a particle on the plane, where the barrier's
+      // energy is infinite.
+      return StepResult::failure(
+          name() + ": this scene's contact is the barrier, whose energy is infinite on the plane, "
+                   "where a projection puts a particle; use the penalty contact with " + name() +
+          ", or implicit-euler with the barrier");
+    }
+  }
   const Eigen::Index n = system().dofs() / dim_;
   inv_particle_mass_.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) inv_particle_mass_[i] = inv_mass()[i * dim_];

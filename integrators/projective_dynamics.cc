@@ -24,14 +24,6 @@ ProjectiveDynamics::ProjectiveDynamics()
 StepResult ProjectiveDynamics::do_initialize() {
   StepResult base = FastSolver::do_initialize();
   if (!base.ok) return base;
-  for (const PlaneConstraint& plane : planes_) {
-    if (!(plane.stiffness > 0.0)) {
-      return StepResult::failure(
-          "projective-dynamics: this scene's contact is the barrier, which is not a projective "
-          "constraint (its energy is infinite on the plane); use the penalty contact with "
-          "projective-dynamics, or implicit-euler with the barrier");
-    }
-  }
   contacts_.clear();
   const Eigen::Index n = inv_particle_mass_.size();
   std::vector<Eigen::Triplet<double>> entries;

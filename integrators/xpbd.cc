@@ -24,20 +24,6 @@ Xpbd::Xpbd()
                                     "nonlinear springs can gain energy; damping, drag and wind "
                                     "are explicit"}) {}
 
-StepResult Xpbd::do_initialize() {
-  StepResult base = FastSolver::do_initialize();
-  if (!base.ok) return base;
-  for (const PlaneConstraint& plane : planes_) {
-    if (!(plane.stiffness > 0.0)) {
-      return StepResult::failure(
-          "xpbd: this scene's contact is the barrier, whose energy is infinite where a "
-          "projection puts a particle (on the plane); use the penalty contact with xpbd, or "
-          "implicit-euler with the barrier");
-    }
-  }
-  return StepResult::success();
-}
-
 StepResult Xpbd::do_step(double h) {
   const int substeps = options().substeps > 0 ? options().substeps : kDefaultSubsteps;
   const int iterations = options().iterations > 0 ? options().iterations : kDefaultIterations;

@@ -43,7 +43,6 @@ class Xpbd final : public FastSolver {
   static constexpr int kDefaultIterations = 1;
 
  protected:
-  StepResult do_initialize() override;
   StepResult do_step(double h) override;
 
  private:
