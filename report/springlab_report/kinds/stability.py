@@ -1,6 +1,7 @@
-"""stability: the largest stable step of each fixed-step method against
-spring stiffness, measured by bisection, next to the limit theory gives from
-w_max; and a map of final/initial energy over (dt, k)."""
+"""stability: the largest stable step of each fixed-step method against a
+swept parameter (spring stiffness, Young's modulus, cell count), measured by
+bisection, next to the limit theory gives from w_max; and a map of
+final/initial energy over (dt, k)."""
 
 import math
 
@@ -16,12 +17,37 @@ from ..figures import esc, facts_html, figure_html, fmt, log_log, new_figure, sw
 KIND = "stability"
 TITLE = "Stability limits"
 ABOUT = (
-    "For each stiffness k, the largest step that does not blow up, found by bisection, next to "
-    "the limit theory predicts from the highest frequency w_max of the linearized scene "
+    "For each value of the swept parameter (a spring's stiffness k, a solid's Young's modulus E "
+    "or its number of cells), the largest step that does not blow up, found by bisection, next "
+    "to the limit theory predicts from the highest frequency w_max of the linearized scene "
     "(2/w_max for symplectic Euler and Verlet, 2√2/w_max for RK4). Theory says the points sit "
-    "on their dashed lines and fall like 1/√k: a 100 times stiffer spring needs a 10 times "
-    "smaller step. A- and L-stable methods have no limit. The map shows the energy on both "
+    "on their dashed lines and fall like 1/√k or 1/√E (a 100 times stiffer material needs a 10 "
+    "times smaller step) and, on solids, like the element size dx (the CFL-like "
+    "h ~ dx / √(E/ρ)). A- and L-stable methods have no limit. The map shows the energy on both "
     "sides of the boundary: white kept, red gained, blue lost.")
+
+# The x axis of a swept parameter.
+PARAMETER_LABELS = {
+    "k": "spring stiffness k [N/m]",
+    "young": "Young's modulus E [Pa]",
+    "nx": "cells along the length nx (element length L / nx)",
+    "n": "cells per side n (element size: side / n)",
+}
+
+
+def swept_parameter(exp, scene):
+    """The parameter a scene's case sweeps ("k" when the settings do not say)."""
+    for case in exp.setting("cases") or []:
+        if not isinstance(case, dict):
+            continue
+        named = case.get("scene")
+        if isinstance(named, dict):  # the scene itself (built with parameters)
+            named = named.get("name")
+        if named == scene:
+            name = case.get("stiffness")
+            if isinstance(name, str) and name:
+                return name
+    return "k"
 
 
 def limits_table(exp):
@@ -68,9 +94,15 @@ def limit_facts(exp, integrators):
         ratio = st["max_stable_dt"][idx] / st["theory_dt"][idx]
         ok = np.isfinite(ratio)
         if ok.any():
+            parameter = swept_parameter(exp, scene)
             lo, hi = fmt(float(np.min(ratio[ok])), 4), fmt(float(np.max(ratio[ok])), 4)
-            text = "%s on %s: measured / theory %s over %d stiffnesses" % (
-                name, scene, lo if lo == hi else "between %s and %s" % (lo, hi), int(ok.sum()))
+            text = "%s on %s: measured / theory %s over %d %s" % (
+                name, scene, lo if lo == hi else "between %s and %s" % (lo, hi), int(ok.sum()),
+                "stiffnesses" if parameter == "k" else "values of %s" % parameter)
+            k, m = st["k"][idx][ok], st["max_stable_dt"][idx][ok]
+            if len(set(k.tolist())) >= 2 and np.all(k > 0) and np.all(m > 0):
+                slope = np.polyfit(np.log(k), np.log(m), 1)[0]
+                text += "; the limit goes like %s^%s" % (parameter, fmt(float(slope), 3))
             if integrators.stability(name).get("limit_wh") == 0:
                 text += " (its theory, the time to grow by the blow-up factor, is exact for " \
                         "one mode, an estimate for several)"
@@ -140,7 +172,8 @@ def stability_figure(exp, integrators, figs):
                 ks = ", ".join(fmt(x) for x in st["k"][rows[nolimit[rows]]])
                 free.append("%s (only at k = %s)" % (integ, ks))
         log_log(ax, "no integrator with a step limit on this scene")
-        ax.set_xlabel("spring stiffness k [N/m]")
+        parameter = swept_parameter(exp, scene)
+        ax.set_xlabel(PARAMETER_LABELS.get(parameter, parameter))
         ax.set_ylabel("largest stable step dt [s]")
         ax.set_title(scene, loc="left", fontweight="bold")
         ax.grid(True, which="major", alpha=0.3)
