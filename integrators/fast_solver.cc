@@ -1,5 +1,7 @@
 #include "integrators/fast_solver.h"
 
+#include <algorithm>
+
 namespace springlab {
 
 StepResult FastSolver::do_initialize() {
@@ -38,6 +40,24 @@ Eigen::Vector3d FastSolver::difference(const DistanceConstraint& c, const Vector
     d[r] = x[c.a * dim_ + r] - (c.b >= 0 ? x[c.b * dim_ + r] : c.anchor[r]);
   }
   return d;
+}
+
+double FastSolver::gap(const PlaneConstraint& plane, const Vector& x, Eigen::Index i) const {
+  double d = -plane.offset;
+  for (int r = 0; r < dim_; ++r) d += plane.normal[r] * x[i * dim_ + r];
+  return d;
+}
+
+void FastSolver::slow_tangential_velocity(const PlaneConstraint& plane, Eigen::Index i,
+                                          double max_dv) {
+  double vn = 0.0;
+  for (int r = 0; r < dim_; ++r) vn += plane.normal[r] * v_[i * dim_ + r];
+  Eigen::Vector3d vt = Eigen::Vector3d::Zero();
+  for (int r = 0; r < dim_; ++r) vt[r] = v_[i * dim_ + r] - vn * plane.normal[r];
+  const double speed = vt.norm();
+  if (!(speed > 0.0)) return;
+  const double dv = std::min(max_dv, speed);
+  for (int r = 0; r < dim_; ++r) v_[i * dim_ + r] -= dv * vt[r] / speed;
 }
 
 }  // namespace springlab

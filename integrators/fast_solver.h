@@ -27,6 +27,12 @@ class FastSolver : public Integrator {
   // d = x_a - x_b (or x_a - anchor) of constraint c at x.
   Eigen::Vector3d difference(const DistanceConstraint& c, const Vector& x) const;
 
+  // n.x_i - offset: particle i's gap to a contact plane at x.
+  double gap(const PlaneConstraint& plane, const Vector& x, Eigen::Index i) const;
+  // Dynamic Coulomb friction on v_: particle i's tangential velocity loses
+  // min(max_dv, |v_t|) along -v_t/|v_t| (Mueller et al. 2020, sec. 3.6).
+  void slow_tangential_velocity(const PlaneConstraint& plane, Eigen::Index i, double max_dv);
+
   int dim_ = 2;
   std::vector<DistanceConstraint> constraints_;
   std::vector<PlaneConstraint> planes_;  // contact planes (xpbd solves them)

@@ -61,13 +61,6 @@ bool ProjectiveDynamics::factor(double h, std::string& error) {
   return true;
 }
 
-double ProjectiveDynamics::gap(const PlaneConstraint& plane, const Vector& x,
-                               Eigen::Index i) const {
-  double d = -plane.offset;
-  for (int r = 0; r < dim_; ++r) d += plane.normal[r] * x[i * dim_ + r];
-  return d;
-}
-
 bool ProjectiveDynamics::update_contacts() {
   std::vector<ContactPair> now;
   const Eigen::Index n = inv_particle_mass_.size();
@@ -101,14 +94,7 @@ void ProjectiveDynamics::apply_friction(double h) {
       continue;
     }
     // Dynamic: slow the tangential velocity by h mu f_n / m.
-    double vn = 0.0;
-    for (int r = 0; r < dim_; ++r) vn += plane.normal[r] * v_[i * dim_ + r];
-    Eigen::Vector3d vt = Eigen::Vector3d::Zero();
-    for (int r = 0; r < dim_; ++r) vt[r] = v_[i * dim_ + r] - vn * plane.normal[r];
-    const double speed = vt.norm();
-    if (!(speed > 0.0)) continue;
-    const double dv = std::min(h * limit * w, speed);
-    for (int r = 0; r < dim_; ++r) v_[i * dim_ + r] -= dv * vt[r] / speed;
+    slow_tangential_velocity(plane, i, h * limit * w);
   }
 }
 

@@ -50,7 +50,6 @@ class ProjectiveDynamics final : public FastSolver {
   // The (particle, plane) pairs in contact at x_n or at y; true when they
   // changed (the matrix must be factored again).
   bool update_contacts();
-  double gap(const PlaneConstraint& plane, const Vector& x, Eigen::Index i) const;
   // Friction of the planes on (x_, x_new_, v_) after the iterations.
   void apply_friction(double h);
 

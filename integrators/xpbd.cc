@@ -74,13 +74,12 @@ void Xpbd::project_planes(double hs) {
     const double compliance = plane.stiffness > 0.0 ? 1.0 / (plane.stiffness * hs * hs) : 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
       double& lambda = lambda_planes_[static_cast<Eigen::Index>(p) * n + i];
-      double gap = -plane.offset;
-      for (int r = 0; r < dim_; ++r) gap += plane.normal[r] * x_[i * dim_ + r];
-      if (gap >= 0.0 && lambda == 0.0) continue;  // apart, and never pushed this substep
+      const double d = gap(plane, x_, i);
+      if (d >= 0.0 && lambda == 0.0) continue;  // apart, and never pushed this substep
       const double w = inv_particle_mass_[i];
       // The inequality: lambda + dlambda >= 0.
       const double dlambda =
-          std::max((-gap - compliance * lambda) / (w + compliance), -lambda);
+          std::max((-d - compliance * lambda) / (w + compliance), -lambda);
       for (int r = 0; r < dim_; ++r) x_[i * dim_ + r] += w * dlambda * plane.normal[r];
       lambda += dlambda;
       // Static friction: the tangential displacement of the substep is
@@ -109,15 +108,8 @@ void Xpbd::apply_friction(double hs) {
     for (Eigen::Index i = 0; i < n; ++i) {
       const double lambda = lambda_planes_[static_cast<Eigen::Index>(p) * n + i];
       if (!(lambda > 0.0)) continue;
-      double vn = 0.0;
-      for (int r = 0; r < dim_; ++r) vn += plane.normal[r] * v_[i * dim_ + r];
-      Eigen::Vector3d vt = Eigen::Vector3d::Zero();
-      for (int r = 0; r < dim_; ++r) vt[r] = v_[i * dim_ + r] - vn * plane.normal[r];
-      const double speed = vt.norm();
-      if (!(speed > 0.0)) continue;
       // |dv| = h_s mu f_n / m with f_n = lambda / h_s^2, at most the speed.
-      const double dv = std::min(plane.friction * lambda * inv_particle_mass_[i] / hs, speed);
-      for (int r = 0; r < dim_; ++r) v_[i * dim_ + r] -= dv * vt[r] / speed;
+      slow_tangential_velocity(plane, i, plane.friction * lambda * inv_particle_mass_[i] / hs);
     }
   }
 }
