@@ -13,6 +13,7 @@ std::unique_ptr<Experiment> make_stability_region_experiment(const DefinitionObj
 std::unique_ptr<Experiment> make_step_energy_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -26,6 +27,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"step-energy", &make_step_energy_experiment},
       {"motion", &make_motion_experiment},
       {"contact", &make_contact_experiment},
+      {"mode", &make_mode_experiment},
   };
   return kinds;
 }

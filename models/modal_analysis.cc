@@ -44,6 +44,30 @@ double max_angular_frequency(const ElasticModel& model, const Vector& x, const V
   return lambda > 0.0 ? std::sqrt(lambda) : 0.0;
 }
 
+Mode lowest_mode(const ElasticModel& model, const Vector& x, const Vector& v) {
+  const Eigen::Index n = model.dofs();
+  if (n > kMaxModeUnknowns) {
+    throw std::invalid_argument("the lowest mode needs a dense " + std::to_string(n) + " x " +
+                                std::to_string(n) + " eigensolver; at most " +
+                                std::to_string(kMaxModeUnknowns) + " unknowns");
+  }
+  SparseMatrix dfdx;
+  model.jacobians(0.0, x, v, &dfdx, nullptr);
+  // K phi = w^2 M phi  <=>  (M^-1/2 K M^-1/2) psi = w^2 psi, phi = M^-1/2 psi,
+  // and |psi| = 1 gives phi^T M phi = 1.
+  const Vector s = model.mass().cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd K = -0.5 * (Eigen::MatrixXd(dfdx) + Eigen::MatrixXd(dfdx).transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s.asDiagonal() * K * s.asDiagonal());
+  Mode mode;
+  const double lambda = eig.eigenvalues()[0];
+  mode.w = lambda > 0.0 ? std::sqrt(lambda) : 0.0;
+  mode.phi = s.asDiagonal() * eig.eigenvectors().col(0);
+  Eigen::Index largest = 0;
+  mode.phi.cwiseAbs().maxCoeff(&largest);
+  if (mode.phi[largest] < 0.0) mode.phi = -mode.phi;
+  return mode;
+}
+
 std::vector<std::complex<double>> first_order_eigenvalues(const ElasticModel& model,
                                                           const Vector& x, const Vector& v) {
   const Eigen::Index n = model.dofs();

@@ -33,4 +33,17 @@ inline constexpr int kMaxFirstOrderUnknowns = 4000;
 std::vector<std::complex<double>> first_order_eigenvalues(const ElasticModel& model,
                                                           const Vector& x, const Vector& v);
 
+// The slowest vibration mode at (x, v), t = 0: the smallest eigenvalue w^2
+// of M^-1 K (K the symmetric part of -dF/dx) and its shape phi, normalized
+// so that phi^T M phi = 1, with the sign that makes its largest component
+// positive. Dense symmetric eigensolver on M^-1/2 K M^-1/2; throws
+// std::invalid_argument above kMaxModeUnknowns unknowns (about 10 s). w is 0 when the
+// smallest eigenvalue is not positive (a free body has rigid modes).
+inline constexpr int kMaxModeUnknowns = 1500;
+struct Mode {
+  double w = 0.0;  // rad/s
+  Vector phi;      // one entry per unknown
+};
+Mode lowest_mode(const ElasticModel& model, const Vector& x, const Vector& v);
+
 }  // namespace springlab

@@ -132,7 +132,7 @@ TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
-            "motion, contact)");
+            "motion, contact, mode)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -1240,6 +1240,61 @@ TEST(ExperimentRunner, EveryTableStartsWithTheTaskColumn) {
   const Json cloth_settings = Json::parse(read_text(out / "cloth-showcase.json"));
   EXPECT_EQ(cloth_settings.at("n"), 3);
   EXPECT_EQ(cloth_settings.at("frames"), (Json{0.0, 0.04, 0.1}));
+}
+
+// mode: on the linear beam every one-step method carries the first bending
+// mode as it carries one oscillator of the mode's frequency w1. The step
+// map read off one oscillator step gives implicit Euler's closed form
+// (R = 1 / (1 - i w h): period 2 pi h / atan(w h), amplitude per period
+// (1 + (w h)^2)^(-pi / atan(w h))) and symplectic Euler's
+// (cos(theta) = 1 - (w h)^2 / 2, no damping), and what the beam run
+// measures (zero crossings; the slope of log r) agrees with it to 1e-3.
+// The explicit method diverges at 10 steps per period: the beam's fastest
+// mode, not the first, limits it. A scene with gravity is refused.
+TEST(ExperimentKinds, ModeMeasuresPeriodAndDampingAgainstTheStepMap) {
+  const Json beam = {{"dimension", 2}, {"nx", 10}, {"ny", 1}, {"model", 0}, {"g", 0}};
+  const LoadedExperiment loaded =
+      parse({{"experiment", "mode"},
+             {"integrators", {"implicit-euler", "symplectic-euler", "implicit-midpoint"}},
+             {"scene", "beam"}, {"parameters", beam}, {"amplitude", 0.01}, {"periods", 10},
+             {"steps_per_period", {10, 40}}});
+  ASSERT_EQ(loaded.experiment->task_count(), 6u);
+  const Json settings = loaded.experiment->settings();
+  const double w = settings.at("w").get<double>();
+  EXPECT_NEAR(settings.at("period_exact").get<double>(), 2 * std::numbers::pi / w, 1e-15);
+  EXPECT_GT(settings.at("w_max").get<double>(), 20 * w);  // the stiff modes above
+  for (std::size_t task = 0; task < 6; ++task) {
+    const auto tables = run_task(loaded, task);
+    const Record& row = tables[0][0];
+    const double h = number(row.at("dt")), wh = w * h;
+    const std::string name = row.at("integrator");
+    SCOPED_TRACE(name + " at " + row.at("steps_per_period") + " steps per period");
+    ASSERT_EQ(number(row.at("steps_per_period")) * h, 2 * std::numbers::pi / w);
+    const double predicted = number(row.at("period_predicted"));
+    const double predicted_amplitude = number(row.at("amplitude_per_period_predicted"));
+    if (name == "implicit-euler") {
+      EXPECT_NEAR(predicted, 2 * std::numbers::pi * h / std::atan(wh), 1e-9 * predicted);
+      EXPECT_NEAR(predicted_amplitude, std::pow(1 + wh * wh, -std::numbers::pi / std::atan(wh)),
+                  1e-9);
+    }
+    if (name == "symplectic-euler") {
+      EXPECT_NEAR(predicted, 2 * std::numbers::pi * h / std::acos(1 - wh * wh / 2),
+                  1e-9 * predicted);
+      EXPECT_NEAR(predicted_amplitude, 1.0, 1e-9);
+      EXPECT_EQ(row.at("status"), "diverged");
+      continue;
+    }
+    ASSERT_EQ(row.at("status"), "completed");
+    EXPECT_NEAR(number(row.at("period")), predicted, 1e-3 * predicted);
+    EXPECT_NEAR(number(row.at("amplitude_per_period")), predicted_amplitude, 1e-3);
+    EXPECT_NEAR(number(tables[1].front().at("q")), 1.0, 1e-12);  // starts at the amplitude
+  }
+  Json with_gravity = beam;
+  with_gravity["g"] = 9.81;
+  EXPECT_EQ(definition_error({{"experiment", "mode"}, {"scene", "beam"},
+                              {"parameters", with_gravity}, {"amplitude", 0.01},
+                              {"steps_per_period", {10}}}),
+            "def.json: scene: the mode is measured about the rest shape, so the scene needs g = 0");
 }
 
 }  // namespace

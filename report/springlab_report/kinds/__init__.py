@@ -3,8 +3,8 @@ name in the settings file's "experiment"), TITLE, ABOUT (what theory says to
 look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
-from . import (cloth_showcase, contact, convergence, damping_budget, energy, motion, stability,
-               stability_region, step_energy, work_precision)
+from . import (cloth_showcase, contact, convergence, damping_budget, energy, mode, motion,
+               stability, stability_region, step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
     motion,
@@ -15,6 +15,7 @@ KINDS = {m.KIND: m for m in (
     work_precision,
     damping_budget,
     contact,
+    mode,
     cloth_showcase,
     step_energy,
 )}
