@@ -14,6 +14,7 @@ std::unique_ptr<Experiment> make_step_energy_experiment(const DefinitionObject&)
 std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -28,6 +29,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"motion", &make_motion_experiment},
       {"contact", &make_contact_experiment},
       {"mode", &make_mode_experiment},
+      {"rotation", &make_rotation_experiment},
   };
   return kinds;
 }

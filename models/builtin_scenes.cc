@@ -275,6 +275,12 @@ const std::vector<Generator>& generators() {
                param("size", 0.2, "side length [m]", Range::kPositive),
                param("height", 0.5, "height of its bottom above y = 0 [m]", Range::kAny),
                param("spin", 2, "angular velocity about the vertical [rad/s]", Range::kAny),
+               param("angle", 0,
+                     "the starting pose turned about the vertical through the centre [degrees] "
+                     "(the rest shape is not: a rigid rotation, which only the linear model "
+                     "resists)",
+                     Range::kAny),
+               param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
                param("contact", 0, "ground contact: 0 penalty, 1 barrier (IPC)", Range::kZeroOrOne),
                param("contact_stiffness", 1e4,
                      "penalty k_c or barrier kappa [N/m] (barrier distance 0.01 m)",

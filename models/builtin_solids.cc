@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <string>
 
 #include "models/contact.h"
@@ -153,23 +154,32 @@ Scene build_membrane(const Values& p) {
 
 // A box of side `size` in tetrahedra, its bottom `height` above the ground
 // plane y = 0 (README "Contact with planes": penalty or barrier contact), falling under gravity
-// and spinning about the vertical at `spin` rad/s: a rigid rotation, which
-// the rotation-invariant models carry without strain and the linear model
-// does not.
+// and spinning about the vertical at `spin` rad/s, its starting pose turned by
+// `angle` degrees from its rest shape: rigid motions, which the
+// rotation-invariant models carry without strain and the linear model does
+// not (a finite rotation strains it; an infinitesimal one, the spin's
+// velocity field, costs it nothing).
 Scene build_block(const Values& p) {
   const int n = static_cast<int>(p.at("n"));
   const double size = p.at("size"), height = p.at("height"), spin = p.at("spin");
   Scene scene;
   scene.dimension = 3;
-  scene.block<Gravity>().acceleration = {0.0, -9.81, 0.0};
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
   const int material = add_material(scene, p);
   auto index = [&](int i, int j, int k) { return (i * (n + 1) + j) * (n + 1) + k; };
+  // The starting pose: the rest shape turned by `angle` about the vertical
+  // axis through its centre (x = z = 0).
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(p.at("angle") * std::numbers::pi / 180.0, Eigen::Vector3d::UnitY())
+          .toRotationMatrix();
   for (int i = 0; i <= n; ++i) {
     for (int j = 0; j <= n; ++j) {
       for (int k = 0; k <= n; ++k) {
-        const Eigen::Vector3d x(size * i / n - size / 2, height + size * j / n,
+        const Eigen::Vector3d X(size * i / n - size / 2, height + size * j / n,
                                 size * k / n - size / 2);
+        const Eigen::Vector3d x = turn * X;
         Particle particle = at(x, false);
+        if (x != X) particle.X = X;
         particle.v = Eigen::Vector3d(0.0, spin, 0.0).cross(Eigen::Vector3d(x.x(), 0.0, x.z()));
         scene.particles.push_back(particle);
       }

@@ -132,7 +132,7 @@ TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
-            "motion, contact, mode)");
+            "motion, contact, mode, rotation)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -1295,6 +1295,58 @@ TEST(ExperimentKinds, ModeMeasuresPeriodAndDampingAgainstTheStepMap) {
                               {"parameters", with_gravity}, {"amplitude", 0.01},
                               {"steps_per_period", {10}}}),
             "def.json: scene: the mode is measured about the rest shape, so the scene needs g = 0");
+}
+
+// rotation: every material model on the block's two rigid motions. Spinning
+// at w, the linear block feels no force (the spin's velocity field is an
+// infinitesimal rotation, strain-free to eps = (F + F^T)/2 - I), so its
+// particles fly straight and its radius of gyration grows to exactly
+// sqrt((r_h^2 (1 + (w t)^2) + r_v^2) / (r_h^2 + r_v^2)) = sqrt((2 (1 + (w t)^2) + 1) / 3)
+// for a cube (r_h^2 = 2 r_v^2), with no elastic energy. Released turned by
+// theta, it starts with V 2 (mu + lambda) (1 - cos theta)^2; the four
+// rotation-invariant models stay rigid (1e-9) with no energy in both, and
+// under implicit Euler too.
+TEST(ExperimentKinds, RotationShowsLinearElasticityGhostForces) {
+  const double w = 3, T = 0.5, theta = 60 * std::numbers::pi / 180, E = 1e5, nu = 0.3;
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "rotation"},
+       {"integrators", {"verlet", "implicit-euler"}},
+       {"scene", "block"},
+       {"parameters", {{"n", 2}, {"g", 0}, {"height", 0}, {"young", E}, {"poisson", nu}}},
+       {"scenarios", {{{"title", "spin"}, {"parameters", {{"spin", w}}}},
+                      {{"title", "turned"}, {"parameters", {{"spin", 0}, {"angle", 60}}}}}},
+       {"dt", 1e-3},
+       {"t_end", T}});
+  const std::size_t models = 5, integrators = 2;
+  ASSERT_EQ(loaded.experiment->task_count(), 2 * models * integrators);
+  const double mu = E / (2 * (1 + nu)), lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
+  const double V = 0.2 * 0.2 * 0.2;
+  for (std::size_t task = 0; task < loaded.experiment->task_count(); ++task) {
+    const auto tables = run_task(loaded, task);
+    const Record& run = tables[1][0];
+    const bool spin = task < models * integrators;
+    SCOPED_TRACE(run.at("model") + ", " + run.at("integrator") + (spin ? ", spin" : ", turned"));
+    ASSERT_EQ(run.at("status"), "completed");
+    if (run.at("model") == "linear") {
+      if (spin) {
+        EXPECT_NEAR(number(run.at("gyration_final")), std::sqrt((2 * (1 + w * w * T * T) + 1) / 3),
+                    1e-9);
+        EXPECT_LT(number(run.at("elastic_max")), 1e-15);
+      } else {
+        const double ghost = V * 2 * (mu + lambda) * std::pow(1 - std::cos(theta), 2);
+        EXPECT_NEAR(number(run.at("elastic_initial")), ghost, 1e-9 * ghost);
+        EXPECT_GT(number(run.at("gyration_max")), 1.1);
+      }
+      continue;
+    }
+    if (spin) {
+      EXPECT_NEAR(number(run.at("gyration_final")), 1.0, 1e-3);  // the centrifugal stretch
+      EXPECT_LT(number(run.at("elastic_max")), 0.01 * number(run.at("kinetic_initial")));
+    } else {
+      EXPECT_NEAR(number(run.at("gyration_max")), 1.0, 1e-9);
+      EXPECT_LT(std::abs(number(run.at("elastic_max"))), 1e-9);
+    }
+  }
 }
 
 }  // namespace

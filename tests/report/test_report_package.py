@@ -338,6 +338,55 @@ class ModeKind(unittest.TestCase):
         self.assertTrue((self.s.dir / "out" / "mode.png").is_file())
 
 
+def rotation_data(scratch):
+    """A rotation experiment: one scenario, verlet; linear swells to 5 x its
+    radius of gyration at no energy, corotated stays rigid."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "scenario", "scene", "model", "integrator", "dt", "t", "kinetic", "elastic",
+            "gyration"]
+    runs = ["task", "scenario", "scene", "model", "integrator", "dt", "status", "diverged_at",
+            "kinetic_initial", "elastic_initial", "elastic_max", "gyration_max",
+            "gyration_final", "steps", "wall_seconds", "failure"]
+    scratch.json("rotation.json", {"name": "rotation", "experiment": "rotation",
+                                   "title": "Rotation", "models": ["linear", "corotated"],
+                                   "scenarios": [{"title": "spinning", "scenes": []}],
+                                   "tables": [{"file": "rotation.csv", "suffix": "",
+                                               "columns": cols},
+                                              {"file": "rotation-runs.csv", "suffix": "runs",
+                                               "columns": runs}]})
+    rows, run_rows = [",".join(cols)], [",".join(runs)]
+    for task, (model, g_end, elastic) in enumerate((("linear", 5.0, 0.0),
+                                                   ("corotated", 1.0001, 2e-4))):
+        for k in range(11):
+            t = k / 10
+            g = 1 + (g_end - 1) * t
+            rows.append("%d,0,block,%s,verlet,0.01,%r,0.3,%r,%r" % (task, model, t, elastic, g))
+        run_rows.append("%d,0,block,%s,verlet,0.01,completed,,0.3,0,%r,%r,%r,100,0.1," % (
+            task, model, elastic, g_end, g_end))
+    scratch.write("rotation.csv", "\n".join(rows) + "\n")
+    scratch.write("rotation-runs.csv", "\n".join(run_rows) + "\n")
+
+
+class RotationKind(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_sentence_follows_the_runs(self):
+        rotation_data(self.s)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        facts = [html.unescape(f) for f in re.findall(r"<li>([^<]*)</li>", page)]
+        self.assertIn("spinning, verlet: linear ends at 5 times its starting radius of gyration "
+                      "(largest 5), its elastic energy 0 J at the start and at most 0 J; "
+                      "corotated stays rigid: the radius of gyration within 0.1 % of its start, "
+                      "the elastic energy under 1 % of the starting kinetic energy (or 1e-9 J).",
+                      facts)
+        self.assertTrue((self.s.dir / "out" / "rotation.png").is_file())
+
+
 class MotionCases(unittest.TestCase):
     """Two cases with the same scene name and step (the cloth with and
     without the ground): each player shows its own case's runs."""

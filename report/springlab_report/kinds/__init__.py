@@ -4,7 +4,7 @@ look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
 from . import (cloth_showcase, contact, convergence, damping_budget, energy, mode, motion,
-               stability, stability_region, step_energy, work_precision)
+               rotation, stability, stability_region, step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
     motion,
@@ -16,6 +16,7 @@ KINDS = {m.KIND: m for m in (
     damping_budget,
     contact,
     mode,
+    rotation,
     cloth_showcase,
     step_energy,
 )}
