@@ -6,7 +6,10 @@
 // rotation). An inverted solid keeps det R = 1, so its last sigma is
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
+#include <Eigen/LU>
+
 #include "models/materials/kinematics.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 namespace {
@@ -31,6 +34,29 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
          m.lambda * (contract(v.g, dF) * v.g + (v.J - 1.0) * volume_differential(F, dF));
 }
 
+// dPdF = 2 mu (I - dR/dF) + lambda g g^T + lambda (J - 1) H_J (tangent3.h),
+// with dR/dF column by column: along E_ab, R^T dF - dF^T R = W S + S W
+// (polar_differential in kinematics.cc) gives W = [w]x,
+// w = (tr(S) I - S)^-1 u, one inverse for all nine columns.
+Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+  const Polar3 p = polar3(F);
+  const Eigen::Matrix3d M_inv =
+      (p.S.trace() * Eigen::Matrix3d::Identity() - p.S).inverse();
+  const Eigen::Matrix<double, 9, 1> g = vec(cofactor(F));
+  Tangent3 T = 2.0 * m.mu * Tangent3::Identity() + m.lambda * g * g.transpose() +
+               m.lambda * (F.determinant() - 1.0) * volume_hessian(F);
+  for (int b = 0; b < 3; ++b) {
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();  // R^T E_ab
+      A.col(b) = p.R.row(a).transpose();
+      const Eigen::Matrix3d K = A - A.transpose();
+      const Eigen::Vector3d w = M_inv * Eigen::Vector3d(K(2, 1), K(0, 2), K(1, 0));
+      T.col(a + 3 * b) -= 2.0 * m.mu * vec(p.R * cross_matrix(w));
+    }
+  }
+  return T;
+}
+
 }  // namespace
 
 const MaterialModel& corotated_material() {
@@ -40,6 +66,7 @@ const MaterialModel& corotated_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
+      .dPdF3 = dPdF3,
   };
   return model;
 }

@@ -63,9 +63,26 @@ Mat volume_differential(const Mat& F, const Mat& dF) {
   return dg;
 }
 
+Polar3 polar3(const Eigen::Matrix3d& F) {
+  // As polar() below for a solid, with fixed sizes.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU();
+  const Eigen::Matrix3d& V = svd.matrixV();
+  if ((U * V.transpose()).determinant() < 0.0) U.col(2) *= -1.0;
+  Polar3 p;
+  p.R = U * V.transpose();
+  const Eigen::Matrix3d S = p.R.transpose() * F;
+  p.S = 0.5 * (S + S.transpose());
+  return p;
+}
+
 Polar polar(const Mat& F) {
   Polar p;
-  if (F.rows() == F.cols()) {
+  if (F.rows() == 3 && F.cols() == 3) {
+    const Polar3 p3 = polar3(F);
+    p.R = p3.R;
+    p.S = p3.S;
+  } else if (F.rows() == F.cols()) {
     // R = U V^T from the SVD; a reflection (det < 0: an inverted element) is
     // turned into a rotation by flipping U's last column, so S = R^T F keeps
     // a negative eigenvalue instead (Irving et al. 2004).

@@ -32,6 +32,11 @@ struct Polar {
   Mat S;  // k x k symmetric, F = R S
 };
 Polar polar(const Mat& F);
+// The same for a 3 x 3 F, fixed size (the tetrahedra's fast path).
+struct Polar3 {
+  Eigen::Matrix3d R, S;
+};
+Polar3 polar3(const Eigen::Matrix3d& F);
 // dR = (dR/dF)[dF] at F = R S.
 Mat polar_differential(const Polar& p, const Mat& F, const Mat& dF);
 

@@ -5,6 +5,7 @@
 // membranes (README "Finite elements"). Sifakis and Barbic, "FEM simulation of 3D deformable
 // solids", SIGGRAPH course 2012, §3.
 #include "models/materials/material.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 namespace {
@@ -29,6 +30,20 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
          m.lambda * dF.trace() * Mat::Identity(F.rows(), F.cols());
 }
 
+// dPdF = mu (I + K) + lambda vec(I) vec(I)^T, K the transpose on vec(F):
+// dP_rc/dF_ab = mu (d_ra d_cb + d_rb d_ca) + lambda d_rc d_ab. Constant.
+Tangent3 dPdF3(const Eigen::Matrix3d&, const Lame& m) {
+  Tangent3 T = Tangent3::Zero();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      T(r + 3 * c, r + 3 * c) += m.mu;
+      T(r + 3 * c, c + 3 * r) += m.mu;
+    }
+  }
+  const Eigen::Matrix<double, 9, 1> I = vec(Eigen::Matrix3d::Identity());
+  return T + m.lambda * I * I.transpose();
+}
+
 }  // namespace
 
 const MaterialModel& linear_material() {
@@ -39,6 +54,7 @@ const MaterialModel& linear_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
+      .dPdF3 = dPdF3,
   };
   return model;
 }

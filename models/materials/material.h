@@ -27,6 +27,8 @@ namespace springlab {
 using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
 // dPdF on vec(F): at most 9 x 9.
 using Tangent = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
+// The same for a 3 x 3 F (a tetrahedron), fixed size.
+using Tangent3 = Eigen::Matrix<double, 9, 9>;
 
 // Lame parameters from Young's modulus E and Poisson's ratio nu (README "Finite elements"):
 // mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
@@ -47,6 +49,10 @@ struct MaterialModel {
   Mat (*P)(const Mat& F, const Lame& m) = nullptr;
   // dP = (dP/dF)[dF], the change of P along dF (d x k).
   Mat (*dP)(const Mat& F, const Mat& dF, const Lame& m) = nullptr;
+  // dPdF of a 3 x 3 F in closed form (the tetrahedra's fast path,
+  // tangent3.h); nullptr: assembled from dP. The shared tests check it
+  // against the one assembled from dP.
+  Tangent3 (*dPdF3)(const Eigen::Matrix3d& F, const Lame& m) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
@@ -56,7 +62,10 @@ const MaterialModel* find_material_model(std::string_view name);
 std::string material_model_names();
 
 // dPdF on vec(F) (column-major: entry (r, c) of F is r + d c), column by
-// column from dP along each basis matrix E_rc.
+// column from dP along each basis matrix E_rc: the reference every closed
+// form is checked against.
 Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m);
+// The 3 x 3 one: the model's closed form when it has one, else dPdF.
+Tangent3 dPdF3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m);
 
 }  // namespace springlab

@@ -59,3 +59,12 @@ Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m) {
 }
 
 }  // namespace springlab
+
+namespace springlab {
+
+Tangent3 dPdF3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m) {
+  if (model.dPdF3 != nullptr) return model.dPdF3(F, m);
+  return dPdF(model, Mat(F), m);
+}
+
+}  // namespace springlab

@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "models/materials/kinematics.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 namespace {
@@ -42,6 +43,17 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
          a * (volume_differential(F, dF) / v.J - dJ / (v.J * v.J) * v.g);
 }
 
+// dPdF = mu I + (lambda - a)/J^2 g g^T + a/J H_J, a = lambda ln J - mu
+// (tangent3.h: g = vec(dJ/dF), H_J its derivative).
+Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+  const double J = F.determinant();
+  if (!(J > 0.0)) return Tangent3::Constant(kNaN);
+  const double a = m.lambda * std::log(J) - m.mu;
+  const Eigen::Matrix<double, 9, 1> g = vec(cofactor(F));
+  return m.mu * Tangent3::Identity() + (m.lambda - a) / (J * J) * g * g.transpose() +
+         a / J * volume_hessian(F);
+}
+
 }  // namespace
 
 const MaterialModel& neo_hookean_material() {
@@ -52,6 +64,7 @@ const MaterialModel& neo_hookean_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
+      .dPdF3 = dPdF3,
   };
   return model;
 }

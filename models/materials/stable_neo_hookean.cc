@@ -7,6 +7,7 @@
 // pushes an inverted element back instead of ending the run. The constant
 // makes Psi(I) = 0 and alpha makes P(I) = 0.
 #include "models/materials/kinematics.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 namespace {
@@ -34,6 +35,14 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
                                           (v.J - alpha(m)) * volume_differential(F, dF));
 }
 
+// dPdF = mu I + lambda' g g^T + lambda' (J - alpha) H_J (tangent3.h).
+Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+  const double l = shifted_lambda(m);
+  const Eigen::Matrix<double, 9, 1> g = vec(cofactor(F));
+  return m.mu * Tangent3::Identity() + l * g * g.transpose() +
+         l * (F.determinant() - alpha(m)) * volume_hessian(F);
+}
+
 }  // namespace
 
 const MaterialModel& stable_neo_hookean_material() {
@@ -44,6 +53,7 @@ const MaterialModel& stable_neo_hookean_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
+      .dPdF3 = dPdF3,
   };
   return model;
 }

@@ -4,6 +4,7 @@
 // under compression and has no resistance to inversion. Sifakis and Barbic
 // 2012, §3.
 #include "models/materials/material.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 namespace {
@@ -30,6 +31,27 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
   return dF * second_pk(green(F), m) + F * second_pk(dG, m);
 }
 
+// dP_ij/dF_ab = d_ia S_bj + mu (F_ib F_aj + (F F^T)_ia d_jb) + lambda F_ij F_ab
+// (the differential above with dF = E_ab).
+Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+  const Eigen::Matrix3d S = Eigen::Matrix3d(second_pk(green(Mat(F)), m));
+  const Eigen::Matrix3d FFt = F * F.transpose();
+  Tangent3 T;
+  for (int b = 0; b < 3; ++b) {
+    for (int a = 0; a < 3; ++a) {
+      for (int j = 0; j < 3; ++j) {
+        for (int i = 0; i < 3; ++i) {
+          double t = m.mu * F(i, b) * F(a, j) + m.lambda * F(i, j) * F(a, b);
+          if (i == a) t += S(b, j);
+          if (j == b) t += m.mu * FFt(i, a);
+          T(i + 3 * j, a + 3 * b) = t;
+        }
+      }
+    }
+  }
+  return T;
+}
+
 }  // namespace
 
 const MaterialModel& stvk_material() {
@@ -39,6 +61,7 @@ const MaterialModel& stvk_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
+      .dPdF3 = dPdF3,
   };
   return model;
 }
