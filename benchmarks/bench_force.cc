@@ -3,7 +3,9 @@
 // the model's fixed pattern: what an implicit method assembles per Newton
 // iteration.
 //
-// Counters: ns_per_spring (time per evaluation / springs), unknowns_per_second
+// Scenes: all_cases() and the finite-element solid_cases() (bench_support.h).
+// Counters: ns_per_spring (time per evaluation / springs), ns_per_element
+// (per triangle or tetrahedron, on the solids), unknowns_per_second
 // (free degrees of freedom processed per second), and the size counters.
 // The state is the initial one, perturbed so no spring sits at rest length.
 #include "benchmarks/bench_support.h"
@@ -13,6 +15,11 @@ namespace {
 
 void set_rate_counters(benchmark::State& state, const ElasticModel& model) {
   const double iterations = static_cast<double>(state.iterations());
+  if (element_count(model) > 0) {
+    state.counters["ns_per_element"] = benchmark::Counter(
+        iterations * static_cast<double>(element_count(model)) * 1e-9,
+        benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  }
   // kIsRate | kInvert: CPU seconds per (iteration x springs); scaled to ns.
   state.counters["ns_per_spring"] = benchmark::Counter(
       iterations * static_cast<double>(spring_count(model)) * 1e-9,
@@ -58,7 +65,9 @@ void force_jacobian_benchmark(benchmark::State& state, const SceneCase& c) {
 }  // namespace
 
 void register_force_benchmarks() {
-  for (const SceneCase& c : all_cases()) {
+  std::vector<SceneCase> cases = all_cases();
+  cases.insert(cases.end(), solid_cases().begin(), solid_cases().end());
+  for (const SceneCase& c : cases) {
     benchmark::RegisterBenchmark(("BM_Force/" + c.path()).c_str(),
                                  [c](benchmark::State& s) { force_benchmark(s, c); })
         ->Unit(benchmark::kMicrosecond)

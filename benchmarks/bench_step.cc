@@ -1,5 +1,7 @@
 // BM_Step/<integrator>/<scene>/<n>: the cost of one step of every registered
-// integrator (integrator_names()), on the same scenes as BM_Force.
+// integrator (integrator_names()), on the same scenes as BM_Force: the cloth
+// and the chain, and the finite-element beam and block at three sizes each
+// (bench_support.h: solid_cases()).
 //
 // What one benchmark iteration is (also in each entry's label and its `dt`
 // counter):
@@ -45,6 +47,7 @@
 //   - cvode-adams and arkode-erk on cloth 64 and 128: non-stiff methods whose
 //     steps shrink to the stiffest spring's stability limit (about 100
 //     internal steps per 1/60 s already on cloth 16 and 32);
+//   - ida, arkode-dirk, arkode-imex and cvode-bdf on block 12 (below);
 //   - ida, arkode-dirk and arkode-imex on cloth 64 and 128, cvode-bdf on
 //     cloth 128: measured here at 35 s (ida), 67 s (arkode-dirk) and 36 s
 //     (arkode-imex) of CPU time per 1/60 s on cloth 64 (cvode-bdf: 26 s, kept
@@ -73,6 +76,10 @@ const std::set<std::string> kSkip = {
     "arkode-erk/cloth/128", "cvode-bdf/cloth/128",   "ida/cloth/64",
     "ida/cloth/128",        "arkode-dirk/cloth/64",  "arkode-dirk/cloth/128",
     "arkode-imex/cloth/64", "arkode-imex/cloth/128",
+    // 10,368 tetrahedra: 19.5 s (cvode-bdf), 22 s (arkode-imex), 26 s
+    // (arkode-dirk), 31 s (ida) of CPU per 1/60 s, measured 2026-11-25.
+    "cvode-bdf/block/12",   "arkode-imex/block/12",  "arkode-dirk/block/12",
+    "ida/block/12",
 };
 
 struct StepPlan {
@@ -192,9 +199,11 @@ void step_benchmark(benchmark::State& state, const std::string& name, const Scen
 
 void register_step_benchmarks() {
   const bool run_all = std::getenv("SPRINGLAB_BENCH_ALL") != nullptr;
+  std::vector<SceneCase> cases = all_cases();
+  cases.insert(cases.end(), solid_cases().begin(), solid_cases().end());
   for (const std::string& name : integrator_names()) {
     const IntegratorInfo info = make_integrator(name)->info();
-    for (const SceneCase& c : all_cases()) {
+    for (const SceneCase& c : cases) {
       if (!run_all && kSkip.count(name + "/" + c.path())) continue;
       auto* b = benchmark::RegisterBenchmark(
           ("BM_Step/" + name + "/" + c.path()).c_str(),

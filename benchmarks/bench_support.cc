@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "models/builtin_scenes.h"
+#include "models/fem.h"
 #include "models/modal_analysis.h"
 #include "models/springs.h"
 
@@ -17,6 +18,18 @@ namespace springlab::bench {
 const std::vector<SceneCase>& all_cases() {
   static const std::vector<SceneCase> cases = {
       {"cloth", 16}, {"cloth", 32}, {"cloth", 64}, {"cloth", 128}, {"chain", 1000}};
+  return cases;
+}
+
+const std::vector<SceneCase>& solid_cases() {
+  static const std::vector<SceneCase> cases = [] {
+    std::vector<SceneCase> out;
+    for (int nx : {40, 80, 160}) {
+      out.push_back({"beam", nx, "nx", {{"dimension", "2"}, {"ny", std::to_string(nx / 10)}}});
+    }
+    for (int n : {4, 8, 12}) out.push_back({"block", n});
+    return out;
+  }();
   return cases;
 }
 
@@ -31,8 +44,9 @@ Cached& cached(const SceneCase& c) {
   static std::map<std::pair<std::string, int>, Cached> cache;
   Cached& entry = cache[{c.scene, c.n}];
   if (!entry.model) {
-    entry.model = std::make_unique<ElasticModel>(
-        make_builtin_scene(c.scene, {{"n", std::to_string(c.n)}}));
+    auto parameters = c.parameters;
+    parameters.emplace_back(c.size_key, std::to_string(c.n));
+    entry.model = std::make_unique<ElasticModel>(make_builtin_scene(c.scene, parameters));
   }
   return entry;
 }
@@ -51,10 +65,16 @@ long spring_count(const ElasticModel& model) {
   return static_cast<long>(model.scene().get<Springs>().size());
 }
 
+long element_count(const ElasticModel& model) {
+  return static_cast<long>(model.scene().get<Triangles>().size() +
+                           model.scene().get<Tetrahedra>().size());
+}
+
 void add_size_counters(benchmark::State& state, const ElasticModel& model) {
   state.counters["unknowns"] = static_cast<double>(model.dofs());
   state.counters["particles"] = static_cast<double>(model.free_particle_count());
   state.counters["springs"] = static_cast<double>(spring_count(model));
+  if (element_count(model) > 0) state.counters["elements"] = static_cast<double>(element_count(model));
 }
 
 double shortest_rest_length(const ElasticModel& model) {

@@ -19,12 +19,20 @@ namespace springlab::bench {
 
 struct SceneCase {
   std::string scene;  // a built-in scene with its default parameters
-  int n;              // its `n` parameter
+  int n;              // its size parameter (`size_key`)
+  std::string size_key = "n";
+  // Further built-in parameters, as `-p` pairs (the solids' refinements).
+  std::vector<std::pair<std::string, std::string>> parameters = {};
   std::string path() const { return scene + "/" + std::to_string(n); }
 };
 
 // cloth n = 16, 32, 64, 128 and chain n = 1000.
 const std::vector<SceneCase>& all_cases();
+// The finite-element scenes at three sizes each: the 2-D beam with
+// nx = 40, 80, 160 cells along and nx / 10 across (320, 1280, 5120
+// triangles), the block with n = 4, 8, 12 cubes per side (384, 3072,
+// 10368 tetrahedra); default materials (neo-Hookean).
+const std::vector<SceneCase>& solid_cases();
 
 // Built once, then shared (benchmarks run one at a time, so the model's
 // scratch arrays are never used concurrently).
@@ -33,8 +41,10 @@ const ElasticModel& model_for(const SceneCase& c);
 double max_frequency_for(const SceneCase& c);
 
 long spring_count(const ElasticModel& model);
+long element_count(const ElasticModel& model);  // triangles + tetrahedra
 
-// unknowns, particles, springs (plain values, not divided by anything).
+// unknowns, particles, springs, elements (triangles and tetrahedra)
+// (plain values, not divided by anything).
 void add_size_counters(benchmark::State& state, const ElasticModel& model);
 
 // The initial state moved off equilibrium by a small deterministic amount
