@@ -122,7 +122,7 @@ Json rows(const Eigen::MatrixXd& m) {
 const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
                                       "max-newton", "max-steps",    "max-order",
                                       "linear-solver", "dq-jacobian", "stald",
-                                      "stiffness", "iterations", "substeps"};
+                                      "stiffness", "iterations", "substeps", "solver"};
 
 // Options shared by `run` and `stability`.
 struct CommonOptions {
@@ -130,6 +130,7 @@ struct CommonOptions {
   std::vector<std::string> parameters;
   RunSettings run;
   std::string stiffness = "exact";
+  std::string solver = "newton";
   bool json = false;
   CLI::App* command = nullptr;
 
@@ -150,6 +151,9 @@ struct CommonOptions {
     cmd.add_option("--stiffness", stiffness,
                    "linear-implicit-euler: exact dF/dx, or definite (compressed springs' negative "
                    "transverse stiffness dropped, Choi and Ko 2002)");
+    cmd.add_option("--solver", solver,
+                   "implicit-euler: newton, or quasi-newton (L-BFGS with the local/global matrix "
+                   "as its initial Hessian, Liu et al. 2017; springs only)");
     cmd.add_option("--iterations", run.options.iterations,
                    "projective-dynamics (default 10), xpbd (default 1): iterations per step "
                    "or substep")
@@ -179,6 +183,9 @@ struct CommonOptions {
     require_integrator(run.integrator);
     if (!parse_stiffness(stiffness, run.options.stiffness)) {
       throw UsageError("--stiffness: unknown '" + stiffness + "' (exact, definite)");
+    }
+    if (!parse_solver(solver, run.options.solver)) {
+      throw UsageError("--solver: unknown '" + printable(solver) + "' (newton, quasi-newton)");
     }
     require_positive("--t-end", run.t_end);
     require_positive("--rtol", run.options.rtol);

@@ -13,9 +13,26 @@ ImplicitEuler::ImplicitEuler()
                           .stability_function =
                               [](std::complex<double> z) { return 1.0 / (1.0 - z); }}) {}
 
+StepResult ImplicitEuler::do_initialize() {
+  StepResult base = ImplicitIntegrator::do_initialize();
+  if (!base.ok || options().solver != Solver::kQuasiNewton) return base;
+  if (!prepare_quasi_newton()) {
+    return StepResult::failure(
+        name() + " --solver quasi-newton: its initial Hessian is the local/global matrix of "
+                 "distance constraints (springs), and this scene has stiff forces that are not "
+                 "(finite elements); use --solver newton");
+  }
+  return base;
+}
+
+std::vector<std::string> ImplicitEuler::options_read() const {
+  return {"newton-tol", "max-newton", "solver"};
+}
+
 StepResult ImplicitEuler::do_step(double h) {
   const StepResult result =
-      solve_velocity(h, {.t_eval_offset = 1.0, .a = 0.0, .b = 1.0, .c = 1.0}, v_new_);
+      solve_velocity(h, {.t_eval_offset = 1.0, .a = 0.0, .b = 1.0, .c = 1.0}, v_new_,
+                     options().solver == Solver::kQuasiNewton);
   if (!result.ok) return result;
   x_ += h * v_new_;
   v_.swap(v_new_);

@@ -11,10 +11,16 @@
 // --max-newton iterations (newton_velocity_solver.h). A Newton failure ends
 // the run as a result.
 //
+// --solver quasi-newton minimizes the same potential by L-BFGS with the
+// local/global matrix as its initial Hessian (quasi_newton.cc); springs only.
+//
 // Order 1. R(z) = 1 / (1 - z): A-stable and L-stable; on the undamped
 // oscillator the energy shrinks by 1 / (1 + w^2 h^2) every step — artificial
 // damping that grows with h.
 #pragma once
+
+#include <string>
+#include <vector>
 
 #include "integrators/newton_velocity_solver.h"
 
@@ -23,8 +29,10 @@ namespace springlab {
 class ImplicitEuler final : public ImplicitIntegrator {
  public:
   ImplicitEuler();
+  std::vector<std::string> options_read() const override;
 
  protected:
+  StepResult do_initialize() override;
   StepResult do_step(double h) override;
 
  private:

@@ -65,6 +65,21 @@ bool parse_stiffness(const std::string& name, Stiffness& stiffness) {
   return true;
 }
 
+bool parse_solver(const std::string& name, Solver& solver) {
+  if (name == "newton") {
+    solver = Solver::kNewton;
+  } else if (name == "quasi-newton") {
+    solver = Solver::kQuasiNewton;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* to_string(Solver solver) {
+  return solver == Solver::kQuasiNewton ? "quasi-newton" : "newton";
+}
+
 const char* to_string(Stiffness stiffness) {
   return stiffness == Stiffness::kDefinite ? "definite" : "exact";
 }

@@ -43,10 +43,17 @@ bool parse_stiffness(const std::string& name, Stiffness& stiffness);
 const char* to_string(Stiffness stiffness);
 
 // Every knob any method reads; each method uses only the ones it needs.
+// How implicit-euler solves its step (README "Fast solvers"): Newton, or
+// L-BFGS with the local/global matrix as its initial Hessian.
+enum class Solver { kNewton, kQuasiNewton };
+bool parse_solver(const std::string& name, Solver& solver);
+const char* to_string(Solver solver);
+
 struct IntegratorOptions {
   double newton_tol = 1e-4;   // m/s: converged when the Newton update ||dv||_inf is below it
   int max_newton = 200;       // Newton iterations per step before giving up (measured: benchmarks/README.md)
   Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
+  Solver solver = Solver::kNewton;          // implicit-euler's
   int iterations = 0;  // projective-dynamics, xpbd: iterations per (sub)step; 0 = the method's
   int substeps = 0;    // xpbd: substeps per step; 0 = the method's
   double rtol = 1e-6;         // adaptive methods

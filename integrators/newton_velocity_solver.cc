@@ -270,7 +270,7 @@ bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vecto
 }
 
 StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitScheme& s,
-                                              Vector& v) {
+                                              Vector& v, bool quasi) {
   // Friction's normal forces from the step's start while the step is
   // solved (MechanicalSystem::lag_normal_forces): friction then derives
   // from a dissipation potential, and Newton minimizes.
@@ -279,6 +279,10 @@ StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitSc
     Lag(const MechanicalSystem& m, const Vector& x) : system(m) { system.lag_normal_forces(&x); }
     ~Lag() { system.lag_normal_forces(nullptr); }
   } lag(system(), x_);
+  // L-BFGS needs the potential; where it stalls, Newton solves the step.
+  if (quasi && system().derives_from_potentials() && quasi_newton(h, s, v)) {
+    return StepResult::success();
+  }
   StepResult result = newton(h, s, v);
   if (!result.ok && system().jacobian_symmetric()) {
     // Projected Newton from the step's start: every update from the definite

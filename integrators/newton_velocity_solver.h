@@ -68,6 +68,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "integrators/integrator.h"
 #include "integrators/preconditioned_cg.h"
@@ -97,8 +98,14 @@ class ImplicitIntegrator : public Integrator {
 
   // Solves r(v) = 0 for v starting from v_n = v_; on success `v` holds the
   // solution. Counts force and Jacobian evaluations, factorizations, linear
-  // solves and their iterations, Newton iterations.
-  StepResult solve_velocity(double h, const VelocityImplicitScheme& scheme, Vector& v);
+  // solves and their iterations, Newton iterations. `quasi_newton`: L-BFGS
+  // first (quasi_newton.cc; prepare_quasi_newton() must have succeeded),
+  // Newton where it stalls.
+  StepResult solve_velocity(double h, const VelocityImplicitScheme& scheme, Vector& v,
+                            bool quasi_newton = false);
+  // Builds L-BFGS's initial Hessian; false when the system's stiff forces
+  // are not distance constraints (finite elements).
+  bool prepare_quasi_newton();
 
   // One linear solve of a linearized step (linear-implicit-euler): with
   // K = dF/dx and D = dF/dv at (t, x, v) -- or their definite parts --
@@ -115,6 +122,9 @@ class ImplicitIntegrator : public Integrator {
   double potential(double h, const VelocityImplicitScheme& s, const Vector& v,
                    double& magnitude) const;
   StepResult newton(double h, const VelocityImplicitScheme& s, Vector& v);
+  // --solver quasi-newton (quasi_newton.cc): L-BFGS on the same potential;
+  // false when it stalls (then Newton solves the step).
+  bool quasi_newton(double h, const VelocityImplicitScheme& s, Vector& v);
 
   // Sets xs_ = x*(v), vs_ = v*(v) of the step.
   void stage(double h, const VelocityImplicitScheme& s, const Vector& v);
@@ -177,6 +187,21 @@ class ImplicitIntegrator : public Integrator {
   // The step's second attempt (solve_velocity): the definite matrix only.
   bool definite_only_ = false;
   double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
+
+  // quasi_newton.cc: the particles' stiffness Laplacian L of the distance
+  // constraints, the factor of M_p + h^2 L (one per step size), and the
+  // L-BFGS history.
+  struct QuasiNewtonState {
+    int dim = 0;
+    SparseMatrix laplacian;
+    Vector particle_mass;
+    SparseDirectSolver factor;
+    double factored_h = 0.0;
+    std::vector<Vector> s, y;  // the last updates and gradient changes
+    std::vector<double> rho;   // 1 / (y . s)
+    Vector q, z, v_try, r_try, d;
+    Eigen::MatrixXd columns, solved;  // n x dim: one coordinate per column
+  } qn_;
 };
 
 }  // namespace springlab

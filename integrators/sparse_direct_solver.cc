@@ -194,4 +194,31 @@ bool SparseDirectSolver::solve(const Vector& b, Vector& x) {
   return x.allFinite();
 }
 
+bool SparseDirectSolver::solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) {
+  switch (method_) {
+    case Method::kCholesky: {
+      cholmod_common& c = cholmod_->common;
+      cholmod_dense rhs{};
+      rhs.nrow = static_cast<size_t>(B.rows());
+      rhs.ncol = static_cast<size_t>(B.cols());
+      rhs.nzmax = rhs.nrow * rhs.ncol;
+      rhs.d = rhs.nrow;
+      rhs.x = const_cast<double*>(B.data());
+      rhs.xtype = CHOLMOD_REAL;
+      rhs.dtype = CHOLMOD_DOUBLE;
+      if (!cholmod_solve2(CHOLMOD_A, cholmod_->factor, &rhs, nullptr, &cholmod_->x, nullptr,
+                          &cholmod_->y, &cholmod_->e, &c)) {
+        return false;
+      }
+      X = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(cholmod_->x->x), B.rows(),
+                                            B.cols());
+      break;
+    }
+    case Method::kLdlt: X = ldlt_.solve(B); break;
+    case Method::kLu: X = lu_.solve(B); break;
+    case Method::kNone: return false;
+  }
+  return X.allFinite();
+}
+
 }  // namespace springlab

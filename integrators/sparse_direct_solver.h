@@ -54,6 +54,9 @@ class SparseDirectSolver {
   void reset();
   // x = A^-1 b with the last factorization; false when x is not finite.
   bool solve(const Vector& b, Vector& x);
+  // X = A^-1 B for several right-hand sides at once (one pass over the
+  // factor: CHOLMOD then works with matrix-matrix kernels).
+  bool solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X);
   // Whether the last factorization is a Cholesky factor of a positive
   // definite matrix (and so a valid preconditioner for conjugate gradients).
   bool positive_definite() const { return method_ == Method::kCholesky; }
