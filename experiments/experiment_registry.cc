@@ -15,6 +15,7 @@ std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_solver_error_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -30,6 +31,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"contact", &make_contact_experiment},
       {"mode", &make_mode_experiment},
       {"rotation", &make_rotation_experiment},
+      {"solver-error", &make_solver_error_experiment},
   };
   return kinds;
 }

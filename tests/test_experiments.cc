@@ -132,7 +132,7 @@ TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
-            "motion, contact, mode, rotation)");
+            "motion, contact, mode, rotation, solver-error)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -1347,6 +1347,51 @@ TEST(ExperimentKinds, RotationShowsLinearElasticityGhostForces) {
       EXPECT_LT(std::abs(number(run.at("elastic_max"))), 1e-9);
     }
   }
+}
+
+// solver-error: every run steps from the tight implicit Euler run's states.
+// On a linear spring of rest length 0 (the oscillator) one projective-
+// dynamics iteration and one xpbd substep are that step exactly (solver
+// error at round-off), and so is Newton; on the cloth more local/global
+// iterations bring projective dynamics closer to the step, Newton at
+// 1e-10 m/s is within 1e-9 of it, and 20 xpbd substeps land closer to the
+// true motion than the exact implicit Euler step does.
+TEST(ExperimentKinds, SolverErrorComparesEachStepWithTheSameStepSolvedTightly) {
+  auto medians = [](const std::vector<Record>& rows, const char* column) {
+    std::vector<double> v;
+    for (const Record& r : rows) {
+      EXPECT_EQ(r.at("status"), "completed") << r.at("failure");
+      v.push_back(number(r.at(column)));
+    }
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  const Json runs = {{{"integrator", "implicit-euler"}, {"newton_tol", 1e-10}},
+                     {{"integrator", "projective-dynamics"}, {"iterations", 1}},
+                     {{"integrator", "projective-dynamics"}, {"iterations", 30}},
+                     {{"integrator", "xpbd"}, {"substeps", 1}, {"iterations", 1}},
+                     {{"integrator", "xpbd"}, {"substeps", 20}, {"iterations", 1}}};
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "solver-error"},
+       {"cases", {{{"scene", "oscillator"}}, {{"scene", "cloth"}, {"parameters", {{"n", 6}}}}}},
+       {"dt", 1.0 / 60.0}, {"steps", 12}, {"every", 4}, {"runs", runs}});
+  ASSERT_EQ(loaded.experiment->task_count(), 10u);
+  for (std::size_t task : {0u, 1u, 3u}) {  // the oscillator
+    const auto rows = run_task(loaded, task)[0];
+    ASSERT_EQ(rows.size(), 3u);  // steps 0, 4, 8
+    EXPECT_LT(medians(rows, "solver_error"), 1e-12) << task;
+  }
+  const double newton = medians(run_task(loaded, 5)[0], "solver_error");
+  const double pd1 = medians(run_task(loaded, 6)[0], "solver_error");
+  const double pd30 = medians(run_task(loaded, 7)[0], "solver_error");
+  const auto xpbd20 = run_task(loaded, 9)[0];
+  EXPECT_LT(newton, 1e-9);
+  EXPECT_LT(pd30, pd1);
+  EXPECT_LT(medians(xpbd20, "total_error"), medians(xpbd20, "discretization_error"));
+  EXPECT_EQ(definition_error({{"experiment", "solver-error"}, {"cases", {{{"scene", "cloth"}}}},
+                              {"dt", 0.01}, {"runs", {{{"integrator", "implicit-euler"},
+                                                       {"solver", "bfgs"}}}}}),
+            "def.json: runs[0].solver: expected \"newton\" or \"quasi-newton\"");
 }
 
 }  // namespace

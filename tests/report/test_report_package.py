@@ -387,6 +387,49 @@ class RotationKind(unittest.TestCase):
         self.assertTrue((self.s.dir / "out" / "rotation.png").is_file())
 
 
+def solver_error_data(scratch):
+    """A solver-error experiment: implicit Euler's discretization error 1e-3
+    m; Newton below it, XPBD above it in solver error but closer to the true
+    motion."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "case", "scene", "integrator", "variant", "dt", "step", "t", "status",
+            "solver_error", "total_error", "discretization_error", "wall_seconds", "iterations",
+            "failure"]
+    scratch.json("se.json", {"name": "se", "experiment": "solver-error", "title": "SE",
+                             "dt": 0.02,
+                             "tables": [{"file": "se.csv", "suffix": "", "columns": cols}]})
+    rows = [",".join(cols)]
+    runs = [("implicit-euler", "newton-tol 0.01", 1e-5, 1e-3, 0.02),
+            ("xpbd", "substeps 10; iterations 1", 3e-3, 1e-4, 0.001)]
+    for task, (name, variant, se, te, wall) in enumerate(runs):
+        for k in (0, 5):
+            rows.append("%d,0,cloth,%s,%s,0.02,%d,%r,completed,%r,%r,0.001,%r,3," % (
+                task, name, variant, k, k * 0.02, se, te, wall))
+    scratch.write("se.csv", "\n".join(rows) + "\n")
+
+
+class SolverErrorKind(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_sentences_follow_the_rows(self):
+        solver_error_data(self.s)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        facts = [html.unescape(f) for f in re.findall(r"<li>([^<]*)</li>", page)]
+        self.assertIn("Solver error below it (as good as solving the step exactly), cheapest "
+                      "first: implicit-euler (newton-tol 0.01) 20 ms (1e-05 m).", facts)
+        self.assertIn("Solver error above it: xpbd (substeps 10; iterations 1) 1 ms (0.003 m).",
+                      facts)
+        self.assertIn("Closer to the true motion than the exact implicit Euler step (less than "
+                      "half its error), cheapest first: xpbd (substeps 10; iterations 1) 1 ms "
+                      "(0.0001 m).", facts)
+        self.assertTrue((self.s.dir / "out" / "se-0.png").is_file())
+
+
 class MotionCases(unittest.TestCase):
     """Two cases with the same scene name and step (the cloth with and
     without the ground): each player shows its own case's runs."""

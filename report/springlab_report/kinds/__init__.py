@@ -4,7 +4,8 @@ look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
 from . import (cloth_showcase, contact, convergence, damping_budget, energy, mode, motion,
-               rotation, stability, stability_region, step_energy, work_precision)
+               rotation, solver_error, stability, stability_region, step_energy,
+               work_precision)
 
 KINDS = {m.KIND: m for m in (
     motion,
@@ -13,6 +14,7 @@ KINDS = {m.KIND: m for m in (
     stability_region,
     convergence,
     work_precision,
+    solver_error,
     damping_budget,
     contact,
     mode,
