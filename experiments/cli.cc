@@ -122,7 +122,8 @@ Json rows(const Eigen::MatrixXd& m) {
 const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
                                       "max-newton", "max-steps",    "max-order",
                                       "linear-solver", "dq-jacobian", "stald",
-                                      "stiffness", "iterations", "substeps", "solver"};
+                                      "stiffness", "iterations", "substeps", "solver",
+                                      "chebyshev"};
 
 // Options shared by `run` and `stability`.
 struct CommonOptions {
@@ -158,6 +159,9 @@ struct CommonOptions {
                    "projective-dynamics (default 10), xpbd (default 1): iterations per step "
                    "or substep")
         ->default_str("the method's");
+    cmd.add_option("--chebyshev", run.options.chebyshev,
+                   "projective-dynamics: Chebyshev acceleration with this spectral radius rho "
+                   "of the plain iteration, in (0, 1) (Wang 2015); 0: off");
     cmd.add_option("--substeps", run.options.substeps, "xpbd: substeps per --dt")
         ->default_str("10");
     cmd.add_option("--max-steps", run.options.max_steps,
@@ -197,6 +201,9 @@ struct CommonOptions {
       throw UsageError("--iterations: must be >= 1");
     }
     if (given("substeps") && run.options.substeps < 1) throw UsageError("--substeps: must be >= 1");
+    if (!(run.options.chebyshev >= 0.0 && run.options.chebyshev < 1.0)) {
+      throw UsageError("--chebyshev: must be in [0, 1) (0: off)");
+    }
     if (run.options.max_steps < 0 || (given("max-steps") && run.options.max_steps < 1)) {
       throw UsageError("--max-steps: must be >= 1");
     }

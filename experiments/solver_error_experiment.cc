@@ -76,8 +76,8 @@ class SolverErrorExperiment final : public Experiment {
       cases_.push_back(std::move(entry));
     }
     for (const DefinitionObject& r : d.objects("runs")) {
-      r.allow_only({"integrator", "newton_tol", "solver", "iterations", "substeps", "rtol",
-                    "atol"});
+      r.allow_only({"integrator", "newton_tol", "solver", "iterations", "substeps", "chebyshev",
+                    "rtol", "atol"});
       Variant v;
       v.integrator = r.string("integrator");
       if (!is_integrator(v.integrator)) {
@@ -102,6 +102,13 @@ class SolverErrorExperiment final : public Experiment {
       if (r.has("iterations")) {
         v.options.iterations = r.count("iterations", 1, 1, 100000);
         note("iterations " + std::to_string(v.options.iterations));
+      }
+      if (r.has("chebyshev")) {
+        v.options.chebyshev = r.number("chebyshev");
+        if (!(v.options.chebyshev > 0.0 && v.options.chebyshev < 1.0)) {
+          r.fail("chebyshev", "expected a spectral radius in (0, 1)");
+        }
+        note("chebyshev " + format_number(v.options.chebyshev));
       }
       if (r.has("rtol")) {
         v.options.rtol = r.positive("rtol");

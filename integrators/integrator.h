@@ -55,6 +55,7 @@ struct IntegratorOptions {
   Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
   Solver solver = Solver::kNewton;          // implicit-euler's
   int iterations = 0;  // projective-dynamics, xpbd: iterations per (sub)step; 0 = the method's
+  double chebyshev = 0.0;  // projective-dynamics: Chebyshev's spectral radius rho; 0 = off
   int substeps = 0;    // xpbd: substeps per step; 0 = the method's
   double rtol = 1e-6;         // adaptive methods
   double atol = 1e-8;

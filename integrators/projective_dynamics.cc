@@ -109,7 +109,13 @@ StepResult ProjectiveDynamics::do_step(double h) {
   }
   x_new_ = y_;
   const Eigen::Index n = inv_particle_mass_.size();
+  const double rho = options().chebyshev;
+  double omega = 1.0;
   for (int it = 0; it < iterations; ++it) {
+    if (rho > 0.0) {  // keep x^(k-1) and x^(k) for the extrapolation below
+      x_before_.swap(x_last_);
+      x_last_ = x_new_;
+    }
     // rhs = M y + h^2 J p, p from the current x (the local step).
     rhs_.resize(y_.size());
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -148,6 +154,11 @@ StepResult ProjectiveDynamics::do_step(double h) {
         return StepResult::failure(name() + ": the global solve gave a non-finite position");
       }
       for (Eigen::Index i = 0; i < n; ++i) x_new_[i * dim_ + r] = solution[i];
+    }
+    if (rho > 0.0 && it > 0) {
+      // Wang 2015: w_2 = 2 / (2 - rho^2), then w_(k+1) = 4 / (4 - rho^2 w_k).
+      omega = it == 1 ? 2.0 / (2.0 - rho * rho) : 4.0 / (4.0 - rho * rho * omega);
+      x_new_ = omega * (x_new_ - x_before_) + x_before_;
     }
     ++mutable_stats().newton_iterations;
   }

@@ -17,6 +17,16 @@
 // after one iteration, on springs of rest length 0). Iterations count as
 // newton_iterations.
 //
+// Chebyshev acceleration (--chebyshev RHO; Wang, "A Chebyshev semi-iterative
+// approach for accelerating projective and position-based dynamics", ACM
+// TOG 2015): each global solve's result xh is extrapolated from the iterate
+// before the last, x^(k+1) = w_(k+1) (xh - x^(k-1)) + x^(k-1), with
+// w_1 = 1, w_2 = 2 / (2 - rho^2), w_(k+1) = 4 / (4 - rho^2 w_k); rho is the
+// plain iteration's spectral radius (its error shrinks by rho per
+// iteration), estimated by the user (README "Fast solvers": watch the
+// solver error fall with --iterations). Too large a rho makes the iterates
+// overshoot; 0 (the default) turns it off.
+//
 // Contact planes (penalty only; the barrier is refused): the penalty
 // k_c/2 min(d, 0)^2 is k_c/2 |x_i - P(x_i)|^2 with P the projection onto the
 // half-space, a projective constraint (Bouaziz et al. 2014) whose local step
@@ -38,7 +48,9 @@ namespace springlab {
 class ProjectiveDynamics final : public FastSolver {
  public:
   ProjectiveDynamics();
-  std::vector<std::string> options_read() const override { return {"iterations"}; }
+  std::vector<std::string> options_read() const override {
+    return {"iterations", "chebyshev"};
+  }
   static constexpr int kDefaultIterations = 10;
 
  protected:
@@ -64,6 +76,7 @@ class ProjectiveDynamics final : public FastSolver {
   SparseDirectSolver solver_;
   double factored_h_ = 0.0;
   Vector f_, y_, x_new_, rhs_, coordinate_;
+  Vector x_before_, x_last_;  // Chebyshev: the iterates k - 1 and k
 };
 
 }  // namespace springlab

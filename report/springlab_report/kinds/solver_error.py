@@ -61,8 +61,12 @@ def label(e):
 
 
 def family(e):
-    """Variants drawn joined by one line: one integrator with one solver."""
-    return e["name"] + (" quasi-newton" if "quasi-newton" in e["variant"] else "")
+    """Variants drawn joined by one line: one integrator with one solver
+    (quasi-Newton, Chebyshev acceleration: lines of their own)."""
+    for extra in ("quasi-newton", "chebyshev"):
+        if extra in e["variant"]:
+            return e["name"] + " " + extra
+    return e["name"]
 
 
 def case_figure(exp, ctx, db, rows, case, integ):
@@ -82,7 +86,7 @@ def case_figure(exp, ctx, db, rows, case, integ):
             members = sorted(members, key=lambda e: e["wall_seconds"])
             name = members[0]["name"]
             style = integ.style(name)
-            if "quasi-newton" in fam:
+            if fam != name:  # quasi-Newton, Chebyshev
                 style["ls"] = ":"
             xs = [e["wall_seconds"] * 1e3 for e in members]
             ys = [max(e[col], FLOOR) for e in members]
@@ -147,7 +151,8 @@ def case_figure(exp, ctx, db, rows, case, integ):
                "Euler run (every sampled step); its end is compared with that run's next state "
                "(left: the solver error) and with the true motion over the step (right: RK4 at "
                "0.1 / w_max). Markers are the variants of one method (its tolerance, iterations "
-               "N, substeps S), joined by cost; dotted: implicit Euler solved by quasi-Newton. "
+               "N, substeps S), joined by cost; dotted: implicit Euler solved by quasi-Newton, and "
+               "projective dynamics with Chebyshev acceleration. "
                "The dashed line is implicit Euler's own error against the true motion. Times are "
                "wall times of one step, the integrator set up outside it.")
     return figure_html(saved, "solver error against cost", esc(caption)) + facts_html(facts)
