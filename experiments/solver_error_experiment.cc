@@ -18,6 +18,14 @@
 // discretization error, the floor below which solving the step more
 // tightly buys nothing. Errors are max norms over the positions, in m.
 //
+// Whole runs: each fixed-step run also runs the `steps` steps from the
+// scene's initial state as a user would (`springlab run`), which gives what
+// the one-step errors do not -- the energy the run lost, E(0) - E(T), and the
+// largest spring strain |l - L| / L at any step (the "Small Steps" grid of
+// XPBD's substeps x iterations at equal cost, Macklin et al. 2019, is read
+// off these) -- and its wall time per step. Adaptive methods are left out
+// of it (a CVODE run of the cloth costs seconds per step).
+//
 // Costs: the wall time of the one step (the integrator is set up outside
 // it; its first factorization, where it has one, counts, as it would on a
 // run's first step) and its Newton/local-global iterations. One task per
@@ -25,6 +33,7 @@
 // once, by whichever of its tasks comes first.
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -35,6 +44,7 @@
 #include "experiments/output_files.h"
 #include "integrators/registry.h"
 #include "models/modal_analysis.h"
+#include "models/springs.h"
 
 namespace springlab {
 namespace {
@@ -54,7 +64,6 @@ struct SampledStep {
 
 struct Case {
   Scene scene;
-  std::unique_ptr<ElasticModel> model;
   std::once_flag once;
   std::vector<SampledStep> samples;
   std::string error;  // the reference failed
@@ -126,7 +135,10 @@ class SolverErrorExperiment final : public Experiment {
   std::vector<TableSpec> tables() const override {
     return {{"", {"case", "scene", "integrator", "variant", "dt", "step", "t", "status",
                   "solver_error", "total_error", "discretization_error", "wall_seconds",
-                  "iterations", "failure"}}};
+                  "iterations", "failure"}},
+            {"runs", {"case", "scene", "integrator", "variant", "dt", "status", "t_final",
+                      "energy_initial", "energy_lost", "max_strain", "wall_seconds_per_step",
+                      "failure"}}};
   }
 
   std::size_t task_count() const override { return cases_.size() * variants_.size(); }
@@ -135,11 +147,14 @@ class SolverErrorExperiment final : public Experiment {
     Case& c = *cases_[index / variants_.size()];
     const Variant& variant = variants_[index % variants_.size()];
     std::call_once(c.once, [&] { prepare(c); });
-    TaskOutput out;
-    out.rows.resize(1);
     const std::string prefix = Row().add(static_cast<long>(index / variants_.size()))
                                    .add(c.scene.name).add(variant.integrator).add(variant.label)
                                    .add(dt_).str();
+    // A model of its own: a model's scratch arrays serve one thread at a time.
+    const ElasticModel model(c.scene);
+    TaskOutput out;
+    out.rows.resize(2);
+    out.rows[1].push_back(whole_run(model, variant, prefix));
     if (!c.error.empty()) {
       out.rows[0].push_back(Row().raw(prefix).add_empty().add_empty().add("failed").add_empty()
                                 .add_empty().add_empty().add_empty().add_empty()
@@ -151,7 +166,7 @@ class SolverErrorExperiment final : public Experiment {
       const double t = s.step * dt_;
       Row row;
       row.raw(prefix).add(s.step).add(t);
-      StepResult r = integrator->initialize(*c.model, t, s.x, s.v, variant.options);
+      StepResult r = integrator->initialize(model, t, s.x, s.v, variant.options);
       double wall = 0.0;
       if (r.ok) {
         const auto start = std::chrono::steady_clock::now();
@@ -185,11 +200,54 @@ class SolverErrorExperiment final : public Experiment {
   }
 
  private:
+  // The largest spring strain |l - L| / L at any output.
+  class StrainWatch final : public Observer {
+   public:
+    explicit StrainWatch(const ElasticModel& model) : model_(model) {}
+    void observe(double, const Vector& x, const Vector&) override {
+      const Eigen::MatrixXd p = model_.scene_positions(x);
+      for (const Spring& s : model_.scene().get<Springs>()) {
+        if (!(s.rest > 0.0)) continue;
+        const double l = (p.row(s.i) - p.row(s.j)).norm();
+        max_strain = std::max(max_strain, std::abs(l - s.rest) / s.rest);
+      }
+    }
+    double max_strain = 0.0;
+
+   private:
+    const ElasticModel& model_;
+  };
+
+  // The run from the scene's initial state over `steps` steps (fixed-step
+  // methods only): its row of the runs table.
+  std::string whole_run(const ElasticModel& model, const Variant& variant,
+                        const std::string& prefix) const {
+    Row row;
+    row.raw(prefix);
+    if (make_integrator(variant.integrator)->info().adaptive) {
+      return row.add("skipped").add_empty().add_empty().add_empty().add_empty().add_empty()
+          .add("adaptive methods are not run whole").str();
+    }
+    RunSettings run;
+    run.integrator = variant.integrator;
+    run.dt = dt_;
+    run.t_end = steps_ * dt_;
+    run.options = variant.options;
+    StrainWatch strain(model);
+    const RunResult r = simulate(model, run, {&strain});
+    const double springs = static_cast<double>(model.scene().get<Springs>().size());
+    return row.add(to_string(r.status)).add(r.t_final).add(r.energy_initial)
+        .add(r.energy_initial - r.energy_final)
+        .add(springs > 0 ? strain.max_strain : std::numeric_limits<double>::quiet_NaN())
+        .add(r.stats.steps > 0 ? r.wall_seconds / static_cast<double>(r.stats.steps)
+                               : std::numeric_limits<double>::quiet_NaN())
+        .add(r.failure).str();
+  }
+
   // The tight implicit Euler trajectory and, at the sampled steps, the true
   // motion over dt.
   void prepare(Case& c) const {
-    c.model = std::make_unique<ElasticModel>(c.scene);
-    const ElasticModel& model = *c.model;
+    const ElasticModel model(c.scene);
     IntegratorOptions tight;
     tight.newton_tol = reference_tol_;
     tight.max_newton = 1000;

@@ -406,6 +406,20 @@ def solver_error_data(scratch):
             rows.append("%d,0,cloth,%s,%s,0.02,%d,%r,completed,%r,%r,0.001,%r,3," % (
                 task, name, variant, k, k * 0.02, se, te, wall))
     scratch.write("se.csv", "\n".join(rows) + "\n")
+    # The whole runs: XPBD at equal cost S x N = 4, and tight Newton.
+    runs_cols = ["task", "case", "scene", "integrator", "variant", "dt", "status", "t_final",
+                 "energy_initial", "energy_lost", "max_strain", "wall_seconds_per_step",
+                 "failure"]
+    settings = json.loads((scratch.dir / "se.json").read_text())
+    settings["tables"].append({"file": "se-runs.csv", "suffix": "runs", "columns": runs_cols})
+    scratch.json("se.json", settings)
+    runs = [",".join(runs_cols), "0,0,cloth,implicit-euler,newton-tol 1e-06,0.02,completed,1,0,"
+            "1.5,0.2,0.02,"]
+    for task, (S, N, lost, strain) in enumerate(((1, 4, -10.0, 1.2), (2, 2, -2.0, 0.5),
+                                                 (4, 1, -0.5, 0.3)), start=1):
+        runs.append("%d,0,cloth,xpbd,substeps %d; iterations %d,0.02,completed,1,0,%r,%r,0.001,"
+                    % (task, S, N, lost, strain))
+    scratch.write("se-runs.csv", "\n".join(runs) + "\n")
 
 
 class SolverErrorKind(unittest.TestCase):
@@ -428,6 +442,11 @@ class SolverErrorKind(unittest.TestCase):
                       "half its error), cheapest first: xpbd (substeps 10; iterations 1) 1 ms "
                       "(0.0001 m).", facts)
         self.assertTrue((self.s.dir / "out" / "se-0.png").is_file())
+        self.assertIn("xpbd at equal cost S x N = 4: 1 x 4 reaches a largest strain of 120 % and "
+                      "gains 10 J; 4 x 1 reaches 30 % and gains 0.5 J.", facts)
+        self.assertIn("Dashed: implicit Euler solved by Newton (newton-tol 1e-06): largest "
+                      "strain 20 %, energy lost 1.5 J.", facts)
+        self.assertTrue((self.s.dir / "out" / "se-0-small-steps.png").is_file())
 
 
 class MotionCases(unittest.TestCase):

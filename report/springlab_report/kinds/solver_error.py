@@ -31,11 +31,101 @@ def render(exp, ctx):
                  texts=("scene", "integrator", "variant", "status", "failure"))
     integ = ctx.integrators
     html = []
+    runs = exp.table("runs")
+    runs = None if runs is None else Columns(
+        runs, numbers=("case", "energy_lost", "max_strain", "wall_seconds_per_step"),
+        texts=("scene", "integrator", "variant", "status"))
     cases = sorted({int(c) for c in db["case"]})
     for case in cases:
         rows = [r for r in range(len(db)) if int(db["case"][r]) == case]
         html.append(case_figure(exp, ctx, db, rows, case, integ))
+        if runs is not None:
+            html.append(small_steps_figure(exp, ctx, db, rows, runs, case, integ))
     return "".join(html)
+
+
+def substeps_iterations(variant):
+    """(S, N) of an XPBD variant "substeps S; iterations N", else None."""
+    parts = dict(p.split(" ", 1) for p in variant.split("; ") if " " in p)
+    try:
+        return int(parts["substeps"]), int(parts["iterations"])
+    except (KeyError, ValueError):
+        return None
+
+
+def small_steps_figure(exp, ctx, db, rows, runs, case, integ):
+    """Macklin et al. 2019's grid: XPBD's substeps S x iterations N at equal
+    cost S N, against S: the largest strain and the energy of the whole run,
+    and the one-step distance to the true motion."""
+    whole = {(runs["integrator"][r], runs["variant"][r]): r for r in range(len(runs))
+             if int(runs["case"][r]) == case and runs["status"][r] == "completed"}
+    one_step = {(e["name"], e["variant"]): e for e in summaries(db, rows) if e["completed"]}
+    groups = {}
+    for (name, variant), r in whole.items():
+        sn = substeps_iterations(variant)
+        if sn is not None:
+            groups.setdefault((name, sn[0] * sn[1]), []).append((sn[0], sn[1], r, variant))
+    groups = {k: sorted(v) for k, v in groups.items() if len(v) >= 3}
+    if not groups:
+        return ""
+    # The tightest Newton run: the reference lines.
+    newton = [(float(v.split(" ")[1]), r) for (n, v), r in whole.items()
+              if n == "implicit-euler" and v.startswith("newton-tol ") and ";" not in v]
+    ref = min(newton)[1] if newton else None
+    fig = new_figure(13.5, 4.2)
+    axes = fig.subplots(1, 3)
+    facts = []
+    for (name, cost), members in groups.items():
+        S = [m[0] for m in members]
+        strain = [runs["max_strain"][m[2]] for m in members]
+        gained = [-runs["energy_lost"][m[2]] for m in members]
+        error = [one_step.get((name, m[3]), {}).get("total_error", np.nan) for m in members]
+        style = integ.style(name)
+        lab = "%s, S x N = %d" % (name, cost)
+        axes[0].plot(S, strain, ms=7, mfc="none", label=lab, **style)
+        axes[1].plot(S, gained, ms=7, mfc="none", label=lab, **style)
+        axes[2].plot(S, error, ms=7, mfc="none", label=lab, **style)
+        first, last = members[0], members[-1]
+        errors = ""
+        if np.isfinite(error[0]) and np.isfinite(error[-1]):
+            errors = "; one step's distance to the true motion %s m against %s m" % (
+                fmt(error[0], 2), fmt(error[-1], 2))
+        facts.append("%s at equal cost S x N = %d: %d x %d reaches a largest strain of %s %% and "
+                     "%s %s J; %d x %d reaches %s %% and %s %s J%s." % (
+                         name, cost, first[0], first[1], fmt(strain[0] * 100, 3),
+                         "gains" if gained[0] > 0 else "loses", fmt(abs(gained[0]), 3),
+                         last[0], last[1], fmt(strain[-1] * 100, 3),
+                         "gains" if gained[-1] > 0 else "loses", fmt(abs(gained[-1]), 3),
+                         errors))
+    if ref is not None:
+        axes[0].axhline(runs["max_strain"][ref], color="0.35", ls="--", lw=1.1)
+        axes[1].axhline(-runs["energy_lost"][ref], color="0.35", ls="--", lw=1.1)
+        facts.append("Dashed: implicit Euler solved by Newton (%s): largest strain %s %%, "
+                     "energy %s %s J." % (
+                         runs["variant"][ref], fmt(runs["max_strain"][ref] * 100, 3),
+                         "gained" if runs["energy_lost"][ref] < 0 else "lost",
+                         fmt(abs(runs["energy_lost"][ref]), 3)))
+    for ax, ylabel, title in ((axes[0], "largest spring strain |l - L| / L", "stretch"),
+                              (axes[1], "energy gained over the run [J]", "energy"),
+                              (axes[2], "one step's distance to the true motion [m]", "error")):
+        ax.set_xscale("log")
+        ax.set_xlabel("substeps S (iterations N = cost / S)")
+        ax.set_ylabel(ylabel)
+        ax.set_title("%s — %s" % (db["scene"][rows[0]], title), loc="left", fontweight="bold",
+                     fontsize=10)
+        ax.grid(True, which="major", alpha=0.3)
+    if any(line.get_ydata().size and np.any(np.asarray(line.get_ydata(), float) > 0)
+           for line in axes[2].get_lines()):
+        axes[2].set_yscale("log")
+    axes[1].axhline(0.0, color="0.6", lw=0.7)
+    legend_outside(axes[2])
+    saved = ctx.figs.save(fig, "%s-%d-small-steps.png" % (exp.name, case))
+    caption = ("XPBD's substeps against its iterations at equal cost (Macklin et al. 2019, "
+               "\u201cSmall Steps\u201d): each point splits the same S x N projections of every "
+               "spring differently. Left and middle: the whole run from rest (the largest spring "
+               "strain at any step, the energy it gained: positive is energy the method made); "
+               "right: one step from the same states against the true motion.")
+    return figure_html(saved, "small steps at equal cost", esc(caption)) + facts_html(facts)
 
 
 def summaries(db, rows):
