@@ -20,7 +20,10 @@
 // where states are forbidden, Phi is +infinity there and the search halves
 // past them). Converged by Newton's own rule: the full update is below
 // --newton-tol in the max norm, or, while L-BFGS converges linearly at an
-// observed rate q > 1/2, what remains after it, q / (1 - q) ||update||. Where the direction does not descend even
+// observed rate q > 1/2, what remains after it, q / (1 - q) ||update||.
+// L-BFGS's update is a rougher error estimate than Newton's: at the same
+// tolerance its step lies further from the exact one (the frame-rate
+// experiment measures how far). Where the direction does not descend even
 // from H0 alone, or the search fails, or --max-newton iterations pass,
 // L-BFGS has stalled: the step is then solved by Newton from its start (the
 // "fall-back to Newton where it stalls").
@@ -179,7 +182,8 @@ bool ImplicitIntegrator::quasi_newton(double h, const VelocityImplicitScheme& s,
     const double rate = previous_update > 0.0 ? update / previous_update : 0.0;
     const double remaining = rate > 0.5 && rate < 1.0 ? update * rate / (1.0 - rate) : update;
     // A tolerance below the round-off of v is met at that round-off.
-    const double floor = kRoundoff * (v.lpNorm<Eigen::Infinity>() + v_.lpNorm<Eigen::Infinity>());
+    const double floor =
+        kRoundoff * (v.lpNorm<Eigen::Infinity>() + v_.lpNorm<Eigen::Infinity>());
     if (remaining <= tol || update <= floor) return true;
     previous_update = update;
   }
