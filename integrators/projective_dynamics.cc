@@ -144,17 +144,14 @@ StepResult ProjectiveDynamics::do_step(double h) {
         rhs_[c.particle * dim_ + r] += w * (x_new_[c.particle * dim_ + r] - d * plane.normal[r]);
       }
     }
-    // The global step, coordinate by coordinate with the one factor.
-    coordinate_.resize(n);
-    Vector solution;
-    for (int r = 0; r < dim_; ++r) {
-      for (Eigen::Index i = 0; i < n; ++i) coordinate_[i] = rhs_[i * dim_ + r];
-      ++mutable_stats().linear_solves;
-      if (!solver_.solve(coordinate_, solution)) {
-        return StepResult::failure(name() + ": the global solve gave a non-finite position");
-      }
-      for (Eigen::Index i = 0; i < n; ++i) x_new_[i * dim_ + r] = solution[i];
+    // The global step: the coordinates as the columns of an n x dim matrix,
+    // solved together with the one factor.
+    columns_ = Eigen::Map<const Eigen::MatrixXd>(rhs_.data(), dim_, n).transpose();
+    mutable_stats().linear_solves += dim_;
+    if (!solver_.solve(columns_, solved_)) {
+      return StepResult::failure(name() + ": the global solve gave a non-finite position");
     }
+    Eigen::Map<Eigen::MatrixXd>(x_new_.data(), dim_, n) = solved_.transpose();
     if (rho > 0.0 && it > 0) {
       // Wang 2015: w_2 = 2 / (2 - rho^2), then w_(k+1) = 4 / (4 - rho^2 w_k).
       omega = it == 1 ? 2.0 / (2.0 - rho * rho) : 4.0 / (4.0 - rho * rho * omega);

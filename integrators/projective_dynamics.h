@@ -11,7 +11,7 @@
 //            per coordinate; L = sum_c k_c (e_a - e_b)(e_a - e_b)^T)
 // lowers g; then v = (x - x_n)/h. The matrix is the same for x, y and z and
 // for every step of one h, so it is factored once (CHOLMOD, kept) and each
-// iteration is three triangular solves. The external forces (gravity, drag,
+// iteration is one solve with the three coordinates as three columns. The external forces (gravity, drag,
 // wind, spring damping) act explicitly through y. Not iterated to
 // convergence: N fixed, so it is implicit Euler only approximately (exactly,
 // after one iteration, on springs of rest length 0). Iterations count as
@@ -75,7 +75,8 @@ class ProjectiveDynamics final : public FastSolver {
   SparseMatrix laplacian_;  // L, free particles x free particles
   SparseDirectSolver solver_;
   double factored_h_ = 0.0;
-  Vector f_, y_, x_new_, rhs_, coordinate_;
+  Vector f_, y_, x_new_, rhs_;
+  Eigen::MatrixXd columns_, solved_;  // n x dim: one coordinate per column
   Vector x_before_, x_last_;  // Chebyshev: the iterates k - 1 and k
 };
 
