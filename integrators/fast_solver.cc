@@ -4,6 +4,24 @@
 
 namespace springlab {
 
+SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constraints,
+                                  Eigen::Index particles) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (const DistanceConstraint& c : constraints) {
+    entries.emplace_back(c.a, c.a, c.stiffness);
+    if (c.b >= 0) {
+      entries.emplace_back(c.b, c.b, c.stiffness);
+      entries.emplace_back(c.a, c.b, -c.stiffness);
+      entries.emplace_back(c.b, c.a, -c.stiffness);
+    }
+  }
+  for (Eigen::Index i = 0; i < particles; ++i) entries.emplace_back(i, i, 0.0);
+  SparseMatrix L(particles, particles);
+  L.setFromTriplets(entries.begin(), entries.end());
+  L.makeCompressed();
+  return L;
+}
+
 StepResult FastSolver::do_initialize() {
   dim_ = system().dimension_of_state();
   if (dim_ < 1 || !system().distance_constraints(constraints_)) {

@@ -13,6 +13,14 @@
 
 namespace springlab {
 
+// The local/global matrix's stiffness part L = sum_c k_c (e_a - e_b)(e_a - e_b)^T
+// (an anchored constraint: k_c on e_a's diagonal), particles x particles, with
+// the full diagonal stored (M or contact terms are added to it in place):
+// projective dynamics' global matrix M + h^2 L and quasi-Newton's initial
+// Hessian (quasi_newton.cc).
+SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constraints,
+                                  Eigen::Index particles);
+
 class FastSolver : public Integrator {
  protected:
   using Integrator::Integrator;

@@ -25,20 +25,7 @@ StepResult ProjectiveDynamics::do_initialize() {
   StepResult base = FastSolver::do_initialize();
   if (!base.ok) return base;
   contacts_.clear();
-  const Eigen::Index n = inv_particle_mass_.size();
-  std::vector<Eigen::Triplet<double>> entries;
-  for (const DistanceConstraint& c : constraints_) {
-    entries.emplace_back(c.a, c.a, c.stiffness);
-    if (c.b >= 0) {
-      entries.emplace_back(c.b, c.b, c.stiffness);
-      entries.emplace_back(c.a, c.b, -c.stiffness);
-      entries.emplace_back(c.b, c.a, -c.stiffness);
-    }
-  }
-  for (Eigen::Index i = 0; i < n; ++i) entries.emplace_back(i, i, 0.0);  // the full diagonal
-  laplacian_.resize(n, n);
-  laplacian_.setFromTriplets(entries.begin(), entries.end());
-  laplacian_.makeCompressed();
+  laplacian_ = constraint_laplacian(constraints_, inv_particle_mass_.size());
   factored_h_ = 0.0;
   return StepResult::success();
 }

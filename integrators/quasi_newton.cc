@@ -30,6 +30,7 @@
 #include <cmath>
 #include <limits>
 
+#include "integrators/fast_solver.h"
 #include "integrators/newton_velocity_solver.h"
 
 namespace springlab {
@@ -47,24 +48,10 @@ bool ImplicitIntegrator::prepare_quasi_newton() {
   const int dim = system().dimension_of_state();
   if (dim < 1 || !system().distance_constraints(constraints)) return false;
   const Eigen::Index n = system().dofs() / dim;
-  std::vector<Eigen::Triplet<double>> entries;
-  for (const DistanceConstraint& c : constraints) {
-    entries.emplace_back(c.a, c.a, c.stiffness);
-    if (c.b >= 0) {
-      entries.emplace_back(c.b, c.b, c.stiffness);
-      entries.emplace_back(c.a, c.b, -c.stiffness);
-      entries.emplace_back(c.b, c.a, -c.stiffness);
-    }
-  }
   qn_.dim = dim;
   qn_.particle_mass.resize(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    qn_.particle_mass[i] = system().mass()[i * dim];
-    entries.emplace_back(i, i, 0.0);  // the full diagonal
-  }
-  qn_.laplacian.resize(n, n);
-  qn_.laplacian.setFromTriplets(entries.begin(), entries.end());
-  qn_.laplacian.makeCompressed();
+  for (Eigen::Index i = 0; i < n; ++i) qn_.particle_mass[i] = system().mass()[i * dim];
+  qn_.laplacian = constraint_laplacian(constraints, n);
   qn_.factor.reset();
   qn_.factored_h = 0.0;
   return true;
