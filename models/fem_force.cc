@@ -169,9 +169,6 @@ class ElementForce final : public ForceTerm {
 
   bool is_tetrahedron() const { return nodes_ == 4 && dim_ == 3; }
 
-  // The element's df/dx, 12 x 12, as stiffness() gives it, from the
-  // material's 9 x 9 tangent: A = dPdF B column by column, then
-  // K = -W B^T A row by row (B above: G's rows, one per node).
   // F = sum_j x_j g_j^T of a tetrahedron, fixed size.
   static Eigen::Matrix3d tet_deformation(const Configuration& c, const Element& e) {
     Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
@@ -182,6 +179,9 @@ class ElementForce final : public ForceTerm {
     return F;
   }
 
+  // The element's df/dx, 12 x 12, as stiffness() gives it, from the
+  // material's 9 x 9 tangent: A = dPdF B column by column, then
+  // K = -W B^T A row by row (B above: G's rows, one per node).
   Eigen::Matrix<double, 12, 12> tet_stiffness(const Configuration& c, const Element& e) const {
     const Tangent3 T = dPdF3(*e.model, tet_deformation(c, e), e.lame);
     Eigen::Matrix<double, 9, 12> A;

@@ -19,11 +19,9 @@ Volume volume(const Mat& F) {
     out.J = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
     out.g << F(1, 1), -F(1, 0), -F(0, 1), F(0, 0);
   } else if (F.cols() == 3) {
-    const V3 f0 = column(F, 0), f1 = column(F, 1), f2 = column(F, 2);
-    out.J = f0.dot(f1.cross(f2));
-    out.g.col(0) = f1.cross(f2);
-    out.g.col(1) = f2.cross(f0);
-    out.g.col(2) = f0.cross(f1);
+    const Eigen::Matrix3d g = cofactor(F);
+    out.J = column(F, 0).dot(g.col(0));
+    out.g = g;
   } else {  // 3 x 2, a membrane: J = |f0 x f1|
     const V3 f0 = column(F, 0), f1 = column(F, 1);
     const V3 n = f0.cross(f1);

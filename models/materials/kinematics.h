@@ -12,6 +12,8 @@
 //     membrane R = F C^-1/2 with orthonormal columns; and its change dR.
 #pragma once
 
+#include <Eigen/Geometry>  // cross
+
 #include "models/materials/material.h"
 
 namespace springlab {
@@ -21,6 +23,16 @@ struct Volume {
   Mat g;  // dJ/dF, the shape of F
 };
 Volume volume(const Mat& F);
+// g = dJ/dF of a solid's 3 x 3 F, fixed size: the cofactor matrix, columns
+// f1 x f2, f2 x f0, f0 x f1 (volume() uses it; so do the closed-form
+// tangents, tangent3.h).
+inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d g;
+  g.col(0) = F.col(1).cross(F.col(2));
+  g.col(1) = F.col(2).cross(F.col(0));
+  g.col(2) = F.col(0).cross(F.col(1));
+  return g;
+}
 // (dg/dF)[dF] (the second derivative of J along dF).
 Mat volume_differential(const Mat& F, const Mat& dF);
 

@@ -14,9 +14,9 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Geometry>  // cross
 #include <Eigen/LU>        // determinant
 
+#include "models/materials/kinematics.h"  // cofactor
 #include "models/materials/material.h"
 
 namespace springlab {
@@ -31,15 +31,6 @@ inline Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& a) {
   Eigen::Matrix3d m;
   m << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
   return m;
-}
-
-// g = dJ/dF, the cofactor matrix.
-inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
-  Eigen::Matrix3d g;
-  g.col(0) = F.col(1).cross(F.col(2));
-  g.col(1) = F.col(2).cross(F.col(0));
-  g.col(2) = F.col(0).cross(F.col(1));
-  return g;
 }
 
 // H_J = d^2 J / dF^2 (above).
