@@ -167,6 +167,12 @@ Scene definition_scene(const DefinitionObject& o,
   }
 }
 
+std::string definition_integrator(const DefinitionObject& o, const char* key) {
+  const std::string name = o.string(key);
+  if (!is_integrator(name)) o.fail(key, "unknown integrator '" + printable(name) + "'");
+  return name;
+}
+
 std::vector<std::string> definition_integrators(const DefinitionObject& o, const char* key,
                                                 const std::string& fallback) {
   std::vector<std::string> names;

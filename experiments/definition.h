@@ -57,6 +57,9 @@ Scene definition_scene(const DefinitionObject& o,
 // The built-in parameters of a case, as `-p` pairs.
 std::vector<std::pair<std::string, std::string>> definition_parameters(const DefinitionObject& o);
 
+// One registered integrator's name at `key` (refused: "unknown integrator").
+std::string definition_integrator(const DefinitionObject& o, const char* key);
+
 // "all", "fixed-step", "adaptive" or a list of registry names.
 std::vector<std::string> definition_integrators(const DefinitionObject& o, const char* key,
                                                 const std::string& fallback);

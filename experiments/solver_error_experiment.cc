@@ -88,10 +88,7 @@ class SolverErrorExperiment final : public Experiment {
       r.allow_only({"integrator", "newton_tol", "solver", "iterations", "substeps", "chebyshev",
                     "rtol", "atol"});
       Variant v;
-      v.integrator = r.string("integrator");
-      if (!is_integrator(v.integrator)) {
-        r.fail("integrator", "unknown integrator '" + v.integrator + "'");
-      }
+      v.integrator = definition_integrator(r, "integrator");
       std::string label;
       auto note = [&](const std::string& text) { label += (label.empty() ? "" : "; ") + text; };
       if (r.has("newton_tol")) {

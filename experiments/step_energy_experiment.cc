@@ -100,10 +100,7 @@ class StepEnergyExperiment final : public Experiment {
     for (const DefinitionObject& r : d.objects("runs")) {
       r.allow_only({"integrator", "stiffness"});
       RunVariant variant;
-      variant.integrator = r.string("integrator");
-      if (!is_integrator(variant.integrator)) {
-        r.fail("integrator", "unknown integrator '" + variant.integrator + "'");
-      }
+      variant.integrator = definition_integrator(r, "integrator");
       if (!parse_stiffness(r.string("stiffness", "exact"), variant.stiffness)) {
         r.fail("stiffness", "expected \"exact\" or \"definite\"");
       }
