@@ -212,22 +212,21 @@ def case_figure(exp, ctx, db, rows, case, integ):
     below = sorted((e for e in done if e["solver_error"] <= disc),
                    key=lambda e: e["wall_seconds"])
     above = sorted((e for e in done if e["solver_error"] > disc), key=lambda e: e["wall_seconds"])
+    def costs(chosen, column):
+        """"name (variant) T ms (E m); ..." of entries, in the given order."""
+        return "; ".join("%s %s ms (%s m)" % (label(e), fmt(e["wall_seconds"] * 1e3, 3),
+                                              fmt(e[column], 2)) for e in chosen)
+
     if below:
         facts.append("Solver error below it (as good as solving the step exactly), cheapest "
-                     "first: %s." % "; ".join("%s %s ms (%s m)" % (
-                         label(e), fmt(e["wall_seconds"] * 1e3, 3), fmt(e["solver_error"], 2))
-                         for e in below))
+                     "first: %s." % costs(below, "solver_error"))
     if above:
-        facts.append("Solver error above it: %s." % "; ".join("%s %s ms (%s m)" % (
-            label(e), fmt(e["wall_seconds"] * 1e3, 3), fmt(e["solver_error"], 2))
-            for e in above))
+        facts.append("Solver error above it: %s." % costs(above, "solver_error"))
     closer = sorted((e for e in done if e["total_error"] < 0.5 * disc),
                     key=lambda e: e["wall_seconds"])
     if closer:
         facts.append("Closer to the true motion than the exact implicit Euler step (less than "
-                     "half its error), cheapest first: %s." % "; ".join("%s %s ms (%s m)" % (
-                         label(e), fmt(e["wall_seconds"] * 1e3, 3), fmt(e["total_error"], 2))
-                         for e in closer))
+                     "half its error), cheapest first: %s." % costs(closer, "total_error"))
     if adaptive:
         facts.append("The adaptive methods solve the ODE itself, not the implicit Euler step: "
                      "%s." % "; ".join("%s %s ms per step, %s m from the true motion" % (
