@@ -65,8 +65,7 @@ void force_jacobian_benchmark(benchmark::State& state, const SceneCase& c) {
 }  // namespace
 
 void register_force_benchmarks() {
-  std::vector<SceneCase> cases = all_cases();
-  cases.insert(cases.end(), solid_cases().begin(), solid_cases().end());
+  const std::vector<SceneCase> cases = spring_and_solid_cases();
   for (const SceneCase& c : cases) {
     benchmark::RegisterBenchmark(("BM_Force/" + c.path()).c_str(),
                                  [c](benchmark::State& s) { force_benchmark(s, c); })

@@ -202,8 +202,7 @@ void step_benchmark(benchmark::State& state, const std::string& name, const Scen
 
 void register_step_benchmarks() {
   const bool run_all = std::getenv("SPRINGLAB_BENCH_ALL") != nullptr;
-  std::vector<SceneCase> cases = all_cases();
-  cases.insert(cases.end(), solid_cases().begin(), solid_cases().end());
+  const std::vector<SceneCase> cases = spring_and_solid_cases();
   for (const std::string& name : integrator_names()) {
     const IntegratorInfo info = make_integrator(name)->info();
     for (const SceneCase& c : cases) {

@@ -33,6 +33,12 @@ const std::vector<SceneCase>& solid_cases() {
   return cases;
 }
 
+std::vector<SceneCase> spring_and_solid_cases() {
+  std::vector<SceneCase> cases = all_cases();
+  cases.insert(cases.end(), solid_cases().begin(), solid_cases().end());
+  return cases;
+}
+
 namespace {
 
 struct Cached {

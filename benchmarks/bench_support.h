@@ -33,6 +33,8 @@ const std::vector<SceneCase>& all_cases();
 // triangles), the block with n = 4, 8, 12 cubes per side (384, 3072,
 // 10368 tetrahedra); default materials (neo-Hookean).
 const std::vector<SceneCase>& solid_cases();
+// all_cases() then solid_cases(): the scenes of BM_Force and BM_Step.
+std::vector<SceneCase> spring_and_solid_cases();
 
 // Built once, then shared (benchmarks run one at a time, so the model's
 // scratch arrays are never used concurrently).
