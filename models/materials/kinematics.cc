@@ -61,14 +61,52 @@ Mat volume_differential(const Mat& F, const Mat& dF) {
   return dg;
 }
 
-Polar3 polar3(const Eigen::Matrix3d& F) {
-  // As polar() below for a solid, with fixed sizes.
+namespace {
+
+// R = U V^T from the SVD F = U Sigma V^T; a reflection (det < 0: an
+// inverted element) is turned into a rotation by flipping U's last column,
+// so S = R^T F keeps a negative eigenvalue instead (Irving et al. 2004).
+Eigen::Matrix3d rotation_by_svd(const Eigen::Matrix3d& F) {
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d U = svd.matrixU();
   const Eigen::Matrix3d& V = svd.matrixV();
   if ((U * V.transpose()).determinant() < 0.0) U.col(2) *= -1.0;
+  return U * V.transpose();
+}
+
+// det F > 0: R is F's orthogonal polar factor (then a rotation), the limit
+// of Higham's scaled Newton iteration from X = F,
+//   X <- (gamma X + X^-T / gamma) / 2,  gamma = (|X^-1|_F / |X|_F)^(1/2),
+// (Higham, "Computing the polar decomposition -- with applications", SIAM
+// J. Sci. Stat. Comput. 7, 1986), with X^-T = cofactor(X) / det X. It
+// converges quadratically: once a step changes X by less than 1e-9, X is
+// exact to rounding. Near rest (F close to I) that takes two or three
+// steps, a fraction of an SVD. Returns false if X degenerates or has not
+// converged after 40 steps (then the SVD decides).
+bool rotation_by_newton(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
+  Eigen::Matrix3d X = F;
+  for (int step = 0; step < 40; ++step) {
+    const Eigen::Matrix3d C = cofactor(X);  // det X X^-T
+    const double det = X.col(0).dot(C.col(0));
+    if (!(det > 0.0) || !std::isfinite(det)) return false;
+    const double gamma = std::sqrt(std::sqrt(C.squaredNorm() / X.squaredNorm()) / det);
+    const Eigen::Matrix3d next = 0.5 * (gamma * X + C / (gamma * det));
+    const double change = (next - X).norm();
+    X = next;
+    if (change < 1e-9) {
+      R = X;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+Polar3 polar3(const Eigen::Matrix3d& F) {
+  // As polar() below for a solid, with fixed sizes.
   Polar3 p;
-  p.R = U * V.transpose();
+  if (!(F.determinant() > 0.0) || !rotation_by_newton(F, p.R)) p.R = rotation_by_svd(F);
   const Eigen::Matrix3d S = p.R.transpose() * F;
   p.S = 0.5 * (S + S.transpose());
   return p;
