@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <memory>
 #include <random>
@@ -57,9 +58,32 @@ struct ElementBlock {
   int nodes = 3;
   std::vector<std::vector<int>> node_lists = {};  // scene indices
   std::vector<int> materials = {};
+  // Tetrahedra take the fixed-size force (tet_force.cc) unless this asks for
+  // the plain one every shape has (fem_force.cc), which the tests compare
+  // it with.
+  bool reference = false;
 };
 std::unique_ptr<ForceTerm> make_element_force(const Scene& scene, const ParticleOrder& order,
                                               const ElementBlock& block);
+std::unique_ptr<ForceTerm> make_tetrahedron_element_force(const Scene& scene,
+                                                          const ParticleOrder& order,
+                                                          const ElementBlock& block);
+
+// The definite part of an element's stiffness K = dF/dx (README "Finite
+// elements"): the element's Hessian -K with its negative eigenvalues set to
+// zero (Teran et al. 2005 do this per singular value; per element is
+// simpler and also definite). K is left as it is where it already is
+// semidefinite, so the definite part is exactly dF/dx there.
+template <typename Matrix>
+void make_definite(Matrix& K) {
+  const Matrix H = -0.5 * (K + K.transpose());
+  Eigen::SelfAdjointEigenSolver<Matrix> eig(H);
+  const auto& lambda = eig.eigenvalues();
+  const double size = lambda.cwiseAbs().maxCoeff();
+  if (lambda.minCoeff() >= -1e-12 * size) return;
+  const Matrix& Q = eig.eigenvectors();
+  K = -(Q * lambda.cwiseMax(0.0).asDiagonal() * Q.transpose());
+}
 
 // ---- The element arrays ("triangles", "tetrahedra"): each element
 // {"nodes": [N particle indices], "material": name}. One reader, checker and

@@ -5,16 +5,11 @@
 // and the stiffness block of nodes i, j, column r (coordinate r of x_j),
 //   (df_i/dx_j) e_r = -W dP[e_r g_j^T] g_i,
 // with dP the material's differential (models/materials/material.h). The
-// definite part for Newton: the element's Hessian -df/dx (nodes x dim
-// square) with its negative eigenvalues set to zero (Teran et al. 2005 do
-// this per singular value; per element is simpler and also definite).
+// definite part for Newton is make_definite (fem_elements.h).
 //
-// Tetrahedra take a fixed-size path with the same formulas: the material's
-// closed-form dPdF (9 x 9 on vec(F), material.h) once per element, then
-//   K = -W B^T dPdF B,  B = dvec(F)/dx, B(r + 3c, 3j + s) = delta_rs G(j, c),
-// multiplied through B's structure (tet_stiffness); the other shapes keep
-// the plain version, stiffness(), one dP per column, which is also the
-// reference the tests compare the fast path with.
+// This is the plain version, one dP per column of the stiffness, for every
+// shape; tetrahedra take the fixed-size one in tet_force.cc (with the
+// material's closed-form dPdF), which the tests compare with this.
 #include <Eigen/Dense>
 #include <cmath>
 #include <string>
@@ -59,13 +54,6 @@ class ElementForce final : public ForceTerm {
 
   void add_force(const Configuration& c, double* f) const override {
     for (const Element& e : elements_) {
-      if (is_tetrahedron()) {
-        const Eigen::Matrix3d P = e.model->P(Mat(tet_deformation(c, e)), e.lame);
-        for (int i = 0; i < 4; ++i) {
-          Eigen::Map<Eigen::Vector3d>(f + e.nodes[i] * 3) -= e.W * (P * e.G.row(i).transpose());
-        }
-        continue;
-      }
       const Mat P = e.model->P(deformation(c, e), e.lame);
       for (int i = 0; i < nodes_; ++i) {
         const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1> fi =
@@ -108,21 +96,15 @@ class ElementForce final : public ForceTerm {
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx == nullptr) return;
     for (const Element& e : elements_) {
-      if (is_tetrahedron()) {
-        scatter(e, tet_stiffness(c, e), dfdx);
-      } else {
-        scatter(e, stiffness(c, e), dfdx);
-      }
+      scatter(e, stiffness(c, e), dfdx);
     }
   }
 
   void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
     for (const Element& e : elements_) {
-      if (is_tetrahedron()) {
-        add_definite<Eigen::Matrix<double, 12, 12>>(e, tet_stiffness(c, e), dfdx);
-      } else {
-        add_definite<Eigen::MatrixXd>(e, stiffness(c, e), dfdx);
-      }
+      Eigen::MatrixXd K = stiffness(c, e);
+      make_definite(K);
+      scatter(e, K, dfdx);
     }
   }
 
@@ -167,55 +149,6 @@ class ElementForce final : public ForceTerm {
     return K;
   }
 
-  bool is_tetrahedron() const { return nodes_ == 4 && dim_ == 3; }
-
-  // F = sum_j x_j g_j^T of a tetrahedron, fixed size.
-  static Eigen::Matrix3d tet_deformation(const Configuration& c, const Element& e) {
-    Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
-    for (int j = 0; j < 4; ++j) {
-      const Eigen::Map<const Eigen::Vector3d> x(c.x + e.nodes[j] * 3);
-      F.noalias() += x * e.G.row(j);
-    }
-    return F;
-  }
-
-  // The element's df/dx, 12 x 12, as stiffness() gives it, from the
-  // material's 9 x 9 tangent: A = dPdF B column by column, then
-  // K = -W B^T A row by row (B above: G's rows, one per node).
-  Eigen::Matrix<double, 12, 12> tet_stiffness(const Configuration& c, const Element& e) const {
-    const Tangent3 T = dPdF3(*e.model, tet_deformation(c, e), e.lame);
-    Eigen::Matrix<double, 9, 12> A;
-    for (int j = 0; j < 4; ++j) {
-      for (int s = 0; s < 3; ++s) {
-        A.col(3 * j + s) = T.col(s) * e.G(j, 0) + T.col(s + 3) * e.G(j, 1) + T.col(s + 6) * e.G(j, 2);
-      }
-    }
-    Eigen::Matrix<double, 12, 12> K;
-    for (int i = 0; i < 4; ++i) {
-      for (int r = 0; r < 3; ++r) {
-        K.row(3 * i + r) = -e.W * (e.G(i, 0) * A.row(r) + e.G(i, 1) * A.row(r + 3) +
-                                   e.G(i, 2) * A.row(r + 6));
-      }
-    }
-    return K;
-  }
-
-  // The element's -Hessian K with its positive eigenvalues (of -K) kept.
-  template <typename Matrix>
-  void add_definite(const Element& e, const Matrix& K, double* dfdx) const {
-    const Matrix H = -0.5 * (K + K.transpose());  // the element's Hessian
-    Eigen::SelfAdjointEigenSolver<Matrix> eig(H);
-    const auto& lambda = eig.eigenvalues();
-    const double size = lambda.cwiseAbs().maxCoeff();
-    if (lambda.minCoeff() >= -1e-12 * size) {
-      scatter(e, K, dfdx);  // already semidefinite: exactly dF/dx
-      return;
-    }
-    const Matrix& Q = eig.eigenvectors();
-    const Matrix projected = -(Q * lambda.cwiseMax(0.0).asDiagonal() * Q.transpose());
-    scatter(e, projected, dfdx);
-  }
-
   template <typename Matrix>
   void scatter(const Element& e, const Matrix& K, double* values) const {
     for (int i = 0; i < nodes_; ++i) {
@@ -242,6 +175,9 @@ class ElementForce final : public ForceTerm {
 std::unique_ptr<ForceTerm> make_element_force(const Scene& scene, const ParticleOrder& order,
                                               const ElementBlock& block) {
   if (block.node_lists.empty()) return nullptr;
+  if (block.nodes == 4 && order.dim == 3 && !block.reference) {
+    return make_tetrahedron_element_force(scene, order, block);
+  }
   return std::make_unique<ElementForce>(scene, order, block);
 }
 

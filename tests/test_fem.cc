@@ -9,6 +9,8 @@
 #include <Eigen/SparseCholesky>
 #include <cmath>
 #include <map>
+#include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,7 @@
 #include "models/builtin_scenes.h"
 #include "models/elastic_model.h"
 #include "models/fem.h"
+#include "models/fem_elements.h"
 #include "models/gravity.h"
 #include "models/materials/material.h"
 #include "models/scene.h"
@@ -109,6 +112,87 @@ TEST(FiniteElements, PatchTestUniformStrainHasNoInteriorForce) {
 
 // README "Finite elements": without a given mass, a particle gets sum rho W / nodes of its
 // elements; a given mass wins; the total is rho x the rest measure.
+// The tetrahedra's fixed-size force (tet_force.cc: the closed-form tangent
+// blocks, node 0 from the others' sums, slots per tetrahedron) is the
+// plain element force (fem_force.cc: one dP per stiffness column) for
+// every material: force, energy, dF/dx and its definite part, on a 3-D
+// beam (its clamped nodes fixed) at a random configuration.
+TEST(FiniteElements, TetrahedronFastPathIsThePlainElementForce) {
+  for (std::size_t m = 0; m < material_models().size(); ++m) {
+    SCOPED_TRACE(std::string(material_models()[m]->name));
+    const Scene scene = make_builtin_scene(
+        "beam", {{"dimension", "3"}, {"nx", "3"}, {"ny", "2"}, {"model", std::to_string(m)}});
+    // Internal order: free particles first (as ElasticModel numbers them).
+    ParticleOrder order;
+    order.dim = 3;
+    order.internal_of_scene.assign(scene.particles.size(), -1);
+    for (bool fixed : {false, true}) {
+      for (std::size_t p = 0; p < scene.particles.size(); ++p) {
+        if (scene.particles[p].fixed != fixed) continue;
+        order.internal_of_scene[p] = static_cast<int>(order.scene_of_internal.size());
+        order.scene_of_internal.push_back(static_cast<int>(p));
+      }
+      if (!fixed) order.free_particles = static_cast<int>(order.scene_of_internal.size());
+    }
+    ElementBlock block{.name = "tetrahedron", .nodes = 4};
+    for (const Tetrahedron& t : scene.get<Tetrahedra>()) {
+      block.node_lists.emplace_back(t.nodes.begin(), t.nodes.end());
+      block.materials.push_back(t.material);
+    }
+    const std::unique_ptr<ForceTerm> fast = make_element_force(scene, order, block);
+    block.reference = true;
+    const std::unique_ptr<ForceTerm> plain = make_element_force(scene, order, block);
+
+    // One pattern: the free particles' diagonal blocks and those declared.
+    const int free = order.free_particles;
+    JacobianPatternBuilder builder(3);
+    for (int p = 0; p < free; ++p) builder.add_block(p, p);
+    fast->declare_jacobian_blocks(builder);
+    std::vector<Eigen::Triplet<double>> entries;
+    for (const auto& [a, b] : builder.blocks())
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) entries.emplace_back(3 * a + r, 3 * b + c, 0.0);
+    SparseMatrix pattern(3 * free, 3 * free);
+    pattern.setFromTriplets(entries.begin(), entries.end());
+    pattern.makeCompressed();
+    fast->bind_jacobian(pattern);
+    plain->bind_jacobian(pattern);
+
+    // Positions: rest, stretched 20 % along x, sheared, plus noise.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> noise(-0.01, 0.01);
+    Vector x(3 * static_cast<Eigen::Index>(scene.particles.size()));
+    for (std::size_t p = 0; p < scene.particles.size(); ++p) {
+      const Eigen::Vector3d X = scene.particles[order.scene_of_internal[p]].rest_position();
+      const Eigen::Vector3d y(1.2 * X.x() + 0.1 * X.y(), X.y(), X.z());
+      for (int r = 0; r < 3; ++r) x[3 * static_cast<Eigen::Index>(p) + r] = y[r] + noise(rng);
+    }
+    Configuration c;
+    c.x = x.data();
+    c.dim = 3;
+    c.free_particles = free;
+
+    Vector f_fast = Vector::Zero(x.size()), f_plain = Vector::Zero(x.size());
+    fast->add_force(c, f_fast.data());
+    plain->add_force(c, f_plain.data());
+    EXPECT_LT((f_fast - f_plain).norm(), 1e-12 * f_plain.norm());
+    EXPECT_NEAR(fast->potential_energy(c), plain->potential_energy(c),
+                1e-12 * std::abs(plain->potential_energy(c)));
+    for (bool definite : {false, true}) {
+      SparseMatrix K_fast = pattern, K_plain = pattern;
+      if (definite) {
+        fast->add_definite_stiffness(c, K_fast.valuePtr());
+        plain->add_definite_stiffness(c, K_plain.valuePtr());
+      } else {
+        fast->add_jacobians(c, K_fast.valuePtr(), nullptr);
+        plain->add_jacobians(c, K_plain.valuePtr(), nullptr);
+      }
+      EXPECT_GT(K_plain.norm(), 0.0);
+      EXPECT_LT((K_fast - K_plain).norm(), 1e-10 * K_plain.norm()) << "definite " << definite;
+    }
+  }
+}
+
 TEST(FiniteElements, LumpedMassesSumToTheBodysMass) {
   const Scene block = make_builtin_scene("block", {{"n", "3"}});
   double total = 0.0;

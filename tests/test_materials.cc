@@ -12,6 +12,7 @@
 
 #include "models/materials/kinematics.h"
 #include "models/materials/material.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 namespace {
@@ -108,19 +109,23 @@ TEST_P(EveryMaterial, TangentIsTheDerivativeOfTheStress) {
   }
 }
 
-// The closed-form tangent of a 3 x 3 F (the tetrahedra's fast path) is the
-// one assembled from dP, entry for entry, at random deformations and -- for
+// The closed-form tangent blocks of a 3 x 3 F (the tetrahedra's fast path,
+// A(d_i, d_j) for the rows of a random D) are the contraction of the tangent
+// assembled from dP, entry for entry, at random deformations and -- for
 // every model defined there -- inverted ones (J < 0).
-TEST_P(EveryMaterial, ClosedFormSolidTangentIsTheAssembledOne) {
+TEST_P(EveryMaterial, ClosedFormSolidTangentBlocksAreTheContractedTangent) {
   if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
-  if (model().dPdF3 == nullptr) GTEST_SKIP() << "no closed form: assembled from dP";
+  if (model().tangent_blocks3 == nullptr) GTEST_SKIP() << "no closed form: contracted from dP";
   std::mt19937 rng(19);
+  std::uniform_real_distribution<double> entry(-1.0, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
     Mat F = deformed(rng);
     if (trial % 2 == 1 && model().finite_everywhere) F.col(0) *= -1.0;  // inverted
-    const Tangent reference = dPdF(model(), F, kLame);
-    const Tangent3 closed = dPdF3(model(), Eigen::Matrix3d(F), kLame);
-    EXPECT_LT((closed - Tangent3(reference)).norm(), 1e-12 * reference.norm())
+    Eigen::Matrix3d D;
+    for (int k = 0; k < 9; ++k) D.data()[k] = entry(rng);
+    const Tangent3 reference = tangent_blocks(Tangent3(dPdF(model(), F, kLame)), D);
+    const Tangent3 closed = tangent_blocks3(model(), Eigen::Matrix3d(F), D, kLame);
+    EXPECT_LT((closed - reference).norm(), 1e-12 * reference.norm())
         << "trial " << trial << ", J " << volume(F).J;
   }
 }
@@ -176,6 +181,34 @@ TEST(Materials, NeoHookeanHasNoEnergyWhereTheElementIsInverted) {
   const MaterialModel& snh = *find_material_model("stable-neo-hookean");
   EXPECT_TRUE(std::isfinite(snh.Psi(F, kLame)));
   EXPECT_LT(snh.P(F, kLame)(2, 2), 0.0);
+}
+
+// polar3 (Newton's iteration where det F > 0, the SVD elsewhere) gives the
+// proper rotation U V^T of the SVD, sign-flipped where det F < 0, and
+// F = R S with S symmetric: near rest, strongly stretched (condition 1e6),
+// nearly flat, and inverted.
+TEST(Materials, PolarDecompositionIsTheSvdsRotation) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::Matrix3d F;
+    for (int k = 0; k < 9; ++k) F.data()[k] = n(rng);
+    if (trial % 4 == 0) F = Eigen::Matrix3d::Identity() + 1e-3 * F;  // near rest
+    if (trial % 4 == 1) F.col(0) *= 1e6;                            // condition ~1e6
+    if (trial % 4 == 2) F.col(2) = F.col(0) + F.col(1) + 1e-7 * F.col(2);  // nearly flat
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d U = svd.matrixU();
+    if ((U * svd.matrixV().transpose()).determinant() < 0.0) U.col(2) *= -1.0;
+    const Eigen::Matrix3d expected = U * svd.matrixV().transpose();
+    const Polar3 p = polar3(F);
+    // Both are exact to rounding times R's sensitivity, ~ sigma_max / sigma_min.
+    const double tolerance = trial % 4 == 1 ? 1e-11 : 1e-13;
+    EXPECT_LT((p.R - expected).norm(), tolerance) << "trial " << trial << ", det " << F.determinant();
+    EXPECT_LT((p.R.transpose() * p.R - Eigen::Matrix3d::Identity()).norm(), 1e-14) << trial;
+    EXPECT_NEAR(p.R.determinant(), 1.0, 1e-14) << trial;
+    EXPECT_LT((p.R * p.S - F).norm(), 1e-14 * F.norm()) << trial;
+    EXPECT_EQ(p.S, p.S.transpose()) << trial;
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
 #include <Eigen/LU>
+#include <array>
 
 #include "models/materials/kinematics.h"
 #include "models/materials/tangent3.h"
@@ -34,27 +35,31 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
          m.lambda * (contract(v.g, dF) * v.g + (v.J - 1.0) * volume_differential(F, dF));
 }
 
-// dPdF = 2 mu (I - dR/dF) + lambda g g^T + lambda (J - 1) H_J (tangent3.h),
-// with dR/dF column by column: along E_ab, R^T dF - dF^T R = W S + S W
-// (polar_differential in kinematics.cc) gives W = [w]x,
-// w = (tr(S) I - S)^-1 u, one inverse for all nine columns.
-Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+// dPdF = 2 mu (I - dR/dF) + lambda g g^T + lambda (J - 1) H_J (tangent3.h).
+// dR/dF from F = R S: along dF, R^T dF - dF^T R = W S + S W
+// (polar_differential in kinematics.cc) gives W = R^T dR = [w]x with
+// w = M^-1 u, M = tr(S) I - S, u_k = <R [e_k]x, dF>; so
+//   dR/dF = sum_kl (M^-1)_kl vec(R [e_k]x) vec(R [e_l]x)^T,
+// three rank-one pieces with R [e_k]x a = -R [a]x e_k. Contracted:
+//   A(a, b) = 2 mu (a . b) I + 2 mu R [a]x M^-1 [b]x R^T
+//             + lambda (G a)(G b)^T - lambda (J - 1) [F (a x b)]x.
+Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
   const Polar3 p = polar3(F);
-  const Eigen::Matrix3d M_inv =
-      (p.S.trace() * Eigen::Matrix3d::Identity() - p.S).inverse();
-  const Eigen::Matrix<double, 9, 1> g = vec(cofactor(F));
-  Tangent3 T = 2.0 * m.mu * Tangent3::Identity() + m.lambda * g * g.transpose() +
-               m.lambda * (F.determinant() - 1.0) * volume_hessian(F);
-  for (int b = 0; b < 3; ++b) {
-    for (int a = 0; a < 3; ++a) {
-      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();  // R^T E_ab
-      A.col(b) = p.R.row(a).transpose();
-      const Eigen::Matrix3d K = A - A.transpose();
-      const Eigen::Vector3d w = M_inv * Eigen::Vector3d(K(2, 1), K(0, 2), K(1, 0));
-      T.col(a + 3 * b) -= 2.0 * m.mu * vec(p.R * cross_matrix(w));
-    }
-  }
-  return T;
+  const Eigen::Matrix3d M_inv = (p.S.trace() * Eigen::Matrix3d::Identity() - p.S).inverse();
+  const double h = m.lambda * (F.determinant() - 1.0);
+  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
+  std::array<Eigen::Matrix3d, 3> Ra;                        // R [d_i]x
+  for (int i = 0; i < 3; ++i) Ra[static_cast<std::size_t>(i)] = p.R * cross_matrix(D.row(i));
+  return symmetric_blocks([&](int i, int j) {
+    const Eigen::Vector3d a = D.row(i), b = D.row(j);
+    const Eigen::Matrix3d twist =
+        Ra[static_cast<std::size_t>(i)] * M_inv * Ra[static_cast<std::size_t>(j)].transpose();
+    return Block3()
+        .identity(2.0 * m.mu * a.dot(b))
+        .matrix(-2.0 * m.mu, twist)
+        .outer(m.lambda, GD.col(i), GD.col(j))
+        .volume_hessian(h, F, a, b);
+  });
 }
 
 }  // namespace
@@ -66,7 +71,7 @@ const MaterialModel& corotated_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
-      .dPdF3 = dPdF3,
+      .tangent_blocks3 = tangent_blocks3,
   };
   return model;
 }

@@ -30,18 +30,14 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
          m.lambda * dF.trace() * Mat::Identity(F.rows(), F.cols());
 }
 
-// dPdF = mu (I + K) + lambda vec(I) vec(I)^T, K the transpose on vec(F):
+// dPdF = mu (I_9 + K) + lambda vec(I) vec(I)^T, K the transpose on vec(F):
 // dP_rc/dF_ab = mu (d_ra d_cb + d_rb d_ca) + lambda d_rc d_ab. Constant.
-Tangent3 dPdF3(const Eigen::Matrix3d&, const Lame& m) {
-  Tangent3 T = Tangent3::Zero();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) {
-      T(r + 3 * c, r + 3 * c) += m.mu;
-      T(r + 3 * c, c + 3 * r) += m.mu;
-    }
-  }
-  const Eigen::Matrix<double, 9, 1> I = vec(Eigen::Matrix3d::Identity());
-  return T + m.lambda * I * I.transpose();
+// Contracted (tangent3.h): A(a, b) = mu (a . b) I + mu b a^T + lambda a b^T.
+Tangent3 tangent_blocks3(const Eigen::Matrix3d&, const Eigen::Matrix3d& D, const Lame& m) {
+  return symmetric_blocks([&](int i, int j) {
+    const Eigen::Vector3d a = D.row(i), b = D.row(j);
+    return Block3().identity(m.mu * a.dot(b)).outer(m.mu, b, a).outer(m.lambda, a, b);
+  });
 }
 
 }  // namespace
@@ -54,7 +50,7 @@ const MaterialModel& linear_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
-      .dPdF3 = dPdF3,
+      .tangent_blocks3 = tangent_blocks3,
   };
   return model;
 }

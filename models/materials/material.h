@@ -49,10 +49,15 @@ struct MaterialModel {
   Mat (*P)(const Mat& F, const Lame& m) = nullptr;
   // dP = (dP/dF)[dF], the change of P along dF (d x k).
   Mat (*dP)(const Mat& F, const Mat& dF, const Lame& m) = nullptr;
-  // dPdF of a 3 x 3 F in closed form (the tetrahedra's fast path,
-  // tangent3.h); nullptr: assembled from dP. The shared tests check it
-  // against the one assembled from dP.
-  Tangent3 (*dPdF3)(const Eigen::Matrix3d& F, const Lame& m) = nullptr;
+  // The tetrahedra's fast path (tet_force.cc): for the rows d_1, d_2, d_3
+  // of D = Dm^-1, the 9 x 9 matrix whose 3 x 3 block (i, j) is
+  //   A(d_i, d_j)_rs = sum_cd (d_i)_c (dP_rc / dF_sd) (d_j)_d,
+  // the tangent contracted with two rest-shape gradients (tangent3.h; the
+  // "constitutive component" of the element's tangent matrix, Bonet and
+  // Wood 2008), in closed form. nullptr: contracted from dPdF. The shared
+  // tests check it against the contraction of the dPdF assembled from dP.
+  Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
+                              const Lame& m) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
@@ -65,7 +70,9 @@ std::string material_model_names();
 // column from dP along each basis matrix E_rc: the reference every closed
 // form is checked against.
 Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m);
-// The 3 x 3 one: the model's closed form when it has one, else dPdF.
-Tangent3 dPdF3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m);
+// The blocks A(d_i, d_j) of a 3 x 3 F (above): the model's closed form when
+// it has one, else the contraction of dPdF.
+Tangent3 tangent_blocks3(const MaterialModel& model, const Eigen::Matrix3d& F,
+                         const Eigen::Matrix3d& D, const Lame& m);
 
 }  // namespace springlab

@@ -3,6 +3,7 @@
 // this table.
 
 #include "models/materials/material.h"
+#include "models/materials/tangent3.h"
 
 namespace springlab {
 
@@ -62,9 +63,28 @@ Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m) {
 
 namespace springlab {
 
-Tangent3 dPdF3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m) {
-  if (model.dPdF3 != nullptr) return model.dPdF3(F, m);
-  return dPdF(model, Mat(F), m);
+Tangent3 tangent_blocks(const Tangent3& T, const Eigen::Matrix3d& D) {
+  // A = T B: column 3 j + s is sum_d D(j, d) T.col(s + 3 d).
+  Tangent3 A;
+  for (int j = 0; j < 3; ++j) {
+    for (int s = 0; s < 3; ++s) {
+      A.col(3 * j + s) = T.col(s) * D(j, 0) + T.col(s + 3) * D(j, 1) + T.col(s + 6) * D(j, 2);
+    }
+  }
+  // B^T A: row 3 i + r is sum_c D(i, c) A.row(r + 3 c).
+  Tangent3 K;
+  for (int i = 0; i < 3; ++i) {
+    for (int r = 0; r < 3; ++r) {
+      K.row(3 * i + r) = D(i, 0) * A.row(r) + D(i, 1) * A.row(r + 3) + D(i, 2) * A.row(r + 6);
+    }
+  }
+  return K;
+}
+
+Tangent3 tangent_blocks3(const MaterialModel& model, const Eigen::Matrix3d& F,
+                         const Eigen::Matrix3d& D, const Lame& m) {
+  if (model.tangent_blocks3 != nullptr) return model.tangent_blocks3(F, D, m);
+  return tangent_blocks(dPdF(model, Mat(F), m), D);
 }
 
 }  // namespace springlab

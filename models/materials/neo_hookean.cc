@@ -44,14 +44,21 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 }
 
 // dPdF = mu I + (lambda - a)/J^2 g g^T + a/J H_J, a = lambda ln J - mu
-// (tangent3.h: g = vec(dJ/dF), H_J its derivative).
-Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+// (g = vec(dJ/dF), H_J its derivative), so (tangent3.h, G the cofactor matrix)
+//   A(a, b) = mu (a . b) I + (lambda - a)/J^2 (G a)(G b)^T - a/J [F (a x b)]x.
+Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
   const double J = F.determinant();
   if (!(J > 0.0)) return Tangent3::Constant(kNaN);
   const double a = m.lambda * std::log(J) - m.mu;
-  const Eigen::Matrix<double, 9, 1> g = vec(cofactor(F));
-  return m.mu * Tangent3::Identity() + (m.lambda - a) / (J * J) * g * g.transpose() +
-         a / J * volume_hessian(F);
+  const double c = (m.lambda - a) / (J * J);
+  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
+  return symmetric_blocks([&](int i, int j) {
+    const Eigen::Vector3d di = D.row(i), dj = D.row(j);
+    return Block3()
+        .identity(m.mu * di.dot(dj))
+        .outer(c, GD.col(i), GD.col(j))
+        .volume_hessian(a / J, F, di, dj);
+  });
 }
 
 }  // namespace
@@ -64,7 +71,7 @@ const MaterialModel& neo_hookean_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
-      .dPdF3 = dPdF3,
+      .tangent_blocks3 = tangent_blocks3,
   };
   return model;
 }

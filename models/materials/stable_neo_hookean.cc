@@ -35,12 +35,17 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
                                           (v.J - alpha(m)) * volume_differential(F, dF));
 }
 
-// dPdF = mu I + lambda' g g^T + lambda' (J - alpha) H_J (tangent3.h).
-Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+// dPdF = mu I + lambda' g g^T + lambda' (J - alpha) H_J, g = vec(dJ/dF), so
+// (tangent3.h, with g's matrix the cofactor matrix G)
+//   A(a, b) = mu (a . b) I + lambda' (G a)(G b)^T - lambda' (J - alpha) [F (a x b)]x.
+Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
   const double l = shifted_lambda(m);
-  const Eigen::Matrix<double, 9, 1> g = vec(cofactor(F));
-  return m.mu * Tangent3::Identity() + l * g * g.transpose() +
-         l * (F.determinant() - alpha(m)) * volume_hessian(F);
+  const double h = l * (F.determinant() - alpha(m));
+  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
+  return symmetric_blocks([&](int i, int j) {
+    const Eigen::Vector3d a = D.row(i), b = D.row(j);
+    return Block3().identity(m.mu * a.dot(b)).outer(l, GD.col(i), GD.col(j)).volume_hessian(h, F, a, b);
+  });
 }
 
 }  // namespace
@@ -53,7 +58,7 @@ const MaterialModel& stable_neo_hookean_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
-      .dPdF3 = dPdF3,
+      .tangent_blocks3 = tangent_blocks3,
   };
   return model;
 }

@@ -32,24 +32,22 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 }
 
 // dP_ij/dF_ab = d_ia S_bj + mu (F_ib F_aj + (F F^T)_ia d_jb) + lambda F_ij F_ab
-// (the differential above with dF = E_ab).
-Tangent3 dPdF3(const Eigen::Matrix3d& F, const Lame& m) {
+// (the differential above with dF = E_ab): a Kronecker piece (S), a
+// transposed rank one (F_ib F_aj), another Kronecker piece (F F^T) and a
+// rank one (F), so (tangent3.h)
+//   A(a, b) = (a^T S b) I + mu (F b)(F a)^T + mu (a . b) F F^T + lambda (F a)(F b)^T.
+Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
   const Eigen::Matrix3d S = Eigen::Matrix3d(second_pk(green(Mat(F)), m));
   const Eigen::Matrix3d FFt = F * F.transpose();
-  Tangent3 T;
-  for (int b = 0; b < 3; ++b) {
-    for (int a = 0; a < 3; ++a) {
-      for (int j = 0; j < 3; ++j) {
-        for (int i = 0; i < 3; ++i) {
-          double t = m.mu * F(i, b) * F(a, j) + m.lambda * F(i, j) * F(a, b);
-          if (i == a) t += S(b, j);
-          if (j == b) t += m.mu * FFt(i, a);
-          T(i + 3 * j, a + 3 * b) = t;
-        }
-      }
-    }
-  }
-  return T;
+  const Eigen::Matrix3d FD = F * D.transpose();  // column i: F d_i
+  return symmetric_blocks([&](int i, int j) {
+    const Eigen::Vector3d a = D.row(i), b = D.row(j);
+    return Block3()
+        .identity(a.dot(S * b))
+        .outer(m.mu, FD.col(j), FD.col(i))
+        .matrix(m.mu * a.dot(b), FFt)
+        .outer(m.lambda, FD.col(i), FD.col(j));
+  });
 }
 
 }  // namespace
@@ -61,7 +59,7 @@ const MaterialModel& stvk_material() {
       .Psi = Psi,
       .P = P,
       .dP = dP,
-      .dPdF3 = dPdF3,
+      .tangent_blocks3 = tangent_blocks3,
   };
   return model;
 }

@@ -1,8 +1,13 @@
-// Pieces of the closed-form tangents dPdF of 3 x 3 deformation gradients
-// (material.h: the tetrahedra's fast path), on vec(F) column-major (entry
-// (r, c) of F at r + 3 c), so that dP = dPdF vec(dF). Each model writes its
-// dPdF from these in its own file; the shared tests check every one against
-// the dPdF assembled from its dP.
+// Pieces of the closed-form tangents of 3 x 3 deformation gradients
+// (material.h: the tetrahedra's fast path). dPdF is on vec(F) column-major
+// (entry (r, c) of F at r + 3 c), so that dP = dPdF vec(dF); the fast path
+// needs it only contracted with two rest-shape gradients a, b (rows of
+// Dm^-1),
+//   A(a, b)_rs = sum_cd a_c (dP_rc / dF_sd) b_d,
+// and each piece of a tangent has a 3 x 3 contraction of a few flops
+// (below), which is what makes the fast path fast. Each model writes its
+// blocks from these in its own file; the shared tests check every one
+// against the contraction of the dPdF assembled from its dP.
 //
 // With f_c the columns of F, J = det F = f0 . (f1 x f2) and
 // g = dJ/dF = [f1 x f2, f2 x f0, f0 x f1] (kinematics.h), the Hessian of J
@@ -10,7 +15,13 @@
 //   H_J = [[0, -[f2]x, [f1]x], [[f2]x, 0, -[f0]x], [-[f1]x, [f0]x, 0]]
 // (block (c, c') = dg_c / df_c'), so that dg = H_J vec(dF). Smith et al.,
 // "Analytic eigensystems for isotropic distortion energies", ACM TOG 2019,
-// §4.2.
+// §4.2. Contracted (block (c, d) of H_J is -eps_cde [f_e]x):
+//   H_J(a, b) = -[F (a x b)]x.
+// The other pieces the models use, contracted (I the 3 x 3 identity):
+//   identity I_9                   -> (a . b) I
+//   transpose, vec(dF^T)           -> b a^T
+//   rank one vec(U) vec(U)^T       -> (U a)(U b)^T
+//   Kronecker, vec(B dF A^T)       -> (a^T A b) B
 #pragma once
 
 #include <Eigen/Core>
@@ -33,18 +44,68 @@ inline Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& a) {
   return m;
 }
 
-// H_J = d^2 J / dF^2 (above).
-inline Tangent3 volume_hessian(const Eigen::Matrix3d& F) {
-  Tangent3 H = Tangent3::Zero();
-  const Eigen::Matrix3d x0 = cross_matrix(F.col(0)), x1 = cross_matrix(F.col(1)),
-                        x2 = cross_matrix(F.col(2));
-  H.block<3, 3>(0, 3) = -x2;
-  H.block<3, 3>(0, 6) = x1;
-  H.block<3, 3>(3, 0) = x2;
-  H.block<3, 3>(3, 6) = -x0;
-  H.block<3, 3>(6, 0) = -x1;
-  H.block<3, 3>(6, 3) = x0;
-  return H;
+// One block A(a, b) summed from the pieces above, entry by entry. (Plain
+// scalar sums, which the compiler keeps in registers; Eigen's 3 x 3
+// expressions would pass partial packets through memory here.)
+struct Block3 {
+  double e[3][3] = {};
+  // c I
+  Block3& identity(double c) {
+    for (int r = 0; r < 3; ++r) e[r][r] += c;
+    return *this;
+  }
+  // c u v^T
+  Block3& outer(double c, const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+    for (int r = 0; r < 3; ++r)
+      for (int s = 0; s < 3; ++s) e[r][s] += c * u[r] * v[s];
+    return *this;
+  }
+  // c M
+  Block3& matrix(double c, const Eigen::Matrix3d& M) {
+    for (int r = 0; r < 3; ++r)
+      for (int s = 0; s < 3; ++s) e[r][s] += c * M(r, s);
+    return *this;
+  }
+  // c [w]x
+  Block3& cross(double c, const Eigen::Vector3d& w) {
+    e[0][1] -= c * w.z();
+    e[0][2] += c * w.y();
+    e[1][0] += c * w.z();
+    e[1][2] -= c * w.x();
+    e[2][0] -= c * w.y();
+    e[2][1] += c * w.x();
+    return *this;
+  }
+  // c H_J(a, b) = -c [F (a x b)]x, the volume Hessian contracted (above).
+  Block3& volume_hessian(double c, const Eigen::Matrix3d& F, const Eigen::Vector3d& a,
+                         const Eigen::Vector3d& b) {
+    return cross(-c, F * a.cross(b));
+  }
+};
+
+// The 9 x 9 matrix of blocks (i, j) = A(d_i, d_j), d_i the rows of D, from
+// block(i, j) (a Block3) for i <= j: a hyperelastic tangent is symmetric (a
+// Hessian), so block (j, i) is the transpose of block (i, j).
+template <typename Block>
+Tangent3 symmetric_blocks(Block block) {
+  Tangent3 K;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) {
+      const Block3 b = block(i, j);
+      for (int r = 0; r < 3; ++r) {
+        for (int s = 0; s < 3; ++s) {
+          K(3 * i + r, 3 * j + s) = b.e[r][s];
+          K(3 * j + s, 3 * i + r) = b.e[r][s];
+        }
+      }
+    }
+  }
+  return K;
 }
+
+// The blocks A(d_i, d_j) of any tangent T on vec(F), by the definition
+// (what the closed forms are checked against): with B = D^T (x) I3,
+// the 9 x 9 matrix B^T T B.
+Tangent3 tangent_blocks(const Tangent3& T, const Eigen::Matrix3d& D);
 
 }  // namespace springlab

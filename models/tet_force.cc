@@ -1,0 +1,220 @@
+// The force of tetrahedra, fixed size (README "Finite elements"): the same
+// element force as fem_force.cc, whose plain version for every shape is the
+// reference the tests compare this one with, written for 3 x 3 F and four
+// nodes so that an implicit method's force + dF/dx stays cheap.
+//
+// With D = Dm^-1 (its rows d_1, d_2, d_3 are the g_j of nodes 1..3; node 0
+// has g_0 = -(d_1 + d_2 + d_3)) and Ds = [x1 - x0, x2 - x0, x3 - x0]:
+//   F = Ds D,  f_j = -W P d_j (j = 1..3),  f_0 = -(f_1 + f_2 + f_3).
+// The stiffness block of nodes i, j = 1..3 is
+//   K_ij = df_i/dx_j = -W A(d_i, d_j),
+// A(a, b)_rs = sum_cd a_c (dP_rc/dF_sd) b_d the tangent contracted with two
+// rest-shape gradients, which each material gives in closed form, a few
+// flops a block (tangent_blocks3, material.h; tangent3.h) instead of the
+// 9 x 9 dPdF and two 9 x 9 products. Node 0's blocks follow from
+// g_0 = -(d_1 + d_2 + d_3):
+//   K_i0 = -sum_j K_ij,  K_0j = -sum_i K_ij,  K_00 = sum_ij K_ij.
+#include <Eigen/Dense>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "models/fem_elements.h"
+#include "models/materials/material.h"
+
+namespace springlab {
+namespace {
+
+using Matrix12 = Eigen::Matrix<double, 12, 12>;
+
+class TetrahedronForce final : public ForceTerm {
+ public:
+  TetrahedronForce(const Scene& scene, const ParticleOrder& order, const ElementBlock& block)
+      : name_(block.name), free_particles_(order.free_particles) {
+    const Materials& materials = scene.get<Materials>();
+    tets_.reserve(block.node_lists.size());
+    for (std::size_t e = 0; e < block.node_lists.size(); ++e) {
+      Tet t;
+      std::vector<Eigen::Vector3d> X;
+      for (int j = 0; j < 4; ++j) {
+        const int n = block.node_lists[e][static_cast<std::size_t>(j)];
+        t.nodes[static_cast<std::size_t>(j)] = order.internal_of_scene[static_cast<std::size_t>(n)];
+        X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
+      }
+      const RestShape shape = rest_shape(X, 3);
+      t.D = shape.G.bottomRows(3);
+      t.W = shape.W;
+      const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
+      t.model = find_material_model(m.model);
+      t.lame = lame(m.young, m.poisson);
+      tets_.push_back(t);
+    }
+  }
+
+  std::string_view name() const override { return name_; }
+  bool conservative() const override { return true; }
+  bool forbids_states() const override {
+    for (const Tet& t : tets_) {
+      if (!t.model->finite_everywhere) return true;
+    }
+    return false;
+  }
+
+  void add_force(const Configuration& c, double* f) const override {
+    for (const Tet& t : tets_) {
+      const Eigen::Matrix3d P = t.model->P(Mat(deformation(c, t)), t.lame);
+      const Eigen::Matrix3d H = -t.W * P * t.D.transpose();  // columns f_1, f_2, f_3
+      node(f, t, 0) -= H.rowwise().sum();
+      for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
+    }
+  }
+
+  double potential_energy(const Configuration& c) const override {
+    double sum = 0.0;
+    for (const Tet& t : tets_) sum += t.W * t.model->Psi(Mat(deformation(c, t)), t.lame);
+    return sum;
+  }
+
+  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
+    for (const Tet& t : tets_) {
+      for (int a : t.nodes) {
+        for (int b : t.nodes) {
+          if (a != b && a < free_particles_ && b < free_particles_) builder.add_block(a, b);
+        }
+      }
+    }
+  }
+
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    Slots none;
+    none.fill(-1);
+    slots_.assign(tets_.size(), none);
+    for (std::size_t e = 0; e < tets_.size(); ++e) {
+      const Tet& t = tets_[e];
+      for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) {
+          const int a = t.nodes[static_cast<std::size_t>(i)];
+          const int b = t.nodes[static_cast<std::size_t>(j)];
+          if (a >= free_particles_ || b >= free_particles_) continue;
+          const BlockSlot slot = find_block_slot(pattern, 3, a, b);
+          for (int s = 0; s < 3; ++s) {
+            slots_[e][static_cast<std::size_t>(12 * j + 3 * i + s)] =
+                slot.offset[static_cast<std::size_t>(s)];
+          }
+        }
+      }
+    }
+  }
+
+  void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
+    if (dfdx == nullptr) return;
+    for (std::size_t e = 0; e < tets_.size(); ++e) add_stiffness(c, tets_[e], slots_[e], dfdx);
+  }
+
+  void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
+    for (std::size_t e = 0; e < tets_.size(); ++e) {
+      Matrix12 K = Matrix12::Zero();
+      add_stiffness(c, tets_[e], dense_slots(), K.data());
+      make_definite(K);
+      scatter(slots_[e], K, dfdx);
+    }
+  }
+
+ private:
+  struct Tet {
+    std::array<int, 4> nodes{};  // internal indices
+    Eigen::Matrix3d D;           // Dm^-1: its rows are g_1, g_2, g_3
+    double W = 0.0;              // the rest volume
+    const MaterialModel* model = nullptr;
+    Lame lame;
+  };
+  // Where column s of block (i, j) starts in the value array, at 12 j + 3 i + s
+  // (-1: a fixed node's block, not in the pattern).
+  using Slots = std::array<int, 48>;
+
+  static Eigen::Map<Eigen::Vector3d> node(double* f, const Tet& t, int j) {
+    return Eigen::Map<Eigen::Vector3d>(f + 3 * t.nodes[static_cast<std::size_t>(j)]);
+  }
+  static Eigen::Map<const Eigen::Vector3d> node(const Configuration& c, const Tet& t, int j) {
+    return Eigen::Map<const Eigen::Vector3d>(c.x + 3 * t.nodes[static_cast<std::size_t>(j)]);
+  }
+
+  // F = Ds Dm^-1.
+  static Eigen::Matrix3d deformation(const Configuration& c, const Tet& t) {
+    Eigen::Matrix3d Ds;
+    const Eigen::Vector3d x0 = node(c, t, 0);
+    for (int j = 1; j < 4; ++j) Ds.col(j - 1) = node(c, t, j) - x0;
+    return Ds * t.D;
+  }
+
+  // Adds the element's df/dx (above) to the value array at `slots`, block by
+  // block, without forming the 12 x 12 matrix: K_ij = -W A(d_i, d_j) for
+  // nodes 1..3, and with S_i = sum_j A(d_i, d_j), node 0's blocks
+  // K_i0 = W S_i, K_0i = W S_i^T (A is symmetric), K_00 = -W sum_i S_i.
+  static void add_stiffness(const Configuration& c, const Tet& t, const Slots& slots,
+                            double* values) {
+    const Tangent3 A = tangent_blocks3(*t.model, deformation(c, t), t.D, t.lame);
+    const double W = t.W;
+    double S[3][3][3] = {};  // S[i][r][s]
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int s = 0; s < 3; ++s)
+          for (int r = 0; r < 3; ++r) S[i][r][s] += A(3 * i + r, 3 * j + s);
+    // Adds entry(r, s) to block (i, j) (nodes 0..3).
+    const auto add = [&](int i, int j, const auto& entry) {
+      for (int s = 0; s < 3; ++s) {
+        const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
+        if (offset < 0) continue;
+        for (int r = 0; r < 3; ++r) values[offset + r] += entry(r, s);
+      }
+    };
+    for (int i = 1; i < 4; ++i) {
+      for (int j = 1; j < 4; ++j) {
+        add(i, j, [&](int r, int s) { return -W * A(3 * (i - 1) + r, 3 * (j - 1) + s); });
+      }
+      add(i, 0, [&](int r, int s) { return W * S[i - 1][r][s]; });
+      add(0, i, [&](int r, int s) { return W * S[i - 1][s][r]; });
+    }
+    add(0, 0, [&](int r, int s) { return -W * (S[0][r][s] + S[1][r][s] + S[2][r][s]); });
+  }
+
+  // The slots of a dense 12 x 12 column-major matrix (the definite part
+  // works on the element's whole matrix).
+  static const Slots& dense_slots() {
+    static const Slots slots = [] {
+      Slots d;
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+          for (int s = 0; s < 3; ++s) {
+            d[static_cast<std::size_t>(12 * j + 3 * i + s)] = 12 * (3 * j + s) + 3 * i;
+          }
+      return d;
+    }();
+    return slots;
+  }
+
+  static void scatter(const Slots& slots, const Matrix12& K, double* values) {
+    for (int col = 0; col < 12; ++col) {
+      for (int i = 0; i < 4; ++i) {
+        const int offset = slots[static_cast<std::size_t>(12 * (col / 3) + 3 * i + col % 3)];
+        if (offset < 0) continue;
+        Eigen::Map<Eigen::Vector3d>(values + offset) += K.col(col).segment<3>(3 * i);
+      }
+    }
+  }
+
+  std::string_view name_;
+  int free_particles_;
+  std::vector<Tet> tets_;
+  std::vector<Slots> slots_;
+};
+
+}  // namespace
+
+std::unique_ptr<ForceTerm> make_tetrahedron_element_force(const Scene& scene,
+                                                          const ParticleOrder& order,
+                                                          const ElementBlock& block) {
+  return std::make_unique<TetrahedronForce>(scene, order, block);
+}
+
+}  // namespace springlab
