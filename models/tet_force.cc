@@ -62,7 +62,7 @@ class TetrahedronForce final : public ForceTerm {
 
   void add_force(const Configuration& c, double* f) const override {
     for (const Tet& t : tets_) {
-      const Eigen::Matrix3d P = t.model->P(Mat(deformation(c, t)), t.lame);
+      const Eigen::Matrix3d P = P3(*t.model, deformation(c, t), t.lame);
       const Eigen::Matrix3d H = -t.W * P * t.D.transpose();  // columns f_1, f_2, f_3
       node(f, t, 0) -= H.rowwise().sum();
       for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
@@ -148,18 +148,13 @@ class TetrahedronForce final : public ForceTerm {
   }
 
   // Adds the element's df/dx (above) to the value array at `slots`, block by
-  // block, without forming the 12 x 12 matrix: K_ij = -W A(d_i, d_j) for
-  // nodes 1..3, and with S_i = sum_j A(d_i, d_j), node 0's blocks
-  // K_i0 = W S_i, K_0i = W S_i^T (A is symmetric), K_00 = -W sum_i S_i.
+  // block, without forming the 12 x 12 matrix: K' = -W [A(d_i, d_j)] holds
+  // the blocks of nodes 1..3, and with S_i = sum_j K'_ij node 0's blocks are
+  // K_i0 = -S_i, K_0i = -S_i^T (K' is symmetric), K_00 = sum_i S_i.
   static void add_stiffness(const Configuration& c, const Tet& t, const Slots& slots,
                             double* values) {
-    const Tangent3 A = tangent_blocks3(*t.model, deformation(c, t), t.D, t.lame);
-    const double W = t.W;
-    double S[3][3][3] = {};  // S[i][r][s]
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        for (int s = 0; s < 3; ++s)
-          for (int r = 0; r < 3; ++r) S[i][r][s] += A(3 * i + r, 3 * j + s);
+    const Tangent3 K = -t.W * tangent_blocks3(*t.model, deformation(c, t), t.D, t.lame);
+    Eigen::Matrix<double, 9, 3> S = K.middleCols<3>(0) + K.middleCols<3>(3) + K.middleCols<3>(6);
     // Adds entry(r, s) to block (i, j) (nodes 0..3).
     const auto add = [&](int i, int j, const auto& entry) {
       for (int s = 0; s < 3; ++s) {
@@ -169,13 +164,14 @@ class TetrahedronForce final : public ForceTerm {
       }
     };
     for (int i = 1; i < 4; ++i) {
+      const int row = 3 * (i - 1);
       for (int j = 1; j < 4; ++j) {
-        add(i, j, [&](int r, int s) { return -W * A(3 * (i - 1) + r, 3 * (j - 1) + s); });
+        add(i, j, [&](int r, int s) { return K(row + r, 3 * (j - 1) + s); });
       }
-      add(i, 0, [&](int r, int s) { return W * S[i - 1][r][s]; });
-      add(0, i, [&](int r, int s) { return W * S[i - 1][s][r]; });
+      add(i, 0, [&](int r, int s) { return -S(row + r, s); });
+      add(0, i, [&](int r, int s) { return -S(row + s, r); });
     }
-    add(0, 0, [&](int r, int s) { return -W * (S[0][r][s] + S[1][r][s] + S[2][r][s]); });
+    add(0, 0, [&](int r, int s) { return S(r, s) + S(3 + r, s) + S(6 + r, s); });
   }
 
   // The slots of a dense 12 x 12 column-major matrix (the definite part

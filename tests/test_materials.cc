@@ -130,6 +130,22 @@ TEST_P(EveryMaterial, ClosedFormSolidTangentBlocksAreTheContractedTangent) {
   }
 }
 
+// The fixed-size P of a 3 x 3 F (the tetrahedra's force) is P, inverted F
+// included.
+TEST_P(EveryMaterial, FixedSizeStressIsTheStress) {
+  if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
+  if (model().P3 == nullptr) GTEST_SKIP() << "no fixed-size instance: P";
+  std::mt19937 rng(23);
+  for (int trial = 0; trial < 10; ++trial) {
+    Mat F = deformed(rng);
+    if (trial % 2 == 1 && model().finite_everywhere) F.col(0) *= -1.0;  // inverted
+    const Mat reference = model().P(F, kLame);
+    const Eigen::Matrix3d fixed = P3(model(), Eigen::Matrix3d(F), kLame);
+    EXPECT_LT((fixed - Eigen::Matrix3d(reference)).norm(), 1e-14 * reference.norm())
+        << "trial " << trial;
+  }
+}
+
 TEST_P(EveryMaterial, EnergyIsInvariantUnderRotationButLinearIsNot) {
   std::mt19937 rng(3);
   const Mat F = deformed(rng);

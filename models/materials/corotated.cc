@@ -21,9 +21,10 @@ double Psi(const Mat& F, const Lame& m) {
   return m.mu * (F - p.R).squaredNorm() + 0.5 * m.lambda * (J - 1.0) * (J - 1.0);
 }
 
-Mat P(const Mat& F, const Lame& m) {
-  const Polar p = polar(F);
-  const Volume v = volume(F);
+template <typename Matrix>
+Matrix P(const Matrix& F, const Lame& m) {
+  const auto p = polar(F);
+  const auto v = volume(F);
   return 2.0 * m.mu * (F - p.R) + m.lambda * (v.J - 1.0) * v.g;
 }
 
@@ -69,7 +70,8 @@ const MaterialModel& corotated_material() {
       .name = "corotated",
       .formula = "mu sum_i (sigma_i - 1)^2 + lambda/2 (J - 1)^2",
       .Psi = Psi,
-      .P = P,
+      .P = P<Mat>,
+      .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
   };

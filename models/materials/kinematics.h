@@ -49,6 +49,19 @@ struct Polar3 {
   Eigen::Matrix3d R, S;
 };
 Polar3 polar3(const Eigen::Matrix3d& F);
+
+// volume() and polar() of a 3 x 3 F with fixed sizes, so that a material's
+// P, written once as a template on the matrix type, also has a fixed-size
+// instance (MaterialModel::P3).
+struct Volume3 {
+  double J = 0.0;
+  Eigen::Matrix3d g;
+};
+inline Volume3 volume(const Eigen::Matrix3d& F) {
+  const Eigen::Matrix3d g = cofactor(F);
+  return {F.col(0).dot(g.col(0)), g};
+}
+inline Polar3 polar(const Eigen::Matrix3d& F) { return polar3(F); }
 // dR = (dR/dF)[dF] at F = R S.
 Mat polar_differential(const Polar& p, const Mat& F, const Mat& dF);
 

@@ -10,8 +10,9 @@
 namespace springlab {
 namespace {
 
-Mat strain(const Mat& F) {
-  return 0.5 * (F + F.transpose()) - Mat::Identity(F.rows(), F.cols());
+template <typename Matrix>
+Matrix strain(const Matrix& F) {
+  return 0.5 * (F + F.transpose()) - Matrix::Identity(F.rows(), F.cols());
 }
 
 double Psi(const Mat& F, const Lame& m) {
@@ -20,9 +21,10 @@ double Psi(const Mat& F, const Lame& m) {
   return m.mu * eps.squaredNorm() + 0.5 * m.lambda * tr * tr;
 }
 
-Mat P(const Mat& F, const Lame& m) {
-  const Mat eps = strain(F);
-  return 2.0 * m.mu * eps + m.lambda * eps.trace() * Mat::Identity(F.rows(), F.cols());
+template <typename Matrix>
+Matrix P(const Matrix& F, const Lame& m) {
+  const Matrix eps = strain(F);
+  return 2.0 * m.mu * eps + m.lambda * eps.trace() * Matrix::Identity(F.rows(), F.cols());
 }
 
 Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
@@ -48,7 +50,8 @@ const MaterialModel& linear_material() {
       .formula = "mu eps:eps + lambda/2 (tr eps)^2, eps = (F + F^T)/2 - I",
       .membranes = false,
       .Psi = Psi,
-      .P = P,
+      .P = P<Mat>,
+      .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
   };

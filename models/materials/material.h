@@ -47,6 +47,10 @@ struct MaterialModel {
   double (*Psi)(const Mat& F, const Lame& m) = nullptr;
   // P = dPsi/dF (d x k).
   Mat (*P)(const Mat& F, const Lame& m) = nullptr;
+  // The same P for a 3 x 3 F with fixed sizes (the tetrahedra's fast path):
+  // each model writes P once, as a template on the matrix type, and
+  // registers both instances. nullptr: P.
+  Eigen::Matrix3d (*P3)(const Eigen::Matrix3d& F, const Lame& m) = nullptr;
   // dP = (dP/dF)[dF], the change of P along dF (d x k).
   Mat (*dP)(const Mat& F, const Mat& dF, const Lame& m) = nullptr;
   // The tetrahedra's fast path (tet_force.cc): for the rows d_1, d_2, d_3
@@ -70,6 +74,8 @@ std::string material_model_names();
 // column from dP along each basis matrix E_rc: the reference every closed
 // form is checked against.
 Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m);
+// P of a 3 x 3 F: the model's fixed-size instance when it has one, else P.
+Eigen::Matrix3d P3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m);
 // The blocks A(d_i, d_j) of a 3 x 3 F (above): the model's closed form when
 // it has one, else the contraction of dPdF.
 Tangent3 tangent_blocks3(const MaterialModel& model, const Eigen::Matrix3d& F,

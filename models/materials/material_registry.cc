@@ -81,6 +81,11 @@ Tangent3 tangent_blocks(const Tangent3& T, const Eigen::Matrix3d& D) {
   return K;
 }
 
+Eigen::Matrix3d P3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m) {
+  if (model.P3 != nullptr) return model.P3(F, m);
+  return model.P(Mat(F), m);
+}
+
 Tangent3 tangent_blocks3(const MaterialModel& model, const Eigen::Matrix3d& F,
                          const Eigen::Matrix3d& D, const Lame& m) {
   if (model.tangent_blocks3 != nullptr) return model.tangent_blocks3(F, D, m);

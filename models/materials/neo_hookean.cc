@@ -27,9 +27,10 @@ double Psi(const Mat& F, const Lame& m) {
   return 0.5 * m.mu * (F.squaredNorm() - d) - m.mu * lnJ + 0.5 * m.lambda * lnJ * lnJ;
 }
 
-Mat P(const Mat& F, const Lame& m) {
-  const Volume v = volume(F);
-  if (!(v.J > 0.0)) return Mat::Constant(F.rows(), F.cols(), kNaN);
+template <typename Matrix>
+Matrix P(const Matrix& F, const Lame& m) {
+  const auto v = volume(F);
+  if (!(v.J > 0.0)) return Matrix::Constant(F.rows(), F.cols(), kNaN);
   return m.mu * F + (m.lambda * std::log(v.J) - m.mu) / v.J * v.g;
 }
 
@@ -69,7 +70,8 @@ const MaterialModel& neo_hookean_material() {
       .formula = "mu/2 (I_C - d) - mu ln J + lambda/2 (ln J)^2",
       .finite_everywhere = false,
       .Psi = Psi,
-      .P = P,
+      .P = P<Mat>,
+      .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
   };

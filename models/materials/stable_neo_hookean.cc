@@ -23,8 +23,9 @@ double Psi(const Mat& F, const Lame& m) {
          m.mu * m.mu / (2.0 * l);
 }
 
-Mat P(const Mat& F, const Lame& m) {
-  const Volume v = volume(F);
+template <typename Matrix>
+Matrix P(const Matrix& F, const Lame& m) {
+  const auto v = volume(F);
   return m.mu * F + shifted_lambda(m) * (v.J - alpha(m)) * v.g;
 }
 
@@ -56,7 +57,8 @@ const MaterialModel& stable_neo_hookean_material() {
       .formula = "mu/2 (I_C - d) + lambda'/2 (J - alpha)^2 - mu^2/(2 lambda'), "
                  "lambda' = lambda + mu, alpha = 1 + mu/lambda'",
       .Psi = Psi,
-      .P = P,
+      .P = P<Mat>,
+      .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
   };

@@ -9,12 +9,14 @@
 namespace springlab {
 namespace {
 
-Mat green(const Mat& F) {
-  return 0.5 * (F.transpose() * F - Mat::Identity(F.cols(), F.cols()));
+template <typename Matrix>
+Matrix green(const Matrix& F) {
+  return 0.5 * (F.transpose() * F - Matrix::Identity(F.cols(), F.cols()));
 }
 
-Mat second_pk(const Mat& G, const Lame& m) {
-  return 2.0 * m.mu * G + m.lambda * G.trace() * Mat::Identity(G.rows(), G.cols());
+template <typename Matrix>
+Matrix second_pk(const Matrix& G, const Lame& m) {
+  return 2.0 * m.mu * G + m.lambda * G.trace() * Matrix::Identity(G.rows(), G.cols());
 }
 
 double Psi(const Mat& F, const Lame& m) {
@@ -23,7 +25,10 @@ double Psi(const Mat& F, const Lame& m) {
   return m.mu * G.squaredNorm() + 0.5 * m.lambda * tr * tr;
 }
 
-Mat P(const Mat& F, const Lame& m) { return F * second_pk(green(F), m); }
+template <typename Matrix>
+Matrix P(const Matrix& F, const Lame& m) {
+  return F * second_pk(green(F), m);
+}
 
 // dP = dF S + F dS, dS = 2 mu dG + lambda tr(dG) I, dG = (dF^T F + F^T dF)/2.
 Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
@@ -37,7 +42,7 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 // rank one (F), so (tangent3.h)
 //   A(a, b) = (a^T S b) I + mu (F b)(F a)^T + mu (a . b) F F^T + lambda (F a)(F b)^T.
 Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
-  const Eigen::Matrix3d S = Eigen::Matrix3d(second_pk(green(Mat(F)), m));
+  const Eigen::Matrix3d S = second_pk(green(F), m);
   const Eigen::Matrix3d FFt = F * F.transpose();
   const Eigen::Matrix3d FD = F * D.transpose();  // column i: F d_i
   return symmetric_blocks([&](int i, int j) {
@@ -57,7 +62,8 @@ const MaterialModel& stvk_material() {
       .name = "stvk",
       .formula = "mu G:G + lambda/2 (tr G)^2, G = (F^T F - I)/2",
       .Psi = Psi,
-      .P = P,
+      .P = P<Mat>,
+      .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
   };
