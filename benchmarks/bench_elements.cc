@@ -31,7 +31,7 @@ const ElasticModel& block_model(int model, int n) {
 }
 
 // A generic deformed state: a 5 % stretch along x, turned by 0.3 rad about
-// (1, 1, 1), each node then moved by up to 1 mm (the block is 1 m wide), so
+// (1, 1, 1), each node then moved by up to 1 mm (the cells are 2 cm), so
 // that F is a full matrix that differs from element to element (a uniform
 // stretch alone gives every element the same diagonal F, which flatters
 // the SVD).

@@ -149,29 +149,33 @@ class TetrahedronForce final : public ForceTerm {
 
   // Adds the element's df/dx (above) to the value array at `slots`, block by
   // block, without forming the 12 x 12 matrix: K' = -W [A(d_i, d_j)] holds
-  // the blocks of nodes 1..3, and with S_i = sum_j K'_ij node 0's blocks are
-  // K_i0 = -S_i, K_0i = -S_i^T (K' is symmetric), K_00 = sum_i S_i.
+  // the blocks of nodes 1..3, and node 0's are K_i0 = -sum_j K'_ij, K_0i =
+  // K_i0^T (K' is symmetric) and K_00 = -sum_i K_i0.
   static void add_stiffness(const Configuration& c, const Tet& t, const Slots& slots,
                             double* values) {
     const Tangent3 K = -t.W * tangent_blocks3(*t.model, deformation(c, t), t.D, t.lame);
-    Eigen::Matrix<double, 9, 3> S = K.middleCols<3>(0) + K.middleCols<3>(3) + K.middleCols<3>(6);
-    // Adds entry(r, s) to block (i, j) (nodes 0..3).
-    const auto add = [&](int i, int j, const auto& entry) {
-      for (int s = 0; s < 3; ++s) {
-        const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
-        if (offset < 0) continue;
-        for (int r = 0; r < 3; ++r) values[offset + r] += entry(r, s);
-      }
+    // Rows 3 (i - 1) .. of K0: K_i0, column by column; K0t: K_0i.
+    const Eigen::Matrix<double, 9, 3> K0 =
+        -(K.middleCols<3>(0) + K.middleCols<3>(3) + K.middleCols<3>(6));
+    const Eigen::Matrix<double, 3, 9> K0t = K0.transpose();
+    const Eigen::Matrix3d K00 = -(K0.middleRows<3>(0) + K0.middleRows<3>(3) + K0.middleRows<3>(6));
+    // Adds column s of a block, three numbers at `column`, to block (i, j).
+    const auto add = [&](int i, int j, int s, const double* column) {
+      const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
+      if (offset < 0) return;
+      double* to = values + offset;
+      to[0] += column[0];
+      to[1] += column[1];
+      to[2] += column[2];
     };
-    for (int i = 1; i < 4; ++i) {
-      const int row = 3 * (i - 1);
-      for (int j = 1; j < 4; ++j) {
-        add(i, j, [&](int r, int s) { return K(row + r, 3 * (j - 1) + s); });
+    for (int s = 0; s < 3; ++s) {
+      add(0, 0, s, K00.col(s).data());
+      for (int i = 1; i < 4; ++i) {
+        add(i, 0, s, K0.col(s).data() + 3 * (i - 1));
+        add(0, i, s, K0t.col(3 * (i - 1) + s).data());
+        for (int j = 1; j < 4; ++j) add(i, j, s, K.col(3 * (j - 1) + s).data() + 3 * (i - 1));
       }
-      add(i, 0, [&](int r, int s) { return -S(row + r, s); });
-      add(0, i, [&](int r, int s) { return -S(row + s, r); });
     }
-    add(0, 0, [&](int r, int s) { return S(r, s) + S(3 + r, s) + S(6 + r, s); });
   }
 
   // The slots of a dense 12 x 12 column-major matrix (the definite part
