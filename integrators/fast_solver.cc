@@ -6,7 +6,24 @@ namespace springlab {
 
 SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constraints,
                                   Eigen::Index particles) {
+  return constraint_laplacian(constraints, {}, particles);
+}
+
+SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constraints,
+                                  const std::vector<ProjectiveElement>& elements,
+                                  Eigen::Index particles) {
   std::vector<Eigen::Triplet<double>> entries;
+  for (const ProjectiveElement& e : elements) {
+    const Eigen::MatrixXd GGt = e.weight * e.G * e.G.transpose();
+    for (std::size_t i = 0; i < e.nodes.size(); ++i) {
+      for (std::size_t j = 0; j < e.nodes.size(); ++j) {
+        if (e.nodes[i] >= 0 && e.nodes[j] >= 0) {
+          entries.emplace_back(e.nodes[i], e.nodes[j],
+                               GGt(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
+        }
+      }
+    }
+  }
   for (const DistanceConstraint& c : constraints) {
     entries.emplace_back(c.a, c.a, c.stiffness);
     if (c.b >= 0) {
@@ -24,7 +41,13 @@ SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constra
 
 StepResult FastSolver::do_initialize() {
   dim_ = system().dimension_of_state();
-  if (dim_ < 1 || !system().distance_constraints(constraints_)) {
+  elements_.clear();
+  if (solves_projective_elements()) {
+    std::string why;
+    if (dim_ < 1 || !system().projective_form(constraints_, elements_, why)) {
+      return StepResult::failure(name() + ": " + why);
+    }
+  } else if (dim_ < 1 || !system().distance_constraints(constraints_)) {
     return StepResult::failure(
         name() + ": this scene has stiff forces that are not distance constraints (finite "
                  "elements), which " + name() +

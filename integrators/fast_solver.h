@@ -20,14 +20,22 @@ namespace springlab {
 // Hessian (quasi_newton.cc).
 SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constraints,
                                   Eigen::Index particles);
+// The same with projective elements (projective dynamics): each adds
+// w g_i . g_j to entry (i, j) of its free nodes i, j.
+SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constraints,
+                                  const std::vector<ProjectiveElement>& elements,
+                                  Eigen::Index particles);
 
 class FastSolver : public Integrator {
  protected:
   using Integrator::Integrator;
 
-  // Reads the constraints; a failure that says which methods run the
-  // system when its stiff forces are not all distance constraints.
+  // Reads the constraints (and the projective elements, where the method
+  // solves them); a failure that says which methods run the system when
+  // its stiff forces have no such form.
   StepResult do_initialize() override;
+  // Projective dynamics solves projective elements too; xpbd does not.
+  virtual bool solves_projective_elements() const { return false; }
 
   // F minus the constraints' forces, counted as a force evaluation.
   void eval_external_force(double t, const Vector& x, const Vector& v, Vector& f);
@@ -43,6 +51,7 @@ class FastSolver : public Integrator {
 
   int dim_ = 2;
   std::vector<DistanceConstraint> constraints_;
+  std::vector<ProjectiveElement> elements_;  // where solves_projective_elements()
   std::vector<PlaneConstraint> planes_;  // contact planes (xpbd solves them)
   Vector inv_particle_mass_;  // 1/m per free particle
 };

@@ -25,7 +25,7 @@ StepResult ProjectiveDynamics::do_initialize() {
   StepResult base = FastSolver::do_initialize();
   if (!base.ok) return base;
   contacts_.clear();
-  laplacian_ = constraint_laplacian(constraints_, inv_particle_mass_.size());
+  laplacian_ = constraint_laplacian(constraints_, elements_, inv_particle_mass_.size());
   factored_h_ = 0.0;
   return StepResult::success();
 }
@@ -119,6 +119,32 @@ StepResult ProjectiveDynamics::do_step(double h) {
           rhs_[c.b * dim_ + r] -= w * p[r];
         } else {
           rhs_[c.a * dim_ + r] += w * (c.anchor[r] + p[r]);
+        }
+      }
+    }
+    // Elements (Bouaziz et al. 2014): E = w/2 |F - T|^2 with T = project(F)
+    // at the current x adds w (T g_i - sum over fixed nodes j of
+    // (g_i . g_j) x_j) to free node i.
+    for (const ProjectiveElement& e : elements_) {
+      const Eigen::Index k = e.G.cols();
+      Eigen::MatrixXd F = Eigen::MatrixXd::Zero(dim_, k);
+      for (std::size_t j = 0; j < e.nodes.size(); ++j) {
+        for (int r = 0; r < dim_; ++r) {
+          const double xr = e.nodes[j] >= 0 ? x_new_[e.nodes[j] * dim_ + r] : e.fixed[j][r];
+          F.row(r) += xr * e.G.row(static_cast<Eigen::Index>(j));
+        }
+      }
+      const Eigen::MatrixXd TGt = e.project(F) * e.G.transpose();  // column i: T g_i
+      const double w = h * h * e.weight;
+      for (std::size_t i = 0; i < e.nodes.size(); ++i) {
+        if (e.nodes[i] < 0) continue;
+        const auto gi = e.G.row(static_cast<Eigen::Index>(i));
+        for (int r = 0; r < dim_; ++r) {
+          double sum = TGt(r, static_cast<Eigen::Index>(i));
+          for (std::size_t j = 0; j < e.nodes.size(); ++j) {
+            if (e.nodes[j] < 0) sum -= gi.dot(e.G.row(static_cast<Eigen::Index>(j))) * e.fixed[j][r];
+          }
+          rhs_[e.nodes[i] * dim_ + r] += w * sum;
         }
       }
     }

@@ -55,6 +55,7 @@ class ProjectiveDynamics final : public FastSolver {
 
  protected:
   StepResult do_initialize() override;
+  bool solves_projective_elements() const override { return true; }
   StepResult do_step(double h) override;
 
  private:

@@ -294,13 +294,29 @@ bool ElasticModel::has_forbidden_states() const {
 }
 
 bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) const {
+  std::vector<ProjectiveElement> elements;
+  std::string why;
+  return stiff_forms(out, nullptr, why);
+}
+
+bool ElasticModel::projective_form(std::vector<DistanceConstraint>& constraints,
+                                   std::vector<ProjectiveElement>& elements,
+                                   std::string& why) const {
+  return stiff_forms(constraints, &elements, why);
+}
+
+bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
+                               std::vector<ProjectiveElement>* elements, std::string& why) const {
   out.clear();
+  if (elements != nullptr) elements->clear();
   std::vector<DistanceConstraint> all;
   std::vector<PlaneConstraint> planes;
+  std::vector<ProjectiveElement> projective;
   for (const auto& term : terms_) {
     if (term->plane_constraints(planes)) continue;           // plane_constraints
     if (!term->conservative() || !term->stiff()) continue;  // external: explicit
-    if (!term->distance_constraints(all)) return false;
+    if (term->distance_constraints(all)) continue;
+    if (elements == nullptr || !term->projective_elements(projective, why)) return false;
   }
   // Internal indices: free particles first. A fixed end becomes an anchor;
   // a constraint between two fixed particles moves nothing.
@@ -313,6 +329,20 @@ bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) co
       c.b = -1;
     }
     out.push_back(c);
+  }
+  // Likewise a fixed node of an element becomes a place.
+  for (ProjectiveElement e : projective) {
+    e.fixed.assign(e.nodes.size(), Eigen::Vector3d::Zero());
+    bool moves = false;
+    for (std::size_t j = 0; j < e.nodes.size(); ++j) {
+      if (e.nodes[j] < free) {
+        moves = true;
+        continue;
+      }
+      for (int r = 0; r < dim; ++r) e.fixed[j][r] = x_all_[e.nodes[j] * dim + r];
+      e.nodes[j] = -1;
+    }
+    if (moves) elements->push_back(std::move(e));
   }
   return true;
 }
@@ -339,10 +369,13 @@ void ElasticModel::external_force(double t, const Vector& x, const Vector& v, Ve
   if (constraint_terms_.empty()) {
     std::vector<DistanceConstraint> probe;
     std::vector<PlaneConstraint> planes;
+    std::vector<ProjectiveElement> elements;
+    std::string why;
     for (const auto& term : terms_) {
       constraint_terms_.push_back(
           term->plane_constraints(planes) ||
-          (term->conservative() && term->stiff() && term->distance_constraints(probe)));
+          (term->conservative() && term->stiff() &&
+           (term->distance_constraints(probe) || term->projective_elements(elements, why))));
     }
   }
   f_all_.setZero(x_all_.size());

@@ -50,6 +50,9 @@ class ElasticModel final : public MechanicalSystem {
   std::string forbidden_state(const Vector& x) const;
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
   bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
+  bool projective_form(std::vector<DistanceConstraint>& constraints,
+                       std::vector<ProjectiveElement>& elements,
+                       std::string& why) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void lag_normal_forces(const Vector* x_lag) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
@@ -116,6 +119,11 @@ class ElasticModel final : public MechanicalSystem {
   // Scratch: all particles, internal order. The fixed tail of x_all_ holds
   // the fixed positions and never changes; v_all_'s fixed tail stays 0.
   mutable Vector x_all_, v_all_, f_all_;
+  // distance_constraints and projective_form: the stiff conservative terms'
+  // constraints, and their projective elements where `elements` is given;
+  // false where a term has neither form (why says which).
+  bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>* elements,
+                   std::string& why) const;
   // Which terms are distance constraints (external_force skips them); set
   // at its first call.
   mutable std::vector<char> constraint_terms_;

@@ -3,6 +3,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+
+#include "models/materials/kinematics.h"
 
 namespace springlab {
 
@@ -171,6 +174,53 @@ void give_rest_positions(Scene& scene, std::mt19937& rng, RandomStates states) {
     }
     p.X = X;
   }
+}
+
+namespace {
+
+Eigen::MatrixXd nearest_rotation(const Eigen::MatrixXd& F) { return polar(Mat(F)).R; }
+
+}  // namespace
+
+ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
+                         const ElementBlock& block) {
+  const Materials& materials = scene.get<Materials>();
+  for (std::size_t e = 0; e < block.node_lists.size(); ++e) {
+    const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
+    const Lame l = lame(m.young, m.poisson);
+    if (m.model != "corotated" || l.lambda != 0.0) {
+      std::ostringstream why;
+      why << "this scene's " << block.name << " elements are of material '" << m.name << "' ("
+          << m.model << ", poisson " << m.poisson
+          << "), which has no projective form; projective dynamics runs corotated elements with "
+             "poisson 0 (the as-rigid-as-possible energy mu |F - R|^2, Bouaziz et al. 2014): "
+             "use such a material, or implicit-euler";
+      not_projective_ = why.str();
+      projective_.clear();
+      return;
+    }
+    ProjectiveElement p;
+    std::vector<Eigen::Vector3d> X;
+    for (int n : block.node_lists[e]) {
+      p.nodes.push_back(order.internal_of_scene[static_cast<std::size_t>(n)]);
+      X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
+    }
+    const RestShape shape = rest_shape(X, scene.dimension);
+    p.G = shape.G;
+    p.weight = 2.0 * l.mu * shape.W * (block.nodes == 3 ? m.thickness_or_one() : 1.0);
+    p.project = nearest_rotation;
+    projective_.push_back(std::move(p));
+  }
+}
+
+bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
+                                      std::string& why) const {
+  if (!not_projective_.empty()) {
+    why = not_projective_;
+    return false;
+  }
+  out.insert(out.end(), projective_.begin(), projective_.end());
+  return true;
 }
 
 }  // namespace springlab

@@ -63,6 +63,23 @@ struct ElementBlock {
   // it with.
   bool reference = false;
 };
+// What the two element force terms (fem_force.cc, tet_force.cc) share: their
+// projective form for projective dynamics (MechanicalSystem::
+// projective_form). Corotated elements with lambda = 0 (poisson 0) store
+// the as-rigid-as-possible energy W mu |F - R|^2 = w/2 |F - R|^2, w = 2 mu W,
+// R the nearest rotation (Bouaziz et al. 2014's strain constraint, exactly);
+// every other material has none (the volume term lambda/2 (J - 1)^2 is not
+// a squared distance to a set), and the form says which to use instead.
+class ElementTerm : public ForceTerm {
+ public:
+  ElementTerm(const Scene& scene, const ParticleOrder& order, const ElementBlock& block);
+  bool projective_elements(std::vector<ProjectiveElement>& out, std::string& why) const override;
+
+ private:
+  std::vector<ProjectiveElement> projective_;
+  std::string not_projective_;  // why not, or empty
+};
+
 std::unique_ptr<ForceTerm> make_element_force(const Scene& scene, const ParticleOrder& order,
                                               const ElementBlock& block);
 std::unique_ptr<ForceTerm> make_tetrahedron_element_force(const Scene& scene,

@@ -20,10 +20,10 @@
 namespace springlab {
 namespace {
 
-class ElementForce final : public ForceTerm {
+class ElementForce final : public ElementTerm {
  public:
   ElementForce(const Scene& scene, const ParticleOrder& order, const ElementBlock& block)
-      : name_(block.name), nodes_(block.nodes), dim_(order.dim),
+      : ElementTerm(scene, order, block), name_(block.name), nodes_(block.nodes), dim_(order.dim),
         free_particles_(order.free_particles) {
     const Materials& materials = scene.get<Materials>();
     for (std::size_t e = 0; e < block.node_lists.size(); ++e) {

@@ -165,6 +165,15 @@ class ForceTerm {
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
     return false;
   }
+  // A stiff conservative term of projective elements (MechanicalSystem::
+  // projective_form) appends them with internal node indices (fixed ones
+  // too: the model turns them into places) and returns true; false, with
+  // `why`, where its energy has no projective form.
+  virtual bool projective_elements(std::vector<ProjectiveElement>& /*out*/,
+                                   std::string& why) const {
+    why = std::string(name()) + " forces have no projective form";
+    return false;
+  }
   virtual double velocity_potential(const Configuration&) const { return 0.0; }
   // A term the fast solvers see as contact planes (MechanicalSystem::
   // plane_constraints) appends them and returns true; so does friction,

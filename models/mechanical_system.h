@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace springlab {
@@ -55,6 +56,23 @@ struct PlaneConstraint {
   double offset = 0.0;                                // n.point
   double stiffness = 0.0;                             // k_c; 0: the barrier
   double friction = 0.0;
+};
+
+// An element energy of projective form (Bouaziz et al., "Projective
+// dynamics: fusing constraint projections for fast simulation", ACM TOG
+// 2014, sec. 4-5), as projective dynamics sees it (README "Fast solvers"):
+//   E = w/2 |F - project(F)|^2,  F = sum_j x_j g_j^T (dim x k),
+// project(F) a nearest point of F on a constraint set (the rotations: the
+// as-rigid-as-possible strain energy). Its global matrix gets w g_i . g_j
+// for nodes i, j (the same for every coordinate); its local step is
+// project(F). A fixed node has index -1 and its place in `fixed`.
+struct ProjectiveElement {
+  std::vector<int> nodes;               // internal indices; -1: a fixed node
+  std::vector<Eigen::Vector3d> fixed;   // each node's position where fixed
+  Eigen::MatrixXd G;                    // nodes x k, rows g_j
+  double weight = 0.0;                  // w
+  // The projection, dim x k (models/materials/kinematics.h: polar's R).
+  Eigen::MatrixXd (*project)(const Eigen::MatrixXd& F) = nullptr;
 };
 
 class MechanicalSystem {
@@ -139,6 +157,15 @@ class MechanicalSystem {
   // spring damping: treated explicitly). False when some stiff force has no
   // such form (finite elements): those solvers refuse the system.
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
+    return false;
+  }
+  // Projective dynamics' wider view: the stiff conservative forces as
+  // distance constraints and projective elements (above). False, with
+  // `why` (one sentence for the user), when some have neither form.
+  virtual bool projective_form(std::vector<DistanceConstraint>& /*constraints*/,
+                               std::vector<ProjectiveElement>& /*elements*/,
+                               std::string& why) const {
+    why = "this system has no projective form";
     return false;
   }
   // Lagged normal forces (README "Contact with planes"): with x_lag, Coulomb
