@@ -9,7 +9,7 @@ namespace springlab {
 ProjectiveDynamics::ProjectiveDynamics()
     : FastSolver({.name = "projective-dynamics",
                   .scheme = "y = x + h v + h^2 M^-1 F_ext; N x (p_c = L_c d_c/|d_c|, "
-                            "(M + h^2 L) x' = M y + h^2 J p); v' = (x' - x)/h",
+                            "elements' R(F), (M + h^2 L) x' = M y + h^2 J p); v' = (x' - x)/h",
                   .order = 1,
                   .implicit = true,
                   .jacobian_free = true,

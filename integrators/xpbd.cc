@@ -8,8 +8,8 @@ namespace springlab {
 Xpbd::Xpbd()
     : FastSolver({.name = "xpbd",
                   .scheme = "S substeps: v += h_s M^-1 F_ext, x += h_s v, N Gauss-Seidel "
-                            "projections of C = |x_a - x_b| - L with compliance 1/k, "
-                            "v = (x - x_prev)/h_s",
+                            "projections of C = |x_a - x_b| - L with compliance 1/k (elements: "
+                            "C = |F - R(F)|, compliance 1/w), v = (x - x_prev)/h_s",
                   .order = 1,
                   .implicit = true,
                   .jacobian_free = true,
@@ -29,6 +29,7 @@ StepResult Xpbd::do_step(double h) {
   const int iterations = options().iterations > 0 ? options().iterations : kDefaultIterations;
   const double hs = h / substeps;
   lambda_.resize(static_cast<Eigen::Index>(constraints_.size()));
+  lambda_elements_.resize(static_cast<Eigen::Index>(elements_.size()));
   lambda_planes_.resize(static_cast<Eigen::Index>(planes_.size()) * inv_particle_mass_.size());
   for (int s = 0; s < substeps; ++s) {
     const double t = t_ + s * hs;
@@ -37,6 +38,7 @@ StepResult Xpbd::do_step(double h) {
     x_prev_ = x_;
     x_ += hs * v_;
     lambda_.setZero();
+    lambda_elements_.setZero();
     lambda_planes_.setZero();
     for (int it = 0; it < iterations; ++it) {
       for (std::size_t k = 0; k < constraints_.size(); ++k) {
@@ -58,6 +60,7 @@ StepResult Xpbd::do_step(double h) {
         }
         lambda_[static_cast<Eigen::Index>(k)] += dlambda;
       }
+      project_elements(hs);
       project_planes(hs);
       ++mutable_stats().newton_iterations;
     }
@@ -65,6 +68,41 @@ StepResult Xpbd::do_step(double h) {
     apply_friction(hs);
   }
   return StepResult::success();
+}
+
+void Xpbd::project_elements(double hs) {
+  for (std::size_t k = 0; k < elements_.size(); ++k) {
+    const ProjectiveElement& e = elements_[k];
+    const Eigen::Index nodes = static_cast<Eigen::Index>(e.nodes.size());
+    Eigen::MatrixXd F = Eigen::MatrixXd::Zero(dim_, e.G.cols());
+    for (Eigen::Index j = 0; j < nodes; ++j) {
+      const int p = e.nodes[static_cast<std::size_t>(j)];
+      for (int r = 0; r < dim_; ++r) {
+        F.row(r) += (p >= 0 ? x_[p * dim_ + r] : e.fixed[static_cast<std::size_t>(j)][r]) *
+                    e.G.row(j);
+      }
+    }
+    const Eigen::MatrixXd D = F - e.project(F);
+    const double C = D.norm();
+    if (!(C > 0.0)) continue;  // on the set: no direction
+    const Eigen::MatrixXd grad = D * e.G.transpose() / C;  // column i: grad_i C
+    double denominator = 1.0 / (e.weight * hs * hs);       // a~
+    const double compliance = denominator;
+    for (Eigen::Index i = 0; i < nodes; ++i) {
+      const int p = e.nodes[static_cast<std::size_t>(i)];
+      if (p >= 0) denominator += inv_particle_mass_[p] * grad.col(i).squaredNorm();
+    }
+    double& lambda = lambda_elements_[static_cast<Eigen::Index>(k)];
+    const double dlambda = (-C - compliance * lambda) / denominator;
+    for (Eigen::Index i = 0; i < nodes; ++i) {
+      const int p = e.nodes[static_cast<std::size_t>(i)];
+      if (p < 0) continue;
+      for (int r = 0; r < dim_; ++r) {
+        x_[p * dim_ + r] += inv_particle_mass_[p] * dlambda * grad(r, i);
+      }
+    }
+    lambda += dlambda;
+  }
 }
 
 void Xpbd::project_planes(double hs) {

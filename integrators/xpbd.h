@@ -25,6 +25,16 @@
 // the force that takes, |dx_t| / (w h_s^2), is at most mu f_n; dynamic,
 // after the substep, v_t loses min(h_s mu f_n / m, |v_t|) along -v_t/|v_t|.
 // Exact Coulomb friction, without the smoothing: a particle sticks exactly.
+// Projective elements (MechanicalSystem::projective_form: corotated with
+// poisson 0, the as-rigid-as-possible energy w/2 |F - R|^2; README "Fast
+// solvers") are the constraint C = |F - P(F)|, the distance of F to the
+// set it is projected on, with compliance 1/w, so that C^2 / (2 alpha) is
+// the element's energy (XPBD's energy form, Macklin et al. 2016, eq. 2-4).
+// Its gradient at node i is (F - P(F)) g_i / C (the distance's gradient is
+// the unit normal to the set; P's own change does not enter), projected
+// after the springs as one constraint over all of the element's nodes:
+//   dlambda = (-C - a~ lambda_e) / (sum_i w_i |grad_i C|^2 + a~),
+//   x_i += w_i dlambda grad_i C.
 // On a spring of rest length 0 one iteration is exactly implicit Euler's
 // substep (tests/test_fast_solvers.cc), so S substeps of one iteration are S
 // implicit Euler steps of h/S; more iterations converge toward it on
@@ -51,7 +61,10 @@ class Xpbd final : public FastSolver {
   // Coulomb friction on v after the substep.
   void apply_friction(double hs);
 
-  Vector f_, x_prev_, lambda_;
+  // Projects the projective elements once (lambda_elements_ accumulates).
+  void project_elements(double hs);
+  bool solves_projective_elements() const override { return true; }
+  Vector f_, x_prev_, lambda_, lambda_elements_;
   Vector lambda_planes_;  // per (plane, free particle)
 };
 

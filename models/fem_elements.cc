@@ -192,7 +192,7 @@ ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
       std::ostringstream why;
       why << "this scene's " << block.name << " elements are of material '" << m.name << "' ("
           << m.model << ", poisson " << m.poisson
-          << "), which has no projective form; projective dynamics runs corotated elements with "
+          << "), which has no projective form; the fast solvers run corotated elements with "
              "poisson 0 (the as-rigid-as-possible energy mu |F - R|^2, Bouaziz et al. 2014): "
              "use such a material, or implicit-euler";
       not_projective_ = why.str();
