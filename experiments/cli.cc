@@ -154,7 +154,7 @@ struct CommonOptions {
                    "transverse stiffness dropped, Choi and Ko 2002)");
     cmd.add_option("--solver", solver,
                    "implicit-euler: newton, or quasi-newton (L-BFGS with the local/global matrix "
-                   "as its initial Hessian, Liu et al. 2017; springs only)");
+                   "as its initial Hessian, Liu et al. 2017)");
     cmd.add_option("--iterations", run.options.iterations,
                    "projective-dynamics (default 10), xpbd (default 1): iterations per step "
                    "or substep")

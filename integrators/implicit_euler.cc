@@ -19,8 +19,8 @@ StepResult ImplicitEuler::do_initialize() {
   if (!prepare_quasi_newton()) {
     return StepResult::failure(
         name() + " --solver quasi-newton: its initial Hessian is the local/global matrix of "
-                 "distance constraints (springs), and this scene has stiff forces that are not "
-                 "(finite elements); use --solver newton");
+                 "distance constraints (springs) and elements, and this scene has stiff forces "
+                 "that are neither; use --solver newton");
   }
   return base;
 }

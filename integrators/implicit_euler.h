@@ -12,7 +12,7 @@
 // the run as a result.
 //
 // --solver quasi-newton minimizes the same potential by L-BFGS with the
-// local/global matrix as its initial Hessian (quasi_newton.cc); springs only.
+// local/global matrix as its initial Hessian (quasi_newton.cc).
 //
 // Order 1. R(z) = 1 / (1 - z): A-stable and L-stable; on the undamped
 // oscillator the energy shrinks by 1 / (1 + w^2 h^2) every step — artificial

@@ -45,13 +45,14 @@ constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();  // a
 
 bool ImplicitIntegrator::prepare_quasi_newton() {
   std::vector<DistanceConstraint> constraints;
+  std::vector<ProjectiveElement> elements;
   const int dim = system().dimension_of_state();
-  if (dim < 1 || !system().distance_constraints(constraints)) return false;
+  if (dim < 1 || !system().laplacian_form(constraints, elements)) return false;
   const Eigen::Index n = system().dofs() / dim;
   qn_.dim = dim;
   qn_.particle_mass.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) qn_.particle_mass[i] = system().mass()[i * dim];
-  qn_.laplacian = constraint_laplacian(constraints, n);
+  qn_.laplacian = constraint_laplacian(constraints, elements, n);
   qn_.factor.reset();
   qn_.factored_h = 0.0;
   return true;

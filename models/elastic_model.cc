@@ -294,19 +294,25 @@ bool ElasticModel::has_forbidden_states() const {
 }
 
 bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) const {
-  std::vector<ProjectiveElement> elements;
   std::string why;
-  return stiff_forms(out, nullptr, why);
+  return stiff_forms(out, nullptr, ElementForm::kNone, why);
 }
 
 bool ElasticModel::projective_form(std::vector<DistanceConstraint>& constraints,
                                    std::vector<ProjectiveElement>& elements,
                                    std::string& why) const {
-  return stiff_forms(constraints, &elements, why);
+  return stiff_forms(constraints, &elements, ElementForm::kProjective, why);
+}
+
+bool ElasticModel::laplacian_form(std::vector<DistanceConstraint>& constraints,
+                                  std::vector<ProjectiveElement>& elements) const {
+  std::string why;
+  return stiff_forms(constraints, &elements, ElementForm::kLaplacian, why);
 }
 
 bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
-                               std::vector<ProjectiveElement>* elements, std::string& why) const {
+                               std::vector<ProjectiveElement>* elements, ElementForm form,
+                               std::string& why) const {
   out.clear();
   if (elements != nullptr) elements->clear();
   std::vector<DistanceConstraint> all;
@@ -316,7 +322,10 @@ bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
     if (term->plane_constraints(planes)) continue;           // plane_constraints
     if (!term->conservative() || !term->stiff()) continue;  // external: explicit
     if (term->distance_constraints(all)) continue;
-    if (elements == nullptr || !term->projective_elements(projective, why)) return false;
+    const bool has_form = form == ElementForm::kProjective ? term->projective_elements(projective, why)
+                          : form == ElementForm::kLaplacian ? term->laplacian_elements(projective)
+                                                            : false;
+    if (!has_form) return false;
   }
   // Internal indices: free particles first. A fixed end becomes an anchor;
   // a constraint between two fixed particles moves nothing.

@@ -53,6 +53,8 @@ class ElasticModel final : public MechanicalSystem {
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
                        std::string& why) const override;
+  bool laplacian_form(std::vector<DistanceConstraint>& constraints,
+                      std::vector<ProjectiveElement>& elements) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void lag_normal_forces(const Vector* x_lag) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
@@ -122,8 +124,9 @@ class ElasticModel final : public MechanicalSystem {
   // distance_constraints and projective_form: the stiff conservative terms'
   // constraints, and their projective elements where `elements` is given;
   // false where a term has neither form (why says which).
+  enum class ElementForm { kNone, kProjective, kLaplacian };
   bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>* elements,
-                   std::string& why) const;
+                   ElementForm form, std::string& why) const;
   // Which terms are distance constraints (external_force skips them); set
   // at its first call.
   mutable std::vector<char> constraint_terms_;

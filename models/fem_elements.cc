@@ -188,6 +188,18 @@ ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
   for (std::size_t e = 0; e < block.node_lists.size(); ++e) {
     const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
     const Lame l = lame(m.young, m.poisson);
+    ProjectiveElement p;
+    std::vector<Eigen::Vector3d> X;
+    for (int n : block.node_lists[e]) {
+      p.nodes.push_back(order.internal_of_scene[static_cast<std::size_t>(n)]);
+      X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
+    }
+    const RestShape shape = rest_shape(X, scene.dimension);
+    const double W = shape.W * (block.nodes == 3 ? m.thickness_or_one() : 1.0);
+    p.G = shape.G;
+    p.weight = (l.lambda + 2.0 * l.mu) * W;
+    laplacian_.push_back(p);
+    if (!not_projective_.empty()) continue;
     if (m.model != "corotated" || l.lambda != 0.0) {
       std::ostringstream why;
       why << "this scene's " << block.name << " elements are of material '" << m.name << "' ("
@@ -197,20 +209,17 @@ ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
              "use such a material, or implicit-euler";
       not_projective_ = why.str();
       projective_.clear();
-      return;
+      continue;
     }
-    ProjectiveElement p;
-    std::vector<Eigen::Vector3d> X;
-    for (int n : block.node_lists[e]) {
-      p.nodes.push_back(order.internal_of_scene[static_cast<std::size_t>(n)]);
-      X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
-    }
-    const RestShape shape = rest_shape(X, scene.dimension);
-    p.G = shape.G;
-    p.weight = 2.0 * l.mu * shape.W * (block.nodes == 3 ? m.thickness_or_one() : 1.0);
+    p.weight = 2.0 * l.mu * W;
     p.project = nearest_rotation;
     projective_.push_back(std::move(p));
   }
+}
+
+bool ElementTerm::laplacian_elements(std::vector<ProjectiveElement>& out) const {
+  out.insert(out.end(), laplacian_.begin(), laplacian_.end());
+  return true;
 }
 
 bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,

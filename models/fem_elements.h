@@ -74,8 +74,12 @@ class ElementTerm : public ForceTerm {
  public:
   ElementTerm(const Scene& scene, const ParticleOrder& order, const ElementBlock& block);
   bool projective_elements(std::vector<ProjectiveElement>& out, std::string& why) const override;
+  // Every material: weight (lambda + 2 mu) W, the constrained (P-wave)
+  // modulus, the stiffness of a stretch along one direction at rest.
+  bool laplacian_elements(std::vector<ProjectiveElement>& out) const override;
 
  private:
+  std::vector<ProjectiveElement> laplacian_;  // weights (lambda + 2 mu) W
   std::vector<ProjectiveElement> projective_;
   std::string not_projective_;  // why not, or empty
 };

@@ -174,6 +174,9 @@ class ForceTerm {
     why = std::string(name()) + " forces have no projective form";
     return false;
   }
+  // The same elements for quasi-Newton's initial Hessian (MechanicalSystem::
+  // laplacian_form), any material, without a projection.
+  virtual bool laplacian_elements(std::vector<ProjectiveElement>& /*out*/) const { return false; }
   virtual double velocity_potential(const Configuration&) const { return 0.0; }
   // A term the fast solvers see as contact planes (MechanicalSystem::
   // plane_constraints) appends them and returns true; so does friction,

@@ -168,6 +168,14 @@ class MechanicalSystem {
     why = "this system has no projective form";
     return false;
   }
+  // Quasi-Newton's initial Hessian (README "Fast solvers"): the distance
+  // constraints and, for elements of any material, the Laplacian part of a
+  // projective element (no projection): weight w = (lambda + 2 mu) W.
+  // False when some stiff conservative force has neither form.
+  virtual bool laplacian_form(std::vector<DistanceConstraint>& /*constraints*/,
+                              std::vector<ProjectiveElement>& /*elements*/) const {
+    return false;
+  }
   // Lagged normal forces (README "Contact with planes"): with x_lag, Coulomb
   // friction takes its normal force f_n from x_lag instead of from the
   // evaluated state, which makes it the gradient of a dissipation potential

@@ -382,9 +382,9 @@ TEST_P(EveryIntegratorOnElements, RunsTheBeamInTwoAndThreeDimensions) {
     s.options.newton_tol = 1e-9;
     const RunResult r = simulate(model, s);
     if (info().jacobian_free) {
-      // The beam's neo-Hookean elements: XPBD solves springs only, so far,
-      // and projective dynamics projective elements only (corotated with
-      // poisson 0, test_fast_solvers.cc): a refusal that says what to use.
+      // The beam's neo-Hookean elements: projective dynamics and XPBD solve
+      // projective elements only (corotated with poisson 0,
+      // test_fast_solvers.cc): a refusal that says what to use.
       EXPECT_EQ(r.status, RunStatus::kFailed);
       EXPECT_NE(r.failure.find("implicit-euler"), std::string::npos) << r.failure;
       continue;
