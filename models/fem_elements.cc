@@ -183,11 +183,13 @@ Eigen::MatrixXd nearest_rotation(const Eigen::MatrixXd& F) { return polar(Mat(F)
 }  // namespace
 
 ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
-                         const ElementBlock& block) {
+                         const ElementBlock& block)
+    : free_particles_(order.free_particles) {
   const Materials& materials = scene.get<Materials>();
   for (std::size_t e = 0; e < block.node_lists.size(); ++e) {
     const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
     const Lame l = lame(m.young, m.poisson);
+    forbids_states_ = forbids_states_ || !find_material_model(m.model)->finite_everywhere;
     ProjectiveElement p;
     std::vector<Eigen::Vector3d> X;
     for (int n : block.node_lists[e]) {
@@ -214,6 +216,16 @@ ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
     p.weight = 2.0 * l.mu * W;
     p.project = nearest_rotation;
     projective_.push_back(std::move(p));
+  }
+}
+
+void ElementTerm::declare_jacobian_blocks(JacobianPatternBuilder& builder) const {
+  for (const ProjectiveElement& e : laplacian_) {
+    for (int a : e.nodes) {
+      for (int b : e.nodes) {
+        if (a != b && a < free_particles_ && b < free_particles_) builder.add_block(a, b);
+      }
+    }
   }
 }
 

@@ -70,16 +70,25 @@ struct ElementBlock {
 // R the nearest rotation (Bouaziz et al. 2014's strain constraint, exactly);
 // every other material has none (the volume term lambda/2 (J - 1)^2 is not
 // a squared distance to a set), and the form says which to use instead.
+//
+// Also shared: an element's energy is conservative, forbids states where a
+// material has no energy (neo-Hookean, J <= 0), and couples every pair of
+// its free nodes in dF/dx.
 class ElementTerm : public ForceTerm {
  public:
   ElementTerm(const Scene& scene, const ParticleOrder& order, const ElementBlock& block);
+  bool conservative() const override { return true; }
+  bool forbids_states() const override { return forbids_states_; }
+  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override;
   bool projective_elements(std::vector<ProjectiveElement>& out, std::string& why) const override;
   // Every material: weight (lambda + 2 mu) W, the constrained (P-wave)
   // modulus, the stiffness of a stretch along one direction at rest.
   bool laplacian_elements(std::vector<ProjectiveElement>& out) const override;
 
  private:
-  std::vector<ProjectiveElement> laplacian_;  // weights (lambda + 2 mu) W
+  int free_particles_ = 0;
+  bool forbids_states_ = false;
+  std::vector<ProjectiveElement> laplacian_;  // weights (lambda + 2 mu) W; their nodes
   std::vector<ProjectiveElement> projective_;
   std::string not_projective_;  // why not, or empty
 };

@@ -44,14 +44,6 @@ class ElementForce final : public ElementTerm {
   }
 
   std::string_view name() const override { return name_; }
-  bool conservative() const override { return true; }
-  bool forbids_states() const override {
-    for (const Element& e : elements_) {
-      if (!e.model->finite_everywhere) return true;
-    }
-    return false;
-  }
-
   void add_force(const Configuration& c, double* f) const override {
     for (const Element& e : elements_) {
       const Mat P = e.model->P(deformation(c, e), e.lame);
@@ -67,16 +59,6 @@ class ElementForce final : public ElementTerm {
     double sum = 0.0;
     for (const Element& e : elements_) sum += e.W * e.model->Psi(deformation(c, e), e.lame);
     return sum;
-  }
-
-  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    for (const Element& e : elements_) {
-      for (int a : e.nodes) {
-        for (int b : e.nodes) {
-          if (a != b && a < free_particles_ && b < free_particles_) builder.add_block(a, b);
-        }
-      }
-    }
   }
 
   void bind_jacobian(const SparseMatrix& pattern) override {

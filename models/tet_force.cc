@@ -52,14 +52,6 @@ class TetrahedronForce final : public ElementTerm {
   }
 
   std::string_view name() const override { return name_; }
-  bool conservative() const override { return true; }
-  bool forbids_states() const override {
-    for (const Tet& t : tets_) {
-      if (!t.model->finite_everywhere) return true;
-    }
-    return false;
-  }
-
   void add_force(const Configuration& c, double* f) const override {
     for (const Tet& t : tets_) {
       const Eigen::Matrix3d P = P3(*t.model, deformation(c, t), t.lame);
@@ -73,16 +65,6 @@ class TetrahedronForce final : public ElementTerm {
     double sum = 0.0;
     for (const Tet& t : tets_) sum += t.W * t.model->Psi(Mat(deformation(c, t)), t.lame);
     return sum;
-  }
-
-  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    for (const Tet& t : tets_) {
-      for (int a : t.nodes) {
-        for (int b : t.nodes) {
-          if (a != b && a < free_particles_ && b < free_particles_) builder.add_block(a, b);
-        }
-      }
-    }
   }
 
   void bind_jacobian(const SparseMatrix& pattern) override {

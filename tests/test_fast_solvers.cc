@@ -12,6 +12,7 @@
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
 #include "models/elastic_model.h"
+#include "models/fem.h"
 #include "models/gravity.h"
 #include "models/scene.h"
 
@@ -84,6 +85,19 @@ TEST(FastSolvers, ProjectiveDynamicsConvergesToImplicitEulerAsIterationsGrow) {
   EXPECT_LT(previous, 1e-5);
 }
 
+// Elements of corotated material with poisson 0 (projective: the
+// as-rigid-as-possible energy): a 3-D tetrahedral beam, a 2-D triangle beam
+// and a membrane.
+std::vector<Scene> projective_element_scenes() {
+  return {
+      make_builtin_scene("beam", {{"dimension", "3"}, {"nx", "6"}, {"ny", "1"}, {"model", "1"},
+                                  {"poisson", "0"}}),
+      make_builtin_scene("beam", {{"dimension", "2"}, {"nx", "6"}, {"ny", "1"}, {"model", "1"},
+                                  {"poisson", "0"}}),
+      make_builtin_scene("membrane", {{"n", "6"}, {"model", "1"}, {"poisson", "0"}}),
+  };
+}
+
 // Elements in projective dynamics (Bouaziz et al. 2014): corotated with
 // poisson 0 is the as-rigid-as-possible energy W mu |F - R|^2, a projective
 // one. On a 3-D tetrahedral beam, a 2-D triangle beam and a membrane, one
@@ -93,15 +107,9 @@ TEST(FastSolvers, ProjectiveDynamicsConvergesToImplicitEulerAsIterationsGrow) {
 // it), and the step approaches implicit Euler's converged one.
 TEST(FastSolvers, ProjectiveDynamicsSolvesCorotatedElementsDescendingToImplicitEuler) {
   const double h = 1.0 / 60.0;
-  using Overrides = std::vector<std::pair<std::string, std::string>>;
-  const std::vector<std::pair<std::string, Overrides>> scenes = {
-      {"beam", {{"dimension", "3"}, {"nx", "6"}, {"ny", "1"}, {"model", "1"}, {"poisson", "0"}}},
-      {"beam", {{"dimension", "2"}, {"nx", "6"}, {"ny", "1"}, {"model", "1"}, {"poisson", "0"}}},
-      {"membrane", {{"n", "6"}, {"model", "1"}, {"poisson", "0"}}},
-  };
-  for (const auto& [name, values] : scenes) {
-    const Scene scene = make_builtin_scene(name, values);
-    SCOPED_TRACE(name + " in " + std::to_string(scene.dimension) + "-D");
+  for (const Scene& scene : projective_element_scenes()) {
+    SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
+                 std::to_string(scene.get<Tetrahedra>().size()) + " tetrahedra");
     const ElasticModel model(scene);
     const Vector x0 = model.initial_positions(), v0 = model.initial_velocities();
     const auto Phi = [&](const Vector& x) {
@@ -153,15 +161,9 @@ TEST(FastSolvers, ProjectiveDynamicsRefusesElementsWithoutAProjectiveForm) {
 TEST(FastSolvers, XpbdSolvesCorotatedElementsApproachingImplicitEulerAtTheSubstep) {
   const double h = 1.0 / 60.0;
   const int substeps = 4;
-  using Overrides = std::vector<std::pair<std::string, std::string>>;
-  const std::vector<std::pair<std::string, Overrides>> scenes = {
-      {"beam", {{"dimension", "3"}, {"nx", "6"}, {"ny", "1"}, {"model", "1"}, {"poisson", "0"}}},
-      {"beam", {{"dimension", "2"}, {"nx", "6"}, {"ny", "1"}, {"model", "1"}, {"poisson", "0"}}},
-      {"membrane", {{"n", "6"}, {"model", "1"}, {"poisson", "0"}}},
-  };
-  for (const auto& [name, values] : scenes) {
-    const Scene scene = make_builtin_scene(name, values);
-    SCOPED_TRACE(name + " in " + std::to_string(scene.dimension) + "-D");
+  for (const Scene& scene : projective_element_scenes()) {
+    SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
+                 std::to_string(scene.get<Tetrahedra>().size()) + " tetrahedra");
     const ElasticModel model(scene);
     RunSettings settings;
     settings.integrator = "implicit-euler";
