@@ -379,12 +379,11 @@ void ElasticModel::external_force(double t, const Vector& x, const Vector& v, Ve
     std::vector<DistanceConstraint> probe;
     std::vector<PlaneConstraint> planes;
     std::vector<ProjectiveElement> elements;
-    std::string why;
     for (const auto& term : terms_) {
       constraint_terms_.push_back(
           term->plane_constraints(planes) ||
           (term->conservative() && term->stiff() &&
-           (term->distance_constraints(probe) || term->projective_elements(elements, why))));
+           (term->distance_constraints(probe) || term->laplacian_elements(elements))));
     }
   }
   f_all_.setZero(x_all_.size());

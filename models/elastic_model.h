@@ -127,7 +127,8 @@ class ElasticModel final : public MechanicalSystem {
   enum class ElementForm { kNone, kProjective, kLaplacian };
   bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>* elements,
                    ElementForm form, std::string& why) const;
-  // Which terms are distance constraints (external_force skips them); set
+  // Which terms the fast solvers solve as constraints (distance
+  // constraints, elements, contact planes: external_force skips them); set
   // at its first call.
   mutable std::vector<char> constraint_terms_;
 };

@@ -184,63 +184,60 @@ Eigen::MatrixXd nearest_rotation(const Eigen::MatrixXd& F) { return polar(Mat(F)
 
 ElementTerm::ElementTerm(const Scene& scene, const ParticleOrder& order,
                          const ElementBlock& block)
-    : free_particles_(order.free_particles) {
-  const Materials& materials = scene.get<Materials>();
-  for (std::size_t e = 0; e < block.node_lists.size(); ++e) {
-    const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
-    const Lame l = lame(m.young, m.poisson);
-    forbids_states_ = forbids_states_ || !find_material_model(m.model)->finite_everywhere;
-    ProjectiveElement p;
-    std::vector<Eigen::Vector3d> X;
-    for (int n : block.node_lists[e]) {
-      p.nodes.push_back(order.internal_of_scene[static_cast<std::size_t>(n)]);
-      X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
-    }
-    const RestShape shape = rest_shape(X, scene.dimension);
-    const double W = shape.W * (block.nodes == 3 ? m.thickness_or_one() : 1.0);
-    p.G = shape.G;
-    p.weight = (l.lambda + 2.0 * l.mu) * W;
-    laplacian_.push_back(p);
-    if (!not_projective_.empty()) continue;
-    if (m.model != "corotated" || l.lambda != 0.0) {
-      std::ostringstream why;
-      why << "this scene's " << block.name << " elements are of material '" << m.name << "' ("
-          << m.model << ", poisson " << m.poisson
-          << "), which has no projective form; the fast solvers run corotated elements with "
-             "poisson 0 (the as-rigid-as-possible energy mu |F - R|^2, Bouaziz et al. 2014): "
-             "use such a material, or implicit-euler";
-      not_projective_ = why.str();
-      projective_.clear();
-      continue;
-    }
-    p.weight = 2.0 * l.mu * W;
-    p.project = nearest_rotation;
-    projective_.push_back(std::move(p));
+    : free_particles_(order.free_particles),
+      kind_(block.name),
+      materials_(scene.get<Materials>()),
+      material_of_(block.materials) {
+  for (int m : material_of_) {
+    const MaterialModel* model = find_material_model(materials_[static_cast<std::size_t>(m)].model);
+    forbids_states_ = forbids_states_ || !model->finite_everywhere;
   }
 }
 
 void ElementTerm::declare_jacobian_blocks(JacobianPatternBuilder& builder) const {
-  for (const ProjectiveElement& e : laplacian_) {
-    for (int a : e.nodes) {
-      for (int b : e.nodes) {
-        if (a != b && a < free_particles_ && b < free_particles_) builder.add_block(a, b);
+  const int free = free_particles_;
+  for (std::size_t e = 0; e < element_count(); ++e) {
+    const std::vector<int> nodes = shape(e).nodes;
+    for (int a : nodes) {
+      for (int b : nodes) {
+        if (a != b && a < free && b < free) builder.add_block(a, b);
       }
     }
   }
 }
 
-bool ElementTerm::laplacian_elements(std::vector<ProjectiveElement>& out) const {
-  out.insert(out.end(), laplacian_.begin(), laplacian_.end());
+bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
+                                      std::string& why) const {
+  std::vector<ProjectiveElement> mine;
+  for (std::size_t e = 0; e < element_count(); ++e) {
+    Shape s = shape(e);
+    if (s.model->name != "corotated" || s.lame.lambda != 0.0) {
+      const MaterialSpec& m = materials_[static_cast<std::size_t>(material_of_[e])];
+      std::ostringstream message;
+      message << "this scene's " << kind_ << " elements are of material '" << m.name << "' ("
+              << m.model << ", poisson " << m.poisson
+              << "), which has no projective form; the fast solvers run corotated elements "
+                 "with poisson 0 (the as-rigid-as-possible energy mu |F - R|^2, Bouaziz et al. "
+                 "2014): use such a material, or implicit-euler";
+      why = message.str();
+      return false;
+    }
+    mine.push_back({.nodes = std::move(s.nodes),
+                    .G = std::move(s.G),
+                    .weight = 2.0 * s.lame.mu * s.W,
+                    .project = nearest_rotation});
+  }
+  out.insert(out.end(), mine.begin(), mine.end());
   return true;
 }
 
-bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
-                                      std::string& why) const {
-  if (!not_projective_.empty()) {
-    why = not_projective_;
-    return false;
+bool ElementTerm::laplacian_elements(std::vector<ProjectiveElement>& out) const {
+  for (std::size_t e = 0; e < element_count(); ++e) {
+    Shape s = shape(e);
+    out.push_back({.nodes = std::move(s.nodes),
+                   .G = std::move(s.G),
+                   .weight = (s.lame.lambda + 2.0 * s.lame.mu) * s.W});
   }
-  out.insert(out.end(), projective_.begin(), projective_.end());
   return true;
 }
 

@@ -63,17 +63,21 @@ struct ElementBlock {
   // it with.
   bool reference = false;
 };
-// What the two element force terms (fem_force.cc, tet_force.cc) share: their
-// projective form for projective dynamics (MechanicalSystem::
-// projective_form). Corotated elements with lambda = 0 (poisson 0) store
-// the as-rigid-as-possible energy W mu |F - R|^2 = w/2 |F - R|^2, w = 2 mu W,
-// R the nearest rotation (Bouaziz et al. 2014's strain constraint, exactly);
-// every other material has none (the volume term lambda/2 (J - 1)^2 is not
-// a squared distance to a set), and the form says which to use instead.
-//
-// Also shared: an element's energy is conservative, forbids states where a
-// material has no energy (neo-Hookean, J <= 0), and couples every pair of
-// its free nodes in dF/dx.
+// What the two element force terms (fem_force.cc, tet_force.cc) share,
+// from each element's rest shape as the term stores it (shape() below):
+// an element's energy is conservative, forbids states where a material has
+// no energy (neo-Hookean, J <= 0), couples every pair of its free nodes in
+// dF/dx, and has the forms the fast solvers ask for, built when asked
+// (MechanicalSystem::projective_form and laplacian_form):
+//   - projective: corotated elements with lambda = 0 (poisson 0) store the
+//     as-rigid-as-possible energy W mu |F - R|^2 = w/2 |F - R|^2, w = 2 mu W,
+//     R the nearest rotation (Bouaziz et al. 2014's strain constraint,
+//     exactly); every other material has none (the volume term
+//     lambda/2 (J - 1)^2 is not a squared distance to a set), and the form
+//     says which to use instead;
+//   - Laplacian (quasi-Newton's initial Hessian), every material: weight
+//     (lambda + 2 mu) W, the constrained (P-wave) modulus, the stiffness of
+//     a stretch along one direction at rest.
 class ElementTerm : public ForceTerm {
  public:
   ElementTerm(const Scene& scene, const ParticleOrder& order, const ElementBlock& block);
@@ -81,16 +85,28 @@ class ElementTerm : public ForceTerm {
   bool forbids_states() const override { return forbids_states_; }
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override;
   bool projective_elements(std::vector<ProjectiveElement>& out, std::string& why) const override;
-  // Every material: weight (lambda + 2 mu) W, the constrained (P-wave)
-  // modulus, the stiffness of a stretch along one direction at rest.
   bool laplacian_elements(std::vector<ProjectiveElement>& out) const override;
 
+ protected:
+  // Element e as its term stores it: internal node indices, G (nodes x k,
+  // rows g_j), W (with a triangle's thickness), the material's model and
+  // Lame parameters.
+  struct Shape {
+    std::vector<int> nodes;
+    Eigen::MatrixXd G;
+    double W = 0.0;
+    const MaterialModel* model = nullptr;
+    Lame lame;
+  };
+  virtual std::size_t element_count() const = 0;
+  virtual Shape shape(std::size_t e) const = 0;
+
  private:
-  int free_particles_ = 0;
+  int free_particles_;
   bool forbids_states_ = false;
-  std::vector<ProjectiveElement> laplacian_;  // weights (lambda + 2 mu) W; their nodes
-  std::vector<ProjectiveElement> projective_;
-  std::string not_projective_;  // why not, or empty
+  std::string_view kind_;
+  Materials materials_;           // the scene's, for messages
+  std::vector<int> material_of_;  // per element
 };
 
 std::unique_ptr<ForceTerm> make_element_force(const Scene& scene, const ParticleOrder& order,

@@ -90,6 +90,14 @@ class ElementForce final : public ElementTerm {
     }
   }
 
+
+ protected:
+  std::size_t element_count() const override { return elements_.size(); }
+  Shape shape(std::size_t e) const override {
+    const Element& el = elements_[e];
+    return {.nodes = el.nodes, .G = el.G, .W = el.W, .model = el.model, .lame = el.lame};
+  }
+
  private:
   struct Element {
     std::vector<int> nodes;  // internal indices

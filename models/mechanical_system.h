@@ -153,9 +153,10 @@ class MechanicalSystem {
   }
 
   // The fast solvers' view (README "Fast solvers"): the stiff conservative forces as
-  // distance constraints, and F minus their forces (gravity, drag, wind,
-  // spring damping: treated explicitly). False when some stiff force has no
-  // such form (finite elements): those solvers refuse the system.
+  // distance constraints, and F minus their forces and the elements'
+  // (external_force: gravity, drag, wind, spring damping, treated
+  // explicitly). False when some stiff force has no such form (finite
+  // elements: see projective_form and laplacian_form).
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
     return false;
   }

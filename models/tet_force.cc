@@ -102,6 +102,18 @@ class TetrahedronForce final : public ElementTerm {
     }
   }
 
+
+ protected:
+  std::size_t element_count() const override { return tets_.size(); }
+  Shape shape(std::size_t e) const override {
+    const Tet& t = tets_[e];
+    Eigen::MatrixXd G(4, 3);
+    G.row(0) = -t.D.colwise().sum();
+    G.bottomRows(3) = t.D;
+    return {.nodes = {t.nodes.begin(), t.nodes.end()}, .G = G, .W = t.W, .model = t.model,
+            .lame = t.lame};
+  }
+
  private:
   struct Tet {
     std::array<int, 4> nodes{};  // internal indices
