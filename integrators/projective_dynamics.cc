@@ -142,7 +142,8 @@ StepResult ProjectiveDynamics::do_step(double h) {
         for (int r = 0; r < dim_; ++r) {
           double sum = TGt(r, static_cast<Eigen::Index>(i));
           for (std::size_t j = 0; j < e.nodes.size(); ++j) {
-            if (e.nodes[j] < 0) sum -= gi.dot(e.G.row(static_cast<Eigen::Index>(j))) * e.fixed[j][r];
+            if (e.nodes[j] >= 0) continue;
+            sum -= gi.dot(e.G.row(static_cast<Eigen::Index>(j))) * e.fixed[j][r];
           }
           rhs_[e.nodes[i] * dim_ + r] += w * sum;
         }

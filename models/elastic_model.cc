@@ -322,9 +322,10 @@ bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
     if (term->plane_constraints(planes)) continue;           // plane_constraints
     if (!term->conservative() || !term->stiff()) continue;  // external: explicit
     if (term->distance_constraints(all)) continue;
-    const bool has_form = form == ElementForm::kProjective ? term->projective_elements(projective, why)
-                          : form == ElementForm::kLaplacian ? term->laplacian_elements(projective)
-                                                            : false;
+    const bool has_form =
+        form == ElementForm::kProjective   ? term->projective_elements(projective, why)
+        : form == ElementForm::kLaplacian ? term->laplacian_elements(projective)
+                                          : false;
     if (!has_form) return false;
   }
   // Internal indices: free particles first. A fixed end becomes an anchor;

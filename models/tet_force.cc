@@ -30,7 +30,9 @@ using Matrix12 = Eigen::Matrix<double, 12, 12>;
 class TetrahedronForce final : public ElementTerm {
  public:
   TetrahedronForce(const Scene& scene, const ParticleOrder& order, const ElementBlock& block)
-      : ElementTerm(scene, order, block), name_(block.name), free_particles_(order.free_particles) {
+      : ElementTerm(scene, order, block),
+        name_(block.name),
+        free_particles_(order.free_particles) {
     const Materials& materials = scene.get<Materials>();
     tets_.reserve(block.node_lists.size());
     for (std::size_t e = 0; e < block.node_lists.size(); ++e) {

@@ -219,7 +219,8 @@ TEST(Materials, PolarDecompositionIsTheSvdsRotation) {
     const Polar3 p = polar3(F);
     // Both are exact to rounding times R's sensitivity, ~ sigma_max / sigma_min.
     const double tolerance = trial % 4 == 1 ? 1e-11 : 1e-13;
-    EXPECT_LT((p.R - expected).norm(), tolerance) << "trial " << trial << ", det " << F.determinant();
+    EXPECT_LT((p.R - expected).norm(), tolerance)
+        << "trial " << trial << ", det " << F.determinant();
     EXPECT_LT((p.R.transpose() * p.R - Eigen::Matrix3d::Identity()).norm(), 1e-14) << trial;
     EXPECT_NEAR(p.R.determinant(), 1.0, 1e-14) << trial;
     EXPECT_LT((p.R * p.S - F).norm(), 1e-14 * F.norm()) << trial;

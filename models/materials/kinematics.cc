@@ -92,7 +92,8 @@ bool rotation_by_newton(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
     const Eigen::Matrix3d C = cofactor(X);  // det X X^-T
     const double det = X.col(0).dot(C.col(0));
     if (!(det > 0.0) || !std::isfinite(det)) return false;
-    const double gamma = scaled ? std::sqrt(std::sqrt(C.squaredNorm() / X.squaredNorm()) / det) : 1.0;
+    const double gamma =
+        scaled ? std::sqrt(std::sqrt(C.squaredNorm() / X.squaredNorm()) / det) : 1.0;
     const Eigen::Matrix3d next = (0.5 * gamma) * X + (0.5 / (gamma * det)) * C;
     const double change2 = (next - X).squaredNorm();
     X = next;

@@ -45,7 +45,10 @@ Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, con
   const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
   return symmetric_blocks([&](int i, int j) {
     const Eigen::Vector3d a = D.row(i), b = D.row(j);
-    return Block3().identity(m.mu * a.dot(b)).outer(l, GD.col(i), GD.col(j)).volume_hessian(h, F, a, b);
+    return Block3()
+        .identity(m.mu * a.dot(b))
+        .outer(l, GD.col(i), GD.col(j))
+        .volume_hessian(h, F, a, b);
   });
 }
 
