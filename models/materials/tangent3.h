@@ -32,11 +32,6 @@
 
 namespace springlab {
 
-// vec(A): the columns of A stacked.
-inline Eigen::Matrix<double, 9, 1> vec(const Eigen::Matrix3d& A) {
-  return Eigen::Map<const Eigen::Matrix<double, 9, 1>>(A.data());
-}
-
 // [a]x, with [a]x b = a x b.
 inline Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& a) {
   Eigen::Matrix3d m;
