@@ -41,17 +41,9 @@ SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constra
 
 StepResult FastSolver::do_initialize() {
   dim_ = system().dimension_of_state();
-  elements_.clear();
-  if (solves_projective_elements()) {
-    std::string why;
-    if (dim_ < 1 || !system().projective_form(constraints_, elements_, why)) {
-      return StepResult::failure(name() + ": " + why);
-    }
-  } else if (dim_ < 1 || !system().distance_constraints(constraints_)) {
-    return StepResult::failure(
-        name() + ": this scene has stiff forces that are not distance constraints (finite "
-                 "elements), which " + name() +
-        " does not solve yet; use implicit-euler, or an explicit method at a small --dt");
+  std::string why = "this system has no projective form; use implicit-euler";
+  if (dim_ < 1 || !system().projective_form(constraints_, elements_, why)) {
+    return StepResult::failure(name() + ": " + why);
   }
   system().plane_constraints(planes_);
   for (const PlaneConstraint& plane : planes_) {

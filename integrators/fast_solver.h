@@ -1,9 +1,9 @@
 // What the two fast solvers of README "Fast solvers" share (projective_dynamics.cc,
-// xpbd.cc): the system's stiff forces as distance constraints
-// (MechanicalSystem::distance_constraints), the other forces applied
-// explicitly, the contact planes (MechanicalSystem::plane_constraints), a
-// refusal where the system has no such form, and the gap of one
-// constraint.
+// xpbd.cc): the system's stiff forces as distance constraints and
+// projective elements (MechanicalSystem::projective_form), the other forces
+// applied explicitly, the contact planes (MechanicalSystem::
+// plane_constraints), a refusal where the system has no such form, and the
+// gap of one constraint.
 #pragma once
 
 #include <string>
@@ -30,12 +30,10 @@ class FastSolver : public Integrator {
  protected:
   using Integrator::Integrator;
 
-  // Reads the constraints (and the projective elements, where the method
-  // solves them); a failure that says which methods run the system when
-  // its stiff forces have no such form.
+  // Reads the distance constraints and the projective elements
+  // (MechanicalSystem::projective_form); a failure that says what to use
+  // when the system's stiff forces have no such form.
   StepResult do_initialize() override;
-  // Projective dynamics solves projective elements too; xpbd does not.
-  virtual bool solves_projective_elements() const { return false; }
 
   // F minus the constraints' forces, counted as a force evaluation.
   void eval_external_force(double t, const Vector& x, const Vector& v, Vector& f);
@@ -51,7 +49,7 @@ class FastSolver : public Integrator {
 
   int dim_ = 2;
   std::vector<DistanceConstraint> constraints_;
-  std::vector<ProjectiveElement> elements_;  // where solves_projective_elements()
+  std::vector<ProjectiveElement> elements_;
   std::vector<PlaneConstraint> planes_;  // contact planes (xpbd solves them)
   Vector inv_particle_mass_;  // 1/m per free particle
 };

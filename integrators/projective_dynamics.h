@@ -55,7 +55,6 @@ class ProjectiveDynamics final : public FastSolver {
 
  protected:
   StepResult do_initialize() override;
-  bool solves_projective_elements() const override { return true; }
   StepResult do_step(double h) override;
 
  private:

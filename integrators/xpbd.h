@@ -63,7 +63,6 @@ class Xpbd final : public FastSolver {
 
   // Projects the projective elements once (lambda_elements_ accumulates).
   void project_elements(double hs);
-  bool solves_projective_elements() const override { return true; }
   Vector f_, x_prev_, lambda_, lambda_elements_;
   Vector lambda_planes_;  // per (plane, free particle)
 };

@@ -293,28 +293,23 @@ bool ElasticModel::has_forbidden_states() const {
   return false;
 }
 
-bool ElasticModel::distance_constraints(std::vector<DistanceConstraint>& out) const {
-  std::string why;
-  return stiff_forms(out, nullptr, ElementForm::kNone, why);
-}
-
 bool ElasticModel::projective_form(std::vector<DistanceConstraint>& constraints,
                                    std::vector<ProjectiveElement>& elements,
                                    std::string& why) const {
-  return stiff_forms(constraints, &elements, ElementForm::kProjective, why);
+  return stiff_forms(constraints, elements, ElementForm::kProjective, why);
 }
 
 bool ElasticModel::laplacian_form(std::vector<DistanceConstraint>& constraints,
                                   std::vector<ProjectiveElement>& elements) const {
   std::string why;
-  return stiff_forms(constraints, &elements, ElementForm::kLaplacian, why);
+  return stiff_forms(constraints, elements, ElementForm::kLaplacian, why);
 }
 
 bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
-                               std::vector<ProjectiveElement>* elements, ElementForm form,
+                               std::vector<ProjectiveElement>& elements, ElementForm form,
                                std::string& why) const {
   out.clear();
-  if (elements != nullptr) elements->clear();
+  elements.clear();
   std::vector<DistanceConstraint> all;
   std::vector<PlaneConstraint> planes;
   std::vector<ProjectiveElement> projective;
@@ -322,10 +317,9 @@ bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
     if (term->plane_constraints(planes)) continue;           // plane_constraints
     if (!term->conservative() || !term->stiff()) continue;  // external: explicit
     if (term->distance_constraints(all)) continue;
-    const bool has_form =
-        form == ElementForm::kProjective   ? term->projective_elements(projective, why)
-        : form == ElementForm::kLaplacian ? term->laplacian_elements(projective)
-                                          : false;
+    const bool has_form = form == ElementForm::kProjective
+                              ? term->projective_elements(projective, why)
+                              : term->laplacian_elements(projective);
     if (!has_form) return false;
   }
   // Internal indices: free particles first. A fixed end becomes an anchor;
@@ -352,7 +346,7 @@ bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
       for (int r = 0; r < dim; ++r) e.fixed[j][r] = x_all_[e.nodes[j] * dim + r];
       e.nodes[j] = -1;
     }
-    if (moves) elements->push_back(std::move(e));
+    if (moves) elements.push_back(std::move(e));
   }
   return true;
 }

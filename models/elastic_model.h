@@ -49,7 +49,6 @@ class ElasticModel final : public MechanicalSystem {
   // in scene terms; empty when it is not one.
   std::string forbidden_state(const Vector& x) const;
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
-  bool distance_constraints(std::vector<DistanceConstraint>& out) const override;
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
                        std::string& why) const override;
@@ -121,11 +120,11 @@ class ElasticModel final : public MechanicalSystem {
   // Scratch: all particles, internal order. The fixed tail of x_all_ holds
   // the fixed positions and never changes; v_all_'s fixed tail stays 0.
   mutable Vector x_all_, v_all_, f_all_;
-  // distance_constraints and projective_form: the stiff conservative terms'
-  // constraints, and their projective elements where `elements` is given;
-  // false where a term has neither form (why says which).
-  enum class ElementForm { kNone, kProjective, kLaplacian };
-  bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>* elements,
+  // projective_form and laplacian_form: the stiff conservative terms'
+  // distance constraints, and their elements in the form asked for; false
+  // where a term has neither form (why says which).
+  enum class ElementForm { kProjective, kLaplacian };
+  bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>& elements,
                    ElementForm form, std::string& why) const;
   // Which terms the fast solvers solve as constraints (distance
   // constraints, elements, contact planes: external_force skips them); set

@@ -152,21 +152,15 @@ class MechanicalSystem {
     return std::numeric_limits<double>::infinity();
   }
 
-  // The fast solvers' view (README "Fast solvers"): the stiff conservative forces as
-  // distance constraints, and F minus their forces and the elements'
-  // (external_force: gravity, drag, wind, spring damping, treated
-  // explicitly). False when some stiff force has no such form (finite
-  // elements: see projective_form and laplacian_form).
-  virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
-    return false;
-  }
-  // Projective dynamics' wider view: the stiff conservative forces as
-  // distance constraints and projective elements (above). False, with
-  // `why` (one sentence for the user), when some have neither form.
+  // The fast solvers' view (README "Fast solvers"): the stiff conservative
+  // forces as distance constraints and projective elements (above), and F
+  // minus their forces and every element's (external_force: gravity, drag,
+  // wind, spring damping, treated explicitly). False, with `why` (one
+  // sentence for the user), when some stiff force has neither form.
   virtual bool projective_form(std::vector<DistanceConstraint>& /*constraints*/,
                                std::vector<ProjectiveElement>& /*elements*/,
                                std::string& why) const {
-    why = "this system has no projective form";
+    why = "this system has no projective form; use implicit-euler";
     return false;
   }
   // Quasi-Newton's initial Hessian (README "Fast solvers"): the distance
@@ -188,7 +182,7 @@ class MechanicalSystem {
 
   // The contact planes as constraints (empty without planes). Their forces,
   // and friction's, are not in external_force: a fast solver that reads
-  // distance_constraints must solve these too, or refuse the system.
+  // projective_form must solve these too, or refuse the system.
   virtual void plane_constraints(std::vector<PlaneConstraint>& out) const { out.clear(); }
   virtual void external_force(double /*t*/, const Vector& /*x*/, const Vector& /*v*/,
                               Vector& /*f*/) const {}

@@ -283,13 +283,11 @@ TEST(Contact, BarrierKeepsTheBlockAndTheClothAboveTheGround) {
 
 // Coulomb friction on the built-in `slope` (one particle on a plane inclined
 // at theta, g = 9.81, friction mu, smoothing eps_v = 1e-3 m/s), under every
-// registered integrator at a step of 1e-4 s. The fast solvers refuse contact
-// planes with a message; they are skipped.
+// registered integrator at a step of 1e-4 s.
 class Friction : public testing::RegistryTest {
  protected:
   static constexpr double kG = 9.81, kEps = 1e-3;
-  // Runs slope with `parameters`; false (and the test skipped) when the
-  // method refuses the scene.
+  // Runs slope with `parameters`; false when the run did not complete.
   bool run(const std::vector<std::pair<std::string, std::string>>& parameters, double t_end,
            RunResult& r, Observer* observer = nullptr) {
     const ElasticModel model(make_builtin_scene("slope", parameters));
@@ -298,9 +296,6 @@ class Friction : public testing::RegistryTest {
     std::vector<Observer*> observers;
     if (observer != nullptr) observers.push_back(observer);
     r = simulate(model, s, observers);
-    if (r.status == RunStatus::kFailed && r.failure.find("does not solve yet") != std::string::npos) {
-      return false;
-    }
     EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
     return r.status == RunStatus::kCompleted;
   }
