@@ -159,7 +159,7 @@ class ForceTerm {
     return std::numeric_limits<double>::infinity();
   }
   // A stiff conservative term that is a set of distance constraints
-  // (MechanicalSystem::distance_constraints) appends them with internal
+  // (MechanicalSystem::projective_form) appends them with internal
   // particle indices (b may be fixed: the model ties it to its place) and
   // returns true.
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
