@@ -51,15 +51,7 @@ Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, con
   const double J = F.determinant();
   if (!(J > 0.0)) return Tangent3::Constant(kNaN);
   const double a = m.lambda * std::log(J) - m.mu;
-  const double c = (m.lambda - a) / (J * J);
-  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
-  return symmetric_blocks([&](int i, int j) {
-    const Eigen::Vector3d di = D.row(i), dj = D.row(j);
-    return Block3()
-        .identity(m.mu * di.dot(dj))
-        .outer(c, GD.col(i), GD.col(j))
-        .volume_hessian(a / J, F, di, dj);
-  });
+  return volumetric_blocks(F, D, m.mu, (m.lambda - a) / (J * J), a / J);
 }
 
 }  // namespace

@@ -41,15 +41,7 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 //   A(a, b) = mu (a . b) I + lambda' (G a)(G b)^T - lambda' (J - alpha) [F (a x b)]x.
 Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
   const double l = shifted_lambda(m);
-  const double h = l * (F.determinant() - alpha(m));
-  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
-  return symmetric_blocks([&](int i, int j) {
-    const Eigen::Vector3d a = D.row(i), b = D.row(j);
-    return Block3()
-        .identity(m.mu * a.dot(b))
-        .outer(l, GD.col(i), GD.col(j))
-        .volume_hessian(h, F, a, b);
-  });
+  return volumetric_blocks(F, D, m.mu, l, l * (F.determinant() - alpha(m)));
 }
 
 }  // namespace

@@ -98,6 +98,21 @@ Tangent3 symmetric_blocks(Block block) {
   return K;
 }
 
+// The blocks of the tangent the neo-Hookean models share,
+//   dPdF = mu I_9 + c g g^T + h H_J  (g = vec(dJ/dF), G its matrix),
+// contracted: A(a, b) = mu (a . b) I + c (G a)(G b)^T - h [F (a x b)]x.
+inline Tangent3 volumetric_blocks(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, double mu,
+                                  double c, double h) {
+  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
+  return symmetric_blocks([&](int i, int j) {
+    const Eigen::Vector3d a = D.row(i), b = D.row(j);
+    return Block3()
+        .identity(mu * a.dot(b))
+        .outer(c, GD.col(i), GD.col(j))
+        .volume_hessian(h, F, a, b);
+  });
+}
+
 // The blocks A(d_i, d_j) of any tangent T on vec(F), by the definition
 // (what the closed forms are checked against): with B = D^T (x) I3,
 // the 9 x 9 matrix B^T T B.
