@@ -16,6 +16,7 @@
 //   K_i0 = -sum_j K_ij,  K_0j = -sum_i K_ij,  K_00 = sum_ij K_ij.
 #include <Eigen/Dense>
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,7 @@ class TetrahedronForce final : public ElementTerm {
       const RestShape shape = rest_shape(X, 3);
       t.D = shape.G.bottomRows(3);
       t.W = shape.W;
+      t.Dw = std::sqrt(t.W) * t.D;
       const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
       t.model = find_material_model(m.model);
       t.lame = lame(m.young, m.poisson);
@@ -120,6 +122,7 @@ class TetrahedronForce final : public ElementTerm {
   struct Tet {
     std::array<int, 4> nodes{};  // internal indices
     Eigen::Matrix3d D;           // Dm^-1: its rows are g_1, g_2, g_3
+    Eigen::Matrix3d Dw;          // sqrt(W) D (add_stiffness)
     double W = 0.0;              // the rest volume
     const MaterialModel* model = nullptr;
     Lame lame;
@@ -144,32 +147,36 @@ class TetrahedronForce final : public ElementTerm {
   }
 
   // Adds the element's df/dx (above) to the value array at `slots`, block by
-  // block, without forming the 12 x 12 matrix: K' = -W [A(d_i, d_j)] holds
-  // the blocks of nodes 1..3, and node 0's are K_i0 = -sum_j K'_ij, K_0i =
-  // K_i0^T (K' is symmetric) and K_00 = -sum_i K_i0.
+  // block, without forming the 12 x 12 matrix. A(a, b) is bilinear, so the
+  // rows of D scaled by w = sqrt(W) (Tet::Dw) give B_ij = W A(d_i, d_j)
+  // with no 9 x 9 product: K_ij = -B_ij for nodes 1..3, and node 0's blocks
+  // are K_i0 = -sum_j K_ij = S_i (S_i = sum_j B_ij), K_0i = K_i0^T (K is
+  // symmetric) and K_00 = -sum_i K_i0 = -sum_i S_i.
   static void add_stiffness(const Configuration& c, const Tet& t, const Slots& slots,
                             double* values) {
-    const Tangent3 K = -t.W * tangent_blocks3(*t.model, deformation(c, t), t.D, t.lame);
-    // Rows 3 (i - 1) .. of K0: K_i0, column by column; K0t: K_0i.
-    const Eigen::Matrix<double, 9, 3> K0 =
-        -(K.middleCols<3>(0) + K.middleCols<3>(3) + K.middleCols<3>(6));
-    const Eigen::Matrix<double, 3, 9> K0t = K0.transpose();
-    const Eigen::Matrix3d K00 = -(K0.middleRows<3>(0) + K0.middleRows<3>(3) + K0.middleRows<3>(6));
-    // Adds column s of a block, three numbers at `column`, to block (i, j).
-    const auto add = [&](int i, int j, int s, const double* column) {
+    const Tangent3 B = tangent_blocks3(*t.model, deformation(c, t), t.Dw, t.lame);
+    // Rows 3 (i - 1) .. of S: S_i.
+    const Eigen::Matrix<double, 9, 3> S = B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
+    const Eigen::Matrix3d S_sum = S.middleRows<3>(0) + S.middleRows<3>(3) + S.middleRows<3>(6);
+    // Adds sign * (u, v, w), column s of a block, to block (i, j).
+    const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
       const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
       if (offset < 0) return;
       double* to = values + offset;
-      to[0] += column[0];
-      to[1] += column[1];
-      to[2] += column[2];
+      to[0] += sign * u;
+      to[1] += sign * v;
+      to[2] += sign * w;
+    };
+    const auto add_column = [&](int i, int j, int s, double sign, const double* column) {
+      add(i, j, s, sign, column[0], column[1], column[2]);
     };
     for (int s = 0; s < 3; ++s) {
-      add(0, 0, s, K00.col(s).data());
+      add_column(0, 0, s, -1.0, S_sum.col(s).data());
       for (int i = 1; i < 4; ++i) {
-        add(i, 0, s, K0.col(s).data() + 3 * (i - 1));
-        add(0, i, s, K0t.col(3 * (i - 1) + s).data());
-        for (int j = 1; j < 4; ++j) add(i, j, s, K.col(3 * (j - 1) + s).data() + 3 * (i - 1));
+        const int r = 3 * (i - 1);
+        add_column(i, 0, s, 1.0, S.col(s).data() + r);
+        add(0, i, s, 1.0, S(r + s, 0), S(r + s, 1), S(r + s, 2));
+        for (int j = 1; j < 4; ++j) add_column(i, j, s, -1.0, B.col(3 * (j - 1) + s).data() + r);
       }
     }
   }
