@@ -31,7 +31,8 @@ template <typename Matrix>
 Matrix P(const Matrix& F, const Lame& m) {
   const auto v = volume(F);
   if (!(v.J > 0.0)) return Matrix::Constant(F.rows(), F.cols(), kNaN);
-  return m.mu * F + (m.lambda * std::log(v.J) - m.mu) / v.J * v.g;
+  const double inverse_J = 1.0 / v.J;  // (computed alongside the logarithm)
+  return m.mu * F + ((m.lambda * std::log(v.J) - m.mu) * inverse_J) * v.g;
 }
 
 // dP = mu dF + lambda (dJ/J) g/J + (lambda ln J - mu) (dg/J - dJ g/J^2), dJ = g:dF.
@@ -48,10 +49,11 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 // (g = vec(dJ/dF), H_J its derivative), so (tangent3.h, G the cofactor matrix)
 //   A(a, b) = mu (a . b) I + (lambda - a)/J^2 (G a)(G b)^T - a/J [F (a x b)]x.
 Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
-  const double J = F.determinant();
-  if (!(J > 0.0)) return Tangent3::Constant(kNaN);
-  const double a = m.lambda * std::log(J) - m.mu;
-  return volumetric_blocks(F, D, m.mu, (m.lambda - a) / (J * J), a / J);
+  const Volume3 v = volume(F);
+  if (!(v.J > 0.0)) return Tangent3::Constant(kNaN);
+  const double inverse_J = 1.0 / v.J;
+  const double a = m.lambda * std::log(v.J) - m.mu;
+  return volumetric_blocks(F, v.g, D, m.mu, (m.lambda - a) * inverse_J * inverse_J, a * inverse_J);
 }
 
 }  // namespace

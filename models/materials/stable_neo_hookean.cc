@@ -41,7 +41,8 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 //   A(a, b) = mu (a . b) I + lambda' (G a)(G b)^T - lambda' (J - alpha) [F (a x b)]x.
 Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
   const double l = shifted_lambda(m);
-  return volumetric_blocks(F, D, m.mu, l, l * (F.determinant() - alpha(m)));
+  const Volume3 v = volume(F);
+  return volumetric_blocks(F, v.g, D, m.mu, l, l * (v.J - alpha(m)));
 }
 
 }  // namespace

@@ -101,9 +101,10 @@ Tangent3 symmetric_blocks(Block block) {
 // The blocks of the tangent the neo-Hookean models share,
 //   dPdF = mu I_9 + c g g^T + h H_J  (g = vec(dJ/dF), G its matrix),
 // contracted: A(a, b) = mu (a . b) I + c (G a)(G b)^T - h [F (a x b)]x.
-inline Tangent3 volumetric_blocks(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, double mu,
-                                  double c, double h) {
-  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
+// G is the caller's cofactor(F) (it has computed J = det F from it).
+inline Tangent3 volumetric_blocks(const Eigen::Matrix3d& F, const Eigen::Matrix3d& G,
+                                  const Eigen::Matrix3d& D, double mu, double c, double h) {
+  const Eigen::Matrix3d GD = G * D.transpose();  // column i: G d_i
   return symmetric_blocks([&](int i, int j) {
     const Eigen::Vector3d a = D.row(i), b = D.row(j);
     return Block3()
