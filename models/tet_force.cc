@@ -48,6 +48,7 @@ class TetrahedronForce final : public ElementTerm {
       t.D = shape.G.bottomRows(3);
       t.W = shape.W;
       t.Dw = std::sqrt(t.W) * t.D;
+      t.minus_WDt = -t.W * t.D.transpose();
       const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
       t.model = find_material_model(m.model);
       t.lame = lame(m.young, m.poisson);
@@ -59,7 +60,7 @@ class TetrahedronForce final : public ElementTerm {
   void add_force(const Configuration& c, double* f) const override {
     for (const Tet& t : tets_) {
       const Eigen::Matrix3d P = P3(*t.model, deformation(c, t), t.lame);
-      const Eigen::Matrix3d H = -t.W * P * t.D.transpose();  // columns f_1, f_2, f_3
+      const Eigen::Matrix3d H = P * t.minus_WDt;  // columns f_1, f_2, f_3
       node(f, t, 0) -= H.rowwise().sum();
       for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
     }
@@ -123,6 +124,7 @@ class TetrahedronForce final : public ElementTerm {
     std::array<int, 4> nodes{};  // internal indices
     Eigen::Matrix3d D;           // Dm^-1: its rows are g_1, g_2, g_3
     Eigen::Matrix3d Dw;          // sqrt(W) D (add_stiffness)
+    Eigen::Matrix3d minus_WDt;   // -W D^T (add_force)
     double W = 0.0;              // the rest volume
     const MaterialModel* model = nullptr;
     Lame lame;
@@ -159,9 +161,12 @@ class TetrahedronForce final : public ElementTerm {
     const Eigen::Matrix<double, 9, 3> S = B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
     const Eigen::Matrix3d S_sum = S.middleRows<3>(0) + S.middleRows<3>(3) + S.middleRows<3>(6);
     // Adds sign * (u, v, w), column s of a block, to block (i, j).
+    // All four nodes free (each has its diagonal block, slot 15 k): no slot is
+    // -1, and the adds below need no test.
+    const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
     const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
       const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
-      if (offset < 0) return;
+      if (!all_free && offset < 0) return;
       double* to = values + offset;
       to[0] += sign * u;
       to[1] += sign * v;
