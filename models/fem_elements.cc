@@ -179,6 +179,9 @@ void give_rest_positions(Scene& scene, std::mt19937& rng, RandomStates states) {
 namespace {
 
 Eigen::MatrixXd nearest_rotation(const Eigen::MatrixXd& F) { return polar(Mat(F)).R; }
+Eigen::MatrixXd nearest_unit_volume_matrix(const Eigen::MatrixXd& F) {
+  return nearest_unit_volume(Mat(F));
+}
 
 }  // namespace
 
@@ -211,21 +214,30 @@ bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
   std::vector<ProjectiveElement> mine;
   for (std::size_t e = 0; e < element_count(); ++e) {
     Shape s = shape(e);
-    if (s.model->name != "corotated" || s.lame.lambda != 0.0) {
+    if (s.model->name != "corotated" || s.lame.lambda < 0.0) {
       const MaterialSpec& m = materials_[static_cast<std::size_t>(material_of_[e])];
       std::ostringstream message;
       message << "this scene's " << kind_ << " elements are of material '" << m.name << "' ("
               << m.model << ", poisson " << m.poisson
               << "), which has no projective form; the fast solvers run corotated elements "
-                 "with poisson 0 (the as-rigid-as-possible energy mu |F - R|^2, Bouaziz et al. "
-                 "2014): use such a material, or implicit-euler";
+                 "with poisson >= 0 (the as-rigid-as-possible energy mu |F - R|^2 plus, for "
+                 "poisson > 0, Bouaziz et al. 2014's volume term): use such a material, or "
+                 "implicit-euler";
       why = message.str();
       return false;
     }
-    mine.push_back({.nodes = std::move(s.nodes),
-                    .G = std::move(s.G),
-                    .weight = 2.0 * s.lame.mu * s.W,
-                    .project = nearest_rotation});
+    // The volume term's weight: near F = I the distance of F to the set
+    // J = 1 is |tr E| / sqrt(k) (E = F - I, k the columns of F), so
+    // w/2 dist^2 = W lambda/2 (J - 1)^2 to second order with w = k lambda W.
+    const double volume_weight = static_cast<double>(s.G.cols()) * s.lame.lambda * s.W;
+    mine.push_back(
+        {.nodes = s.nodes, .G = s.G, .weight = 2.0 * s.lame.mu * s.W, .project = nearest_rotation});
+    if (volume_weight > 0.0) {
+      mine.push_back({.nodes = std::move(s.nodes),
+                      .G = std::move(s.G),
+                      .weight = volume_weight,
+                      .project = nearest_unit_volume_matrix});
+    }
   }
   out.insert(out.end(), mine.begin(), mine.end());
   return true;

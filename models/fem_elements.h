@@ -69,12 +69,13 @@ struct ElementBlock {
 // no energy (neo-Hookean, J <= 0), couples every pair of its free nodes in
 // dF/dx, and has the forms the fast solvers ask for, built when asked
 // (MechanicalSystem::projective_form and laplacian_form):
-//   - projective: corotated elements with lambda = 0 (poisson 0) store the
-//     as-rigid-as-possible energy W mu |F - R|^2 = w/2 |F - R|^2, w = 2 mu W,
-//     R the nearest rotation (Bouaziz et al. 2014's strain constraint,
-//     exactly); every other material has none (the volume term
-//     lambda/2 (J - 1)^2 is not a squared distance to a set), and the form
-//     says which to use instead;
+//   - projective: corotated elements store the as-rigid-as-possible energy
+//     W mu |F - R|^2 = w/2 |F - R|^2, w = 2 mu W, R the nearest rotation
+//     (Bouaziz et al. 2014's strain constraint, exactly), and for lambda > 0
+//     Bouaziz's volume constraint in place of lambda/2 (J - 1)^2 (not a
+//     squared distance to a set): w = k lambda W, projected on J = 1, the
+//     same stiffness at rest (README "Fast solvers"); every other material
+//     has none, and the form says which to use instead;
 //   - Laplacian (quasi-Newton's initial Hessian), every material: weight
 //     (lambda + 2 mu) W, the constrained (P-wave) modulus, the stiffness of
 //     a stretch along one direction at rest.

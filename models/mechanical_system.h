@@ -63,7 +63,8 @@ struct PlaneConstraint {
 // 2014, sec. 4-5), as projective dynamics sees it (README "Fast solvers"):
 //   E = w/2 |F - project(F)|^2,  F = sum_j x_j g_j^T (dim x k),
 // project(F) a nearest point of F on a constraint set (the rotations: the
-// as-rigid-as-possible strain energy). Its global matrix gets w g_i . g_j
+// as-rigid-as-possible strain energy; the matrices of J = 1: the volume
+// constraint). Its global matrix gets w g_i . g_j
 // for nodes i, j (the same for every coordinate); its local step is
 // project(F). A fixed node has index -1 and its place in `fixed`.
 struct ProjectiveElement {
@@ -71,7 +72,8 @@ struct ProjectiveElement {
   std::vector<Eigen::Vector3d> fixed;   // each node's position where fixed
   Eigen::MatrixXd G;                    // nodes x k, rows g_j
   double weight = 0.0;                  // w
-  // The projection, dim x k (models/materials/kinematics.h: polar's R).
+  // The projection, dim x k (models/materials/kinematics.h: polar's R,
+  // nearest_unit_volume).
   Eigen::MatrixXd (*project)(const Eigen::MatrixXd& F) = nullptr;
 };
 

@@ -383,8 +383,8 @@ TEST_P(EveryIntegratorOnElements, RunsTheBeamInTwoAndThreeDimensions) {
     const RunResult r = simulate(model, s);
     if (info().jacobian_free) {
       // The beam's neo-Hookean elements: projective dynamics and XPBD solve
-      // projective elements only (corotated with poisson 0,
-      // test_fast_solvers.cc): a refusal that says what to use.
+      // projective elements only (corotated, test_fast_solvers.cc): a
+      // refusal that says what to use.
       EXPECT_EQ(r.status, RunStatus::kFailed);
       EXPECT_NE(r.failure.find("implicit-euler"), std::string::npos) << r.failure;
       continue;

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "models/materials/kinematics.h"
 #include "models/materials/material.h"
@@ -225,6 +227,35 @@ TEST(Materials, PolarDecompositionIsTheSvdsRotation) {
     EXPECT_NEAR(p.R.determinant(), 1.0, 1e-14) << trial;
     EXPECT_LT((p.R * p.S - F).norm(), 1e-14 * F.norm()) << trial;
     EXPECT_EQ(p.S, p.S.transpose()) << trial;
+  }
+}
+
+// nearest_unit_volume (projective dynamics' volume constraint): T has
+// J = 1, and it is the nearest such matrix: F - T is normal to the set at
+// T, i.e. parallel to dJ/dF at T (Lagrange), for 3 x 3, 2 x 2 and 3 x 2 F
+// stretched or compressed by up to 40 %; a matrix already on the set is its
+// own projection, and the result of a 30 % stretch is closer to F than the
+// uniformly scaled F / J^(1/k), another point of the set.
+TEST(Materials, NearestUnitVolumeIsTheNearestMatrixOfUnitJ) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const auto& [d, k] : std::vector<std::pair<int, int>>{{3, 3}, {2, 2}, {3, 2}}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      Mat F = Mat::Identity(d, k);
+      for (int r = 0; r < d; ++r)
+        for (int c = 0; c < k; ++c) F(r, c) += 0.4 * u(rng);
+      if (!(volume(F).J > 0.05)) continue;
+      const Mat T = nearest_unit_volume(F);
+      const Volume v = volume(T);
+      EXPECT_NEAR(v.J, 1.0, 1e-12) << d << "x" << k << " trial " << trial;
+      const Mat N = F - T;
+      const double m = contract(N, v.g) / contract(v.g, v.g);
+      EXPECT_LT((N - m * v.g).norm(), 1e-10 * std::max(1.0, N.norm()))
+          << d << "x" << k << " trial " << trial << ", J(F) " << volume(F).J;
+      EXPECT_LT((nearest_unit_volume(T) - T).norm(), 1e-12) << d << "x" << k;
+      const Mat scaled = F / std::pow(volume(F).J, 1.0 / k);
+      EXPECT_LE((F - T).norm(), (F - scaled).norm() + 1e-14) << d << "x" << k;
+    }
   }
 }
 

@@ -146,6 +146,51 @@ Polar polar(const Mat& F) {
   return p;
 }
 
+Mat nearest_unit_volume(const Mat& F) {
+  const double J = volume(F).J;
+  if (!(J > 0.0)) return polar(F).R;
+  const Eigen::JacobiSVD<Mat> svd(F, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Mat& U = svd.matrixU();
+  const Mat& V = svd.matrixV();
+  const Eigen::VectorXd s = svd.singularValues();
+  // A square F of J > 0 has det(U V^T) = 1: U diag(s*) V^T keeps J > 0.
+  const Eigen::Index k = s.size();
+  const double s_min = s.minCoeff();
+  Eigen::VectorXd star(k);
+  const auto at = [&](double m, double& g, double& dg) {  // g(m), g'(m)
+    g = 0.0;
+    dg = 0.0;
+    for (Eigen::Index i = 0; i < k; ++i) {
+      const double r = std::sqrt(std::max(0.0, s[i] * s[i] - 4.0 * m));
+      star[i] = 0.5 * (s[i] + r);
+      g += std::log(star[i]);
+      dg -= 1.0 / (r * star[i]);
+    }
+  };
+  // g(0) = ln J. For J > 1 the root lies in (0, s_min^2 / 4]; for J < 1 in
+  // [-1, 0) (at m = -1 every s*_i >= 1, so g >= 0).
+  double lo = J > 1.0 ? 0.0 : -1.0, hi = J > 1.0 ? 0.25 * s_min * s_min : 0.0;
+  double g = 0.0, dg = 0.0;
+  if (J > 1.0) {
+    at(hi, g, dg);
+    if (g > 0.0) {  // no root on this branch
+      return F / std::pow(J, 1.0 / static_cast<double>(k));
+    }
+  }
+  double m = 0.0;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    at(m, g, dg);
+    if (std::abs(g) <= 1e-15 * static_cast<double>(k)) break;
+    if (g > 0.0) lo = m; else hi = m;  // g decreases in m
+    double next = m - g / dg;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // Newton left the bracket
+    if (next == m) break;
+    m = next;
+  }
+  at(m, g, dg);
+  return U * star.asDiagonal() * V.transpose();
+}
+
 Mat polar_differential(const Polar& p, const Mat& F, const Mat& dF) {
   if (F.rows() == F.cols()) {
     // F = R S with W = R^T dR skew and dS symmetric gives

@@ -50,6 +50,20 @@ struct Polar3 {
 };
 Polar3 polar3(const Eigen::Matrix3d& F);
 
+// The nearest matrix to F (Frobenius norm) whose J is 1: the volume
+// constraint set of projective dynamics (Bouaziz et al., "Projective
+// dynamics: fusing constraint projections for fast simulation", ACM TOG
+// 2014, sec. 5). With F = U diag(s) V^T (an SVD; for a membrane U is 3 x 2),
+// T = U diag(s*) V^T where s* minimizes |s - s*|^2 subject to prod s* = 1;
+// its Lagrange conditions s_i - s*_i = m prod_{j != i} s*_j = m / s*_i give
+//   s*_i = (s_i + sqrt(s_i^2 - 4 m)) / 2
+// for one scalar m, the root of sum_i ln s*_i(m) = 0 (decreasing in m),
+// found by Newton's method kept inside a bracket. Where no such m exists
+// (every s_i above 2: a volume grown eightfold) T = F / J^(1/k), and an
+// inverted or flattened element (J <= 0) is projected onto its rotation
+// polar(F).R, a point of the set but not the nearest.
+Mat nearest_unit_volume(const Mat& F);
+
 // volume() and polar() of a 3 x 3 F with fixed sizes, so that a material's
 // P, written once as a template on the matrix type, also has a fixed-size
 // instance (MaterialModel::P3).
