@@ -149,23 +149,35 @@ Polar polar(const Mat& F) {
 Mat nearest_unit_volume(const Mat& F) {
   const double J = volume(F).J;
   if (!(J > 0.0)) return polar(F).R;
-  const Eigen::JacobiSVD<Mat> svd(F, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Mat& U = svd.matrixU();
-  const Mat& V = svd.matrixV();
-  const Eigen::VectorXd s = svd.singularValues();
-  // A square F of J > 0 has det(U V^T) = 1: U diag(s*) V^T keeps J > 0.
+  // The SVD F = U diag(s) V^T from the eigen decomposition
+  // C = F^T F = V diag(s^2) V^T (k x k, closed form): U diag(s*) V^T =
+  // F V diag(s* / s) V^T, no U needed (J > 0: every s_i > 0).
+  Mat V;
+  Eigen::VectorXd s;
+  if (F.cols() == 3) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(Eigen::Matrix3d(F.transpose() * F));
+    V = eig.eigenvectors();
+    s = eig.eigenvalues().cwiseSqrt();
+  } else {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
+    eig.computeDirect(Eigen::Matrix2d(F.transpose() * F));
+    V = eig.eigenvectors();
+    s = eig.eigenvalues().cwiseSqrt();
+  }
   const Eigen::Index k = s.size();
   const double s_min = s.minCoeff();
   Eigen::VectorXd star(k);
   const auto at = [&](double m, double& g, double& dg) {  // g(m), g'(m)
-    g = 0.0;
+    double product = 1.0;
     dg = 0.0;
     for (Eigen::Index i = 0; i < k; ++i) {
       const double r = std::sqrt(std::max(0.0, s[i] * s[i] - 4.0 * m));
       star[i] = 0.5 * (s[i] + r);
-      g += std::log(star[i]);
+      product *= star[i];
       dg -= 1.0 / (r * star[i]);
     }
+    g = std::log(product);
   };
   // g(0) = ln J. For J > 1 the root lies in (0, s_min^2 / 4]; for J < 1 in
   // [-1, 0) (at m = -1 every s*_i >= 1, so g >= 0).
@@ -188,7 +200,7 @@ Mat nearest_unit_volume(const Mat& F) {
     m = next;
   }
   at(m, g, dg);
-  return U * star.asDiagonal() * V.transpose();
+  return F * (V * star.cwiseQuotient(s).asDiagonal() * V.transpose());
 }
 
 Mat polar_differential(const Polar& p, const Mat& F, const Mat& dF) {
