@@ -14,7 +14,8 @@ SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constra
                                   Eigen::Index particles) {
   std::vector<Eigen::Triplet<double>> entries;
   for (const ProjectiveElement& e : elements) {
-    const Eigen::MatrixXd GGt = e.weight * e.G * e.G.transpose();
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 4> GGt =
+        e.weight * e.G * e.G.transpose();
     for (std::size_t i = 0; i < e.nodes.size(); ++i) {
       for (std::size_t j = 0; j < e.nodes.size(); ++j) {
         if (e.nodes[i] >= 0 && e.nodes[j] >= 0) {

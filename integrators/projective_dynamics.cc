@@ -127,14 +127,16 @@ StepResult ProjectiveDynamics::do_step(double h) {
     // (g_i . g_j) x_j) to free node i.
     for (const ProjectiveElement& e : elements_) {
       const Eigen::Index k = e.G.cols();
-      Eigen::MatrixXd F = Eigen::MatrixXd::Zero(dim_, k);
+      ProjectiveElement::Deformation F = ProjectiveElement::Deformation::Zero(dim_, k);
       for (std::size_t j = 0; j < e.nodes.size(); ++j) {
         for (int r = 0; r < dim_; ++r) {
           const double xr = e.nodes[j] >= 0 ? x_new_[e.nodes[j] * dim_ + r] : e.fixed[j][r];
           F.row(r) += xr * e.G.row(static_cast<Eigen::Index>(j));
         }
       }
-      const Eigen::MatrixXd TGt = e.project(F) * e.G.transpose();  // column i: T g_i
+      // Column i: T g_i.
+      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 4> TGt =
+          e.project(F) * e.G.transpose();
       const double w = h * h * e.weight;
       for (std::size_t i = 0; i < e.nodes.size(); ++i) {
         if (e.nodes[i] < 0) continue;

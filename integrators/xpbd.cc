@@ -74,7 +74,7 @@ void Xpbd::project_elements(double hs) {
   for (std::size_t k = 0; k < elements_.size(); ++k) {
     const ProjectiveElement& e = elements_[k];
     const Eigen::Index nodes = static_cast<Eigen::Index>(e.nodes.size());
-    Eigen::MatrixXd F = Eigen::MatrixXd::Zero(dim_, e.G.cols());
+    ProjectiveElement::Deformation F = ProjectiveElement::Deformation::Zero(dim_, e.G.cols());
     for (Eigen::Index j = 0; j < nodes; ++j) {
       const int p = e.nodes[static_cast<std::size_t>(j)];
       for (int r = 0; r < dim_; ++r) {
@@ -82,10 +82,12 @@ void Xpbd::project_elements(double hs) {
                     e.G.row(j);
       }
     }
-    const Eigen::MatrixXd D = F - e.project(F);
+    const ProjectiveElement::Deformation D = F - e.project(F);
     const double C = D.norm();
     if (!(C > 0.0)) continue;  // on the set: no direction
-    const Eigen::MatrixXd grad = D * e.G.transpose() / C;  // column i: grad_i C
+    // Column i: grad_i C.
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 4> grad =
+        D * e.G.transpose() / C;
     double denominator = 1.0 / (e.weight * hs * hs);       // a~
     const double compliance = denominator;
     for (Eigen::Index i = 0; i < nodes; ++i) {

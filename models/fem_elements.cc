@@ -178,10 +178,7 @@ void give_rest_positions(Scene& scene, std::mt19937& rng, RandomStates states) {
 
 namespace {
 
-Eigen::MatrixXd nearest_rotation(const Eigen::MatrixXd& F) { return polar(Mat(F)).R; }
-Eigen::MatrixXd nearest_unit_volume_matrix(const Eigen::MatrixXd& F) {
-  return nearest_unit_volume(Mat(F));
-}
+Mat nearest_rotation(const Mat& F) { return polar(F).R; }
 
 }  // namespace
 
@@ -236,7 +233,7 @@ bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
       mine.push_back({.nodes = std::move(s.nodes),
                       .G = std::move(s.G),
                       .weight = volume_weight,
-                      .project = nearest_unit_volume_matrix});
+                      .project = nearest_unit_volume});
     }
   }
   out.insert(out.end(), mine.begin(), mine.end());

@@ -67,14 +67,18 @@ struct PlaneConstraint {
 // constraint). Its global matrix gets w g_i . g_j
 // for nodes i, j (the same for every coordinate); its local step is
 // project(F). A fixed node has index -1 and its place in `fixed`.
+// (Its matrices have at most 4 nodes and 3 x 3 entries: on the stack, so
+// the fast solvers' local steps allocate nothing.)
 struct ProjectiveElement {
+  using Gradients = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 3>;
+  using Deformation = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
   std::vector<int> nodes;               // internal indices; -1: a fixed node
   std::vector<Eigen::Vector3d> fixed;   // each node's position where fixed
-  Eigen::MatrixXd G;                    // nodes x k, rows g_j
+  Gradients G;                          // nodes x k, rows g_j
   double weight = 0.0;                  // w
   // The projection, dim x k (models/materials/kinematics.h: polar's R,
   // nearest_unit_volume).
-  Eigen::MatrixXd (*project)(const Eigen::MatrixXd& F) = nullptr;
+  Deformation (*project)(const Deformation& F) = nullptr;
 };
 
 class MechanicalSystem {

@@ -158,7 +158,7 @@ double projective_energy(const std::vector<ProjectiveElement>& elements, int dim
                          const Vector& x) {
   double sum = 0.0;
   for (const ProjectiveElement& e : elements) {
-    Eigen::MatrixXd F = Eigen::MatrixXd::Zero(dim, e.G.cols());
+    ProjectiveElement::Deformation F = ProjectiveElement::Deformation::Zero(dim, e.G.cols());
     for (std::size_t j = 0; j < e.nodes.size(); ++j) {
       for (int r = 0; r < dim; ++r) {
         const double xr = e.nodes[j] >= 0 ? x[e.nodes[j] * dim + r] : e.fixed[j][r];
