@@ -152,6 +152,16 @@ std::vector<Scene> volume_element_scenes() {
   };
 }
 
+// The system's projective elements (none, with a failure, if it has no
+// projective form).
+std::vector<ProjectiveElement> projective_elements(const ElasticModel& model) {
+  std::vector<DistanceConstraint> constraints;
+  std::vector<ProjectiveElement> elements;
+  std::string why;
+  EXPECT_TRUE(model.projective_form(constraints, elements, why)) << why;
+  return elements;
+}
+
 // The projective form's energy sum_e w/2 |F_e - P(F_e)|^2 at x (free
 // degrees of freedom; fixed nodes at their places).
 double projective_energy(const std::vector<ProjectiveElement>& elements, int dim,
@@ -185,10 +195,8 @@ TEST(FastSolvers, CorotatedsProjectiveFormHasItsStiffnessAtRest) {
     SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
                  std::to_string(scene.particles.size()) + " particles");
     const ElasticModel model(scene);
-    std::vector<DistanceConstraint> constraints;
-    std::vector<ProjectiveElement> elements;
-    std::string why;
-    ASSERT_TRUE(model.projective_form(constraints, elements, why)) << why;
+    const std::vector<ProjectiveElement> elements = projective_elements(model);
+    ASSERT_FALSE(elements.empty());
     const int dim = scene.dimension;
     const Vector X = model.initial_positions(), v = model.initial_velocities();
     const double elastic_at_rest = model.energies(X, v)["elastic"];
@@ -236,10 +244,8 @@ TEST(FastSolvers, ProjectiveDynamicsSolvesCorotatedsVolumeForm) {
     SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
                  std::to_string(scene.particles.size()) + " particles");
     const ElasticModel model(scene);
-    std::vector<DistanceConstraint> constraints;
-    std::vector<ProjectiveElement> elements;
-    std::string why;
-    ASSERT_TRUE(model.projective_form(constraints, elements, why)) << why;
+    const std::vector<ProjectiveElement> elements = projective_elements(model);
+    ASSERT_FALSE(elements.empty());
     const int dim = scene.dimension;
     const Vector x0 = model.initial_positions(), v0 = model.initial_velocities();
     const auto Phi = [&](const Vector& x) {
