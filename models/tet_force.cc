@@ -158,12 +158,13 @@ class TetrahedronForce final : public ElementTerm {
                             double* values) {
     const Tangent3 B = tangent_blocks3(*t.model, deformation(c, t), t.Dw, t.lame);
     // Rows 3 (i - 1) .. of S: S_i.
-    const Eigen::Matrix<double, 9, 3> S = B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
+    const Eigen::Matrix<double, 9, 3> S =
+        B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
     const Eigen::Matrix3d S_sum = S.middleRows<3>(0) + S.middleRows<3>(3) + S.middleRows<3>(6);
-    // Adds sign * (u, v, w), column s of a block, to block (i, j).
     // All four nodes free (each has its diagonal block, slot 15 k): no slot is
     // -1, and the adds below need no test.
     const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
+    // Adds sign * (u, v, w), column s of a block, to block (i, j).
     const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
       const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
       if (!all_free && offset < 0) return;

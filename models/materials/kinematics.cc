@@ -152,8 +152,9 @@ Mat nearest_unit_volume(const Mat& F) {
   // The SVD F = U diag(s) V^T from the eigen decomposition
   // C = F^T F = V diag(s^2) V^T (k x k, closed form): U diag(s*) V^T =
   // F V diag(s* / s) V^T, no U needed (J > 0: every s_i > 0).
+  using Values = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;  // on the stack
   Mat V;
-  Eigen::VectorXd s;
+  Values s;
   if (F.cols() == 3) {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(Eigen::Matrix3d(F.transpose() * F));
@@ -167,7 +168,7 @@ Mat nearest_unit_volume(const Mat& F) {
   }
   const Eigen::Index k = s.size();
   const double s_min = s.minCoeff();
-  Eigen::VectorXd star(k);
+  Values star(k);
   const auto at = [&](double m, double& g, double& dg) {  // g(m), g'(m)
     double product = 1.0;
     dg = 0.0;
