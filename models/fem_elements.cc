@@ -223,9 +223,11 @@ bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
       why = message.str();
       return false;
     }
-    // The volume term's weight: near F = I the distance of F to the set
-    // J = 1 is |tr E| / sqrt(k) (E = F - I, k the columns of F), so
-    // w/2 dist^2 = W lambda/2 (J - 1)^2 to second order with w = k lambda W.
+    // The volume term's weight: near rest (F = I, or orthonormal columns
+    // for a membrane) the distance of F to the set J = 1 is |J - 1| / sqrt(k)
+    // to first order (k the columns of F: the set's normal there is the
+    // rest F / sqrt(k)), so w/2 dist^2 = W lambda/2 (J - 1)^2 to second
+    // order with w = k lambda W.
     const double volume_weight = static_cast<double>(s.G.cols()) * s.lame.lambda * s.W;
     mine.push_back(
         {.nodes = s.nodes, .G = s.G, .weight = 2.0 * s.lame.mu * s.W, .project = nearest_rotation});
