@@ -234,8 +234,8 @@ TEST(Materials, PolarDecompositionIsTheSvdsRotation) {
 // J = 1, and it is the nearest such matrix: F - T is normal to the set at
 // T, i.e. parallel to dJ/dF at T (Lagrange), for 3 x 3, 2 x 2 and 3 x 2 F
 // stretched or compressed by up to 40 %; a matrix already on the set is its
-// own projection, and the result of a 30 % stretch is closer to F than the
-// uniformly scaled F / J^(1/k), another point of the set.
+// own projection, and T is no farther from F than the uniformly scaled
+// F / J^(1/k), another point of the set.
 TEST(Materials, NearestUnitVolumeIsTheNearestMatrixOfUnitJ) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

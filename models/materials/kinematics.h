@@ -59,9 +59,11 @@ Polar3 polar3(const Eigen::Matrix3d& F);
 //   s*_i = (s_i + sqrt(s_i^2 - 4 m)) / 2
 // for one scalar m, the root of sum_i ln s*_i(m) = 0 (decreasing in m),
 // found by Newton's method kept inside a bracket. Where no such m exists
-// (every s_i above 2: a volume grown eightfold) T = F / J^(1/k), and an
-// inverted or flattened element (J <= 0) is projected onto its rotation
-// polar(F).R, a point of the set but not the nearest.
+// (a large growth: at the bracket's end m = s_min^2 / 4, where
+// s*_min = s_min / 2, the product still exceeds 1, as when every s_i
+// exceeds 2) T = F / J^(1/k), and an inverted or flattened element
+// (J <= 0) is projected onto its rotation polar(F).R, a point of the set
+// but not the nearest.
 Mat nearest_unit_volume(const Mat& F);
 
 // volume() and polar() of a 3 x 3 F with fixed sizes, so that a material's
