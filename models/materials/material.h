@@ -60,6 +60,8 @@ struct MaterialModel {
   // "constitutive component" of the element's tangent matrix, Bonet and
   // Wood 2008), in closed form. nullptr: contracted from dPdF. The shared
   // tests check it against the contraction of the dPdF assembled from dP.
+  // Any three rows serve (the blocks are bilinear in them): tet_force.cc
+  // passes Dm^-1 scaled by sqrt(W), which scales the blocks by W.
   Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
                               const Lame& m) = nullptr;
 };
