@@ -344,7 +344,9 @@ TEST(FiniteElements, TetrahedralCantileverModeAndSagApproachBeamTheory) {
   // mesh is not yet within 5 %).
   for (std::size_t k = 0; k < sag_errors.size(); ++k) {
     EXPECT_LT(sag_errors[k], 0.0) << "mesh " << k;
-    if (k > 0) EXPECT_LT(std::abs(sag_errors[k]), 0.5 * std::abs(sag_errors[k - 1])) << "mesh " << k;
+    if (k > 0) {
+      EXPECT_LT(std::abs(sag_errors[k]), 0.5 * std::abs(sag_errors[k - 1])) << "mesh " << k;
+    }
   }
 }
 
