@@ -195,7 +195,7 @@ class ImplicitIntegrator : public Integrator {
     int dim = 0;
     SparseMatrix laplacian;
     Vector particle_mass;
-    SparseDirectSolver factor;
+    SparseDirectSolver factor{FactorUse::kSolvedOften};
     double factored_h = 0.0;
     std::vector<Vector> s, y;  // the last updates and gradient changes
     std::vector<double> rho;   // 1 / (y . s)

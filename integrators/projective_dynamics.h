@@ -73,7 +73,7 @@ class ProjectiveDynamics final : public FastSolver {
   std::vector<ContactPair> contacts_;
 
   SparseMatrix laplacian_;  // L, free particles x free particles
-  SparseDirectSolver solver_;
+  SparseDirectSolver solver_{FactorUse::kSolvedOften};
   double factored_h_ = 0.0;
   Vector f_, y_, x_new_, rhs_;
   Eigen::MatrixXd columns_, solved_;  // n x dim: one coordinate per column

@@ -51,9 +51,14 @@ struct SparseDirectSolver::Cholmod {
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
 
-  Cholmod() {
+  explicit Cholmod(FactorUse use) {
     cholmod_start(&common);
-    common.supernodal = CHOLMOD_SUPERNODAL;
+    if (use == FactorUse::kSolvedOften) {
+      common.supernodal = CHOLMOD_SIMPLICIAL;
+      common.final_ll = 1;  // LL^T, not CHOLMOD's default simplicial LDL^T
+    } else {
+      common.supernodal = CHOLMOD_SUPERNODAL;
+    }
     // One ordering, AMD: on these meshes it fills L about as little as
     // METIS's nested dissection (cloth 64: 1.77 M vs 1.91 M nonzeros) and
     // its analysis costs a fraction of METIS's; tried alone, not the
@@ -100,7 +105,7 @@ cholmod_sparse view_lower(const SparseMatrix& a) {
 
 }  // namespace
 
-SparseDirectSolver::SparseDirectSolver() : cholmod_(std::make_unique<Cholmod>()) {
+SparseDirectSolver::SparseDirectSolver(FactorUse use) : cholmod_(std::make_unique<Cholmod>(use)) {
   set_blas_threads_once();
 }
 
@@ -130,7 +135,7 @@ bool SparseDirectSolver::factorize_cholesky(const SparseMatrix& a) {
     cholmod_->factor = cholmod_analyze(&view, &c);
     if (cholmod_->factor == nullptr) return false;  // out of memory or too large: LDL^T
   }
-  // Supernodal: ok only when every pivot is positive (status CHOLMOD_OK);
+  // LL^T: ok only when every pivot is positive (status CHOLMOD_OK);
   // CHOLMOD_NOT_POSDEF leaves the factor incomplete.
   if (!cholmod_factorize(&view, cholmod_->factor, &c) || c.status != CHOLMOD_OK) return false;
   method_ = Method::kCholesky;

@@ -4,9 +4,10 @@
 // numeric factorization is repeated. Three kinds of matrix, three methods:
 //   - kPositiveDefinite (the Newton matrix made of the definite part of the
 //     Jacobians, M - h c D - h^2 b K~ with K~ negative semidefinite):
-//     CHOLMOD's supernodal LL^T (SuiteSparse), whose dense blocks run in
-//     BLAS (OpenBLAS): ~4 x faster than a simplicial LDL^T on cloth 64 and
-//     ~8 x on cloth 128 (benchmarks/README.md). Only such a factor may
+//     CHOLMOD's LL^T (SuiteSparse). Supernodal for a factor made often,
+//     its dense blocks in BLAS (OpenBLAS): ~4 x faster than a simplicial
+//     LDL^T on cloth 64 and ~8 x on cloth 128 (benchmarks/README.md);
+//     simplicial for one solved often (FactorUse below). Only such a factor may
 //     precondition conjugate gradients (it is symmetric positive definite).
 //     A matrix that turns out not to be positive definite after all is
 //     factored as kSymmetric instead;
@@ -39,9 +40,21 @@ namespace springlab {
 
 enum class MatrixKind { kPositiveDefinite, kSymmetric, kGeneral };
 
+// How a positive definite factor is used, which picks CHOLMOD's layout:
+//   - kRefactoredOften (Newton: a new factor every iteration or step, a few
+//     solves each): supernodal, the factorization in dense BLAS blocks;
+//   - kSolvedOften (projective dynamics' and quasi-Newton's M + h^2 L: one
+//     factor per step size, two to three solves of three right-hand sides
+//     per iteration): simplicial LL^T, whose triangular solves run
+//     column by column without BLAS calls per supernode. On cloth 64 at
+//     1/60 over 2 s (an n_particles x n_particles Laplacian), measured in
+//     one binary: quasi-Newton at 1e-3 m/s 44.6 -> 36.6 ms per step,
+//     projective dynamics 7.0 -> 5.7 ms; cloth 128's 34 -> 31 ms.
+enum class FactorUse { kRefactoredOften, kSolvedOften };
+
 class SparseDirectSolver {
  public:
-  SparseDirectSolver();
+  explicit SparseDirectSolver(FactorUse use = FactorUse::kRefactoredOften);
   ~SparseDirectSolver();
   SparseDirectSolver(const SparseDirectSolver&) = delete;
   SparseDirectSolver& operator=(const SparseDirectSolver&) = delete;
