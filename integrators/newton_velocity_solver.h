@@ -199,7 +199,7 @@ class ImplicitIntegrator : public Integrator {
     double factored_h = 0.0;
     std::vector<Vector> s, y;  // the last updates and gradient changes
     std::vector<double> rho;   // 1 / (y . s)
-    Vector q, z, v_try, r_try, d;
+    Vector q, z, v_try, r_try, v_long, r_long, d;
     Eigen::MatrixXd columns, solved;  // n x dim: one coordinate per column
   } qn_;
 };

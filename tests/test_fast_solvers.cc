@@ -415,6 +415,40 @@ TEST(QuasiNewton, OneIterationOnALinearSpring) {
   EXPECT_EQ(r.stats.newton_iterations, 2);
 }
 
+// The search's extrapolation (quasi_newton.cc) puts the step at the secant
+// a* of the slope along d, the exact minimum on the line when Phi is
+// quadratic. One tetrahedron of linear material (poisson 0: lambda = 0,
+// mu = E / 2) with three fixed nodes in the plane x = 0 and its free node
+// at (L, 0, 0) falls under gravity across its gradient g = (1/L, 0, 0).
+// Across g its stiffness is mu W |g|^2, half of what H0's Laplacian weight
+// (lambda + 2 mu) W |g|^2 gives it, and the first direction is along
+// gravity, an eigenvector of Phi's Hessian M + h^2 K: there
+//   a* = (m + h^2 2 mu W / L^2) / (m + h^2 mu W / L^2) = 5/3  (m = rho W / 4),
+// so the first iteration solves the step and the second confirms it. The
+// full step alone would leave L-BFGS a second update to make (three
+// iterations).
+TEST(QuasiNewton, ExtrapolationLandsOnTheMinimumOfAQuadraticStep) {
+  const std::string text = R"({"dimension": 3, "gravity": [0, -9.81, 0],
+      "materials": {"m": {"model": "linear", "young": 1e5, "poisson": 0, "density": 1000}},
+      "particles": [{"x": [0, 0, 0], "fixed": true}, {"x": [0, 1, 0], "fixed": true},
+                    {"x": [0, 0, 1], "fixed": true}, {"x": [0.1, 0, 0]}],
+      "springs": [], "tetrahedra": [{"nodes": [0, 1, 2, 3], "material": "m"}]})";
+  const ElasticModel tet(parse_scene(text, "tet.json"));
+  RunSettings s;
+  s.integrator = "implicit-euler";
+  s.dt = 0.01;  // h^2 mu W / L^2 = 500 W, m = 250 W: a* = 1250 / 750
+  s.t_end = 0.01;
+  s.options.newton_tol = 1e-12;
+  const RunResult newton = simulate(tet, s);
+  s.options.solver = Solver::kQuasiNewton;
+  const RunResult quasi = simulate(tet, s);
+  ASSERT_EQ(newton.status, RunStatus::kCompleted) << newton.failure;
+  ASSERT_EQ(quasi.status, RunStatus::kCompleted) << quasi.failure;
+  EXPECT_EQ(quasi.stats.newton_iterations, 2);
+  EXPECT_LT((quasi.v_final - newton.v_final).lpNorm<Eigen::Infinity>(),
+            1e-12 * newton.v_final.lpNorm<Eigen::Infinity>());
+}
+
 // Finite elements of any material: the initial Hessian's Laplacian has the
 // weights (lambda + 2 mu) W, and L-BFGS minimizes the true potential, so
 // half a second of the neo-Hookean beam (2-D triangles, 3-D tetrahedra)
