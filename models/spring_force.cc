@@ -184,6 +184,24 @@ class SpringForce final : public ForceTerm {
   }
 
  private:
+  // The springs first .. first + m - 1 (j from 0): d_j = x_a - x_b and
+  // l2_j = |d_j|^2.
+  template <int D>
+  void gather(const Configuration& c, int first, int m, double (&d)[D][kBlock],
+              double* l2) const {
+    const auto* ends = ends_.data() + first;
+    for (int j = 0; j < m; ++j) {
+      const double* xa = c.x + ends[j].a;
+      const double* xb = c.x + ends[j].b;
+      double sum = 0.0;
+      for (int r = 0; r < D; ++r) {
+        d[r][j] = xa[r] - xb[r];
+        sum += d[r][j] * d[r][j];
+      }
+      l2[j] = sum;
+    }
+  }
+
   // The cost of a force evaluation is the square root and the division per
   // spring (the divider is the bottleneck) and the loads and stores of f,
   // so each block of springs runs in three loops: gather d = x_a - x_b, then
@@ -201,16 +219,7 @@ class SpringForce final : public ForceTerm {
     for (int first = 0; first < count; first += kBlock) {
       const int m = std::min(kBlock, count - first);
       const Ends* ends = ends_.data() + first;
-      for (int j = 0; j < m; ++j) {
-        const double* xa = c.x + ends[j].a;
-        const double* xb = c.x + ends[j].b;
-        double sum = 0.0;
-        for (int r = 0; r < D; ++r) {
-          d[r][j] = xa[r] - xb[r];
-          sum += d[r][j] * d[r][j];
-        }
-        l2[j] = sum;
-      }
+      gather<D>(c, first, m, d, l2);
       // F_i = -k (l - L) d / l = -k (1 - L/l) d; with L = 0 exactly -k d.
       // A spring of zero length (d = 0) gets scale 0 below, not 0 * inf.
       scale_kernel_(k_.data() + first, rest_.data() + first, l2, scale, m);
@@ -243,16 +252,10 @@ class SpringForce final : public ForceTerm {
     alignas(64) double l2[kBlock];
     double energy = 0.0;
     const int count = static_cast<int>(ends_.size());
+    alignas(64) double d[D][kBlock];
     for (int first = 0; first < count; first += kBlock) {
       const int m = std::min(kBlock, count - first);
-      const Ends* ends = ends_.data() + first;
-      for (int j = 0; j < m; ++j) {
-        const double* xa = c.x + ends[j].a;
-        const double* xb = c.x + ends[j].b;
-        double sum = 0.0;
-        for (int r = 0; r < D; ++r) sum += (xa[r] - xb[r]) * (xa[r] - xb[r]);
-        l2[j] = sum;
-      }
+      gather<D>(c, first, m, d, l2);
       using Map = Eigen::Map<const Eigen::ArrayXd>;
       energy += 0.5 * (Map(k_.data() + first, m) *
                        (Map(l2, m).sqrt() - Map(rest_.data() + first, m)).square())
