@@ -44,12 +44,12 @@ enum class MatrixKind { kPositiveDefinite, kSymmetric, kGeneral };
 //   - kRefactoredOften (Newton: a new factor every iteration or step, a few
 //     solves each): supernodal, the factorization in dense BLAS blocks;
 //   - kSolvedOften (projective dynamics' and quasi-Newton's M + h^2 L: one
-//     factor per step size, two to three solves of three right-hand sides
-//     per iteration): simplicial LL^T, whose triangular solves run
-//     column by column without BLAS calls per supernode. On cloth 64 at
-//     1/60 over 2 s (an n_particles x n_particles Laplacian), measured in
-//     one binary: quasi-Newton at 1e-3 m/s 44.6 -> 36.6 ms per step,
-//     projective dynamics 7.0 -> 5.7 ms; cloth 128's 34 -> 31 ms.
+//     factor per step size, one solve of three right-hand sides per
+//     iteration): simplicial LL^T, whose triangular solves run column by
+//     column without a BLAS call per supernode. Measured in one binary at
+//     1/60 over 2 s (an n_particles x n_particles Laplacian): quasi-Newton
+//     at 1e-3 m/s on cloth 64 44.6 -> 36.6 ms per step, projective
+//     dynamics 7.0 -> 5.7 ms on cloth 64 and 34 -> 31 ms on cloth 128.
 enum class FactorUse { kRefactoredOften, kSolvedOften };
 
 class SparseDirectSolver {
