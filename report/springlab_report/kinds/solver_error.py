@@ -182,12 +182,16 @@ def case_figure(exp, ctx, db, rows, case, integ):
             ys = [max(e[col], FLOOR) for e in members]
             ax.plot(xs, ys, ms=7, mfc="none", mew=1.4, lw=1.1, label=fam, **style)
             for e, x, y in zip(members, xs, ys):
-                # Points crowding the dashed line are left unlabelled.
+                # Points crowding the dashed line are left unlabelled. Labels
+                # take their method's colour; quasi-Newton's say "QN", as its
+                # points share Newton's colour and meet them.
                 if e["variant"] and abs(np.log10(y / disc)) > 0.25:
-                    ax.annotate(e["variant"].replace("newton-tol ", "tol ").replace(
-                        "; quasi-newton", "").replace("iterations ", "N=").replace(
-                        "substeps ", "S="), (x, y),
-                        textcoords="offset points", xytext=(4, 3), fontsize=6.5, color="0.3")
+                    text = e["variant"].replace("newton-tol ", "tol ").replace(
+                        "iterations ", "N=").replace("substeps ", "S=")
+                    if text.endswith("; quasi-newton"):
+                        text = "QN " + text[:-len("; quasi-newton")]
+                    ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 3),
+                                fontsize=6.5, color=style["color"])
         ax.axhline(disc, color="0.35", lw=1.2, ls="--")
         ax.text(0.99, disc, "implicit Euler's discretization error per step ", va="top",
                 ha="right", fontsize=7.5, color="0.3", transform=ax.get_yaxis_transform())
