@@ -17,10 +17,12 @@
 #include <Eigen/Dense>
 #include <array>
 #include <cmath>
+#include <cstring>  // memcmp
 #include <string>
 #include <vector>
 
 #include "models/fem_elements.h"
+#include "models/materials/kinematics.h"  // polar3
 #include "models/materials/material.h"
 
 namespace springlab {
@@ -58,8 +60,12 @@ class TetrahedronForce final : public ElementTerm {
 
   std::string_view name() const override { return name_; }
   void add_force(const Configuration& c, double* f) const override {
-    for (const Tet& t : tets_) {
-      const Eigen::Matrix3d P = P3(*t.model, deformation(c, t), t.lame);
+    for (std::size_t e = 0; e < tets_.size(); ++e) {
+      const Tet& t = tets_[e];
+      const Eigen::Matrix3d F = deformation(c, t);
+      const Eigen::Matrix3d P = t.model->P3_of_polar != nullptr
+                                    ? t.model->P3_of_polar(F, polar_of(e, F), t.lame)
+                                    : P3(*t.model, F, t.lame);
       const Eigen::Matrix3d H = P * t.minus_WDt;  // columns f_1, f_2, f_3
       node(f, t, 0) -= H.rowwise().sum();
       for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
@@ -95,13 +101,13 @@ class TetrahedronForce final : public ElementTerm {
 
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx == nullptr) return;
-    for (std::size_t e = 0; e < tets_.size(); ++e) add_stiffness(c, tets_[e], slots_[e], dfdx);
+    for (std::size_t e = 0; e < tets_.size(); ++e) add_stiffness(c, e, slots_[e], dfdx);
   }
 
   void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
     for (std::size_t e = 0; e < tets_.size(); ++e) {
       Matrix12 K = Matrix12::Zero();
-      add_stiffness(c, tets_[e], dense_slots(), K.data());
+      add_stiffness(c, e, dense_slots(), K.data());
       make_definite(K);
       scatter(slots_[e], K, dfdx);
     }
@@ -154,9 +160,13 @@ class TetrahedronForce final : public ElementTerm {
   // with no 9 x 9 product: K_ij = -B_ij for nodes 1..3, and node 0's blocks
   // are K_i0 = -sum_j K_ij = S_i (S_i = sum_j B_ij), K_0i = K_i0^T (K is
   // symmetric) and K_00 = -sum_i K_i0 = -sum_i S_i.
-  static void add_stiffness(const Configuration& c, const Tet& t, const Slots& slots,
-                            double* values) {
-    const Tangent3 B = tangent_blocks3(*t.model, deformation(c, t), t.Dw, t.lame);
+  void add_stiffness(const Configuration& c, std::size_t e, const Slots& slots,
+                     double* values) const {
+    const Tet& t = tets_[e];
+    const Eigen::Matrix3d F = deformation(c, t);
+    const Tangent3 B = t.model->tangent_blocks3_of_polar != nullptr
+                           ? t.model->tangent_blocks3_of_polar(F, polar_of(e, F), t.Dw, t.lame)
+                           : tangent_blocks3(*t.model, F, t.Dw, t.lame);
     // Rows 3 (i - 1) .. of S: S_i.
     const Eigen::Matrix<double, 9, 3> S =
         B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
@@ -185,6 +195,22 @@ class TetrahedronForce final : public ElementTerm {
         for (int j = 1; j < 4; ++j) add_column(i, j, s, -1.0, B.col(3 * (j - 1) + s).data() + r);
       }
     }
+  }
+
+  // F = R S of element e's F, for a model that takes it
+  // (MaterialModel::P3_of_polar): decomposed when F differs, bit for bit,
+  // from the F of the element's last call, else kept from it. An implicit
+  // method asks for the force and then dF/dx at one state, and the pair
+  // decomposes each F once; the result is the same as decomposing it again.
+  const Polar3& polar_of(std::size_t e, const Eigen::Matrix3d& F) const {
+    if (kept_.empty()) kept_.resize(tets_.size());
+    KeptPolar& k = kept_[e];
+    if (!k.set || std::memcmp(k.F.data(), F.data(), sizeof(double) * 9) != 0) {
+      k.F = F;
+      k.p = polar3(F);
+      k.set = true;
+    }
+    return k.p;
   }
 
   // The slots of a dense 12 x 12 column-major matrix (the definite part
@@ -216,6 +242,12 @@ class TetrahedronForce final : public ElementTerm {
   int free_particles_;
   std::vector<Tet> tets_;
   std::vector<Slots> slots_;
+  struct KeptPolar {
+    Eigen::Matrix3d F;
+    Polar3 p;
+    bool set = false;
+  };
+  mutable std::vector<KeptPolar> kept_;  // per element, from its first polar_of
 };
 
 }  // namespace

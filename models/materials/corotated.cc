@@ -21,11 +21,15 @@ double Psi(const Mat& F, const Lame& m) {
   return m.mu * (F - p.R).squaredNorm() + 0.5 * m.lambda * (J - 1.0) * (J - 1.0);
 }
 
-template <typename Matrix>
-Matrix P(const Matrix& F, const Lame& m) {
-  const auto p = polar(F);
+template <typename Matrix, typename Polar>
+Matrix P_of_polar(const Matrix& F, const Polar& p, const Lame& m) {
   const auto v = volume(F);
   return 2.0 * m.mu * (F - p.R) + m.lambda * (v.J - 1.0) * v.g;
+}
+
+template <typename Matrix>
+Matrix P(const Matrix& F, const Lame& m) {
+  return P_of_polar(F, polar(F), m);
 }
 
 Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
@@ -44,8 +48,8 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 // three rank-one pieces with R [e_k]x a = -R [a]x e_k. Contracted:
 //   A(a, b) = 2 mu (a . b) I + 2 mu R [a]x M^-1 [b]x R^T
 //             + lambda (G a)(G b)^T - lambda (J - 1) [F (a x b)]x.
-Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
-  const Polar3 p = polar3(F);
+Tangent3 tangent_blocks3_of_polar(const Eigen::Matrix3d& F, const Polar3& p,
+                                  const Eigen::Matrix3d& D, const Lame& m) {
   const Eigen::Matrix3d M_inv = (p.S.trace() * Eigen::Matrix3d::Identity() - p.S).inverse();
   const double h = m.lambda * (F.determinant() - 1.0);
   const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
@@ -63,6 +67,10 @@ Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, con
   });
 }
 
+Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
+  return tangent_blocks3_of_polar(F, polar3(F), D, m);
+}
+
 }  // namespace
 
 const MaterialModel& corotated_material() {
@@ -74,6 +82,8 @@ const MaterialModel& corotated_material() {
       .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
+      .P3_of_polar = P_of_polar<Eigen::Matrix3d, Polar3>,
+      .tangent_blocks3_of_polar = tangent_blocks3_of_polar,
   };
   return model;
 }

@@ -38,6 +38,8 @@ struct Lame {
 };
 Lame lame(double young, double poisson);
 
+struct Polar3;  // F = R S of a 3 x 3 F (kinematics.h)
+
 struct MaterialModel {
   std::string_view name;  // "neo-hookean": the "model" of a scene's material
   std::string_view formula;  // Psi, for `springlab list` and the README
@@ -64,6 +66,16 @@ struct MaterialModel {
   // passes Dm^-1 scaled by sqrt(W), which scales the blocks by W.
   Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
                               const Lame& m) = nullptr;
+  // A model built on F's polar decomposition F = R S (corotated) also gives
+  // its fast path with R and S passed in, so that a tetrahedron whose force
+  // and dF/dx are evaluated at one state (an implicit method's Newton
+  // iteration) decomposes F once: tet_force.cc keeps each element's R and S
+  // from its force for its dF/dx. Its P3 and tangent_blocks3 decompose F
+  // and call these. nullptr: the model does not use R.
+  Eigen::Matrix3d (*P3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p,
+                                 const Lame& m) = nullptr;
+  Tangent3 (*tangent_blocks3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p,
+                                       const Eigen::Matrix3d& D, const Lame& m) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
