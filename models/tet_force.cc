@@ -63,7 +63,7 @@ class TetrahedronForce final : public ElementTerm {
     for (std::size_t e = 0; e < tets_.size(); ++e) {
       const Tet& t = tets_[e];
       const Eigen::Matrix3d F = deformation(c, t);
-      const Eigen::Matrix3d P = t.model->P3_of_polar != nullptr
+      const Eigen::Matrix3d P = t.model->P3_of_polar != nullptr && !kept_.empty()
                                     ? t.model->P3_of_polar(F, polar_of(e, F), t.lame)
                                     : P3(*t.model, F, t.lame);
       const Eigen::Matrix3d H = P * t.minus_WDt;  // columns f_1, f_2, f_3
@@ -202,6 +202,8 @@ class TetrahedronForce final : public ElementTerm {
   // from the F of the element's last call, else kept from it. An implicit
   // method asks for the force and then dF/dx at one state, and the pair
   // decomposes each F once; the result is the same as decomposing it again.
+  // The force keeps R and S only once dF/dx has been asked for (kept_ is
+  // then sized): an explicit method, which never asks, pays nothing.
   const Polar3& polar_of(std::size_t e, const Eigen::Matrix3d& F) const {
     if (kept_.empty()) kept_.resize(tets_.size());
     KeptPolar& k = kept_[e];
@@ -247,7 +249,7 @@ class TetrahedronForce final : public ElementTerm {
     Polar3 p;
     bool set = false;
   };
-  mutable std::vector<KeptPolar> kept_;  // per element, from its first polar_of
+  mutable std::vector<KeptPolar> kept_;  // per element, from the first dF/dx
 };
 
 }  // namespace
