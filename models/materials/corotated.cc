@@ -59,11 +59,11 @@ Tangent3 tangent_blocks3_of_polar(const Eigen::Matrix3d& F, const Polar3& p,
     const Eigen::Vector3d a = D.row(i), b = D.row(j);
     const Eigen::Matrix3d twist =
         Ra[static_cast<std::size_t>(i)] * M_inv * Ra[static_cast<std::size_t>(j)].transpose();
-    return Block3()
-        .identity(2.0 * m.mu * a.dot(b))
-        .matrix(-2.0 * m.mu, twist)
-        .outer(m.lambda, GD.col(i), GD.col(j))
-        .volume_hessian(h, F, a, b);
+    Block3 block = Block3()
+                       .identity(2.0 * m.mu * a.dot(b))
+                       .matrix(-2.0 * m.mu, twist)
+                       .outer(m.lambda, GD.col(i), GD.col(j));
+    return i == j ? block : block.volume_hessian(h, F, a, b);  // H_J(a, a) = 0 (a x a = 0)
   });
 }
 

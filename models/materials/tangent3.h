@@ -107,10 +107,8 @@ inline Tangent3 volumetric_blocks(const Eigen::Matrix3d& F, const Eigen::Matrix3
   const Eigen::Matrix3d GD = G * D.transpose();  // column i: G d_i
   return symmetric_blocks([&](int i, int j) {
     const Eigen::Vector3d a = D.row(i), b = D.row(j);
-    return Block3()
-        .identity(mu * a.dot(b))
-        .outer(c, GD.col(i), GD.col(j))
-        .volume_hessian(h, F, a, b);
+    Block3 block = Block3().identity(mu * a.dot(b)).outer(c, GD.col(i), GD.col(j));
+    return i == j ? block : block.volume_hessian(h, F, a, b);  // H_J(a, a) = 0 (a x a = 0)
   });
 }
 
