@@ -74,7 +74,16 @@ class TetrahedronForce final : public ElementTerm {
 
   double potential_energy(const Configuration& c) const override {
     double sum = 0.0;
-    for (const Tet& t : tets_) sum += t.W * t.model->Psi(Mat(deformation(c, t)), t.lame);
+    for (std::size_t e = 0; e < tets_.size(); ++e) {
+      const Tet& t = tets_[e];
+      const Eigen::Matrix3d F = deformation(c, t);
+      if (t.model->Psi3_of_polar == nullptr) {
+        sum += t.W * t.model->Psi(Mat(F), t.lame);
+      } else {  // the same arithmetic, R and S kept or not
+        sum += t.W * (kept_.empty() ? t.model->Psi3_of_polar(F, polar3(F), t.lame)
+                                    : t.model->Psi3_of_polar(F, polar_of(e, F), t.lame));
+      }
+    }
     return sum;
   }
 
@@ -200,10 +209,11 @@ class TetrahedronForce final : public ElementTerm {
   // F = R S of element e's F, for a model that takes it
   // (MaterialModel::P3_of_polar): decomposed when F differs, bit for bit,
   // from the F of the element's last call, else kept from it. An implicit
-  // method asks for the force and then dF/dx at one state, and the pair
-  // decomposes each F once; the result is the same as decomposing it again.
-  // The force keeps R and S only once dF/dx has been asked for (kept_ is
-  // then sized): an explicit method, which never asks, pays nothing.
+  // method asks for the energy, the force and dF/dx at the state its line
+  // search accepts, and decomposes each F once for all three; the result is
+  // the same as decomposing it again. The energy and the force keep R and S
+  // only once dF/dx has been asked for (kept_ is then sized): an explicit
+  // method, which never asks, pays nothing.
   const Polar3& polar_of(std::size_t e, const Eigen::Matrix3d& F) const {
     if (kept_.empty()) kept_.resize(tets_.size());
     KeptPolar& k = kept_[e];

@@ -194,8 +194,8 @@ TEST(FiniteElements, TetrahedronFastPathIsThePlainElementForce) {
 }
 
 // A model keeps what a material derives from each element's F between
-// calls at one state (tet_force.cc: corotated's R and S from the force for
-// dF/dx). Whatever it keeps, each result depends only on the state it is
+// calls at one state (tet_force.cc: corotated's R and S, for its energy,
+// force and dF/dx). Whatever it keeps, each result depends only on the state it is
 // asked at: calls that alternate between two states give, bit for bit, what
 // a fresh model gives at each, for every material.
 TEST(FiniteElements, TetrahedraResultsDependOnlyOnTheStateAskedAt) {
@@ -220,13 +220,18 @@ TEST(FiniteElements, TetrahedraResultsDependOnlyOnTheStateAskedAt) {
       return Eigen::Map<const Vector>(K.valuePtr(), K.nonZeros());
     };
     // Each pair of calls at one state, in both orders, and calls that
-    // switch state: 'f' the force, 'K' dF/dx.
+    // switch state: 'V' the energy, 'f' the force, 'K' dF/dx.
     const std::vector<std::pair<char, const Vector*>> calls = {
-        {'f', &xa}, {'K', &xb}, {'f', &xa}, {'K', &xa}, {'f', &xa},
-        {'K', &xb}, {'f', &xb}, {'f', &xa}, {'K', &xa}, {'K', &xb}};
+        {'V', &xa}, {'f', &xa}, {'K', &xb}, {'f', &xa}, {'K', &xa}, {'f', &xa},
+        {'V', &xb}, {'K', &xb}, {'V', &xb}, {'f', &xb}, {'f', &xa}, {'V', &xa},
+        {'K', &xa}, {'K', &xb}, {'V', &xa}};
     for (const auto& [call, x] : calls) {
       ElasticModel fresh(scene);
-      if (call == 'f') {
+      if (call == 'V') {
+        const double V_fresh = fresh.position_potential(0.0, *x);
+        EXPECT_GT(std::abs(V_fresh), 0.0);
+        EXPECT_EQ(kept.position_potential(0.0, *x), V_fresh);
+      } else if (call == 'f') {
         kept.force(0.0, *x, v, f_kept);
         fresh.force(0.0, *x, v, f_fresh);
         EXPECT_GT(f_fresh.norm(), 0.0);

@@ -15,11 +15,13 @@
 namespace springlab {
 namespace {
 
-double Psi(const Mat& F, const Lame& m) {
-  const Polar p = polar(F);
+template <typename Matrix, typename Polar>
+double Psi_of_polar(const Matrix& F, const Polar& p, const Lame& m) {
   const double J = volume(F).J;
   return m.mu * (F - p.R).squaredNorm() + 0.5 * m.lambda * (J - 1.0) * (J - 1.0);
 }
+
+double Psi(const Mat& F, const Lame& m) { return Psi_of_polar(F, polar(F), m); }
 
 template <typename Matrix, typename Polar>
 Matrix P_of_polar(const Matrix& F, const Polar& p, const Lame& m) {
@@ -82,6 +84,7 @@ const MaterialModel& corotated_material() {
       .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
+      .Psi3_of_polar = Psi_of_polar<Eigen::Matrix3d, Polar3>,
       .P3_of_polar = P_of_polar<Eigen::Matrix3d, Polar3>,
       .tangent_blocks3_of_polar = tangent_blocks3_of_polar,
   };

@@ -67,11 +67,13 @@ struct MaterialModel {
   Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
                               const Lame& m) = nullptr;
   // A model built on F's polar decomposition F = R S (corotated) also gives
-  // its fast path with R and S passed in, so that a tetrahedron whose force
-  // and dF/dx are evaluated at one state (an implicit method's Newton
-  // iteration) decomposes F once: tet_force.cc keeps each element's R and S
-  // from its force for its dF/dx. Its P3 and tangent_blocks3 decompose F
-  // and call these. nullptr: the model does not use R.
+  // Psi, P and the blocks of a 3 x 3 F with R and S passed in, so that a
+  // tetrahedron evaluated several times at one state (an implicit method's
+  // line search asks for the energy, then the force, then dF/dx at the point
+  // it accepts) decomposes F once: tet_force.cc keeps each element's R and
+  // S. Its Psi, P3 and tangent_blocks3 decompose F and call these. nullptr:
+  // the model does not use R.
+  double (*Psi3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p, const Lame& m) = nullptr;
   Eigen::Matrix3d (*P3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p,
                                  const Lame& m) = nullptr;
   Tangent3 (*tangent_blocks3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p,
