@@ -60,15 +60,20 @@ class TetrahedronForce final : public ElementTerm {
 
   std::string_view name() const override { return name_; }
   void add_force(const Configuration& c, double* f) const override {
-    for (std::size_t e = 0; e < tets_.size(); ++e) {
-      const Tet& t = tets_[e];
-      const Eigen::Matrix3d F = deformation(c, t);
-      const Eigen::Matrix3d P = t.model->P3_of_polar != nullptr && !kept_.empty()
-                                    ? t.model->P3_of_polar(F, polar_of(e, F), t.lame)
-                                    : P3(*t.model, F, t.lame);
+    const auto add = [&](const Tet& t, const Eigen::Matrix3d& P) {
       const Eigen::Matrix3d H = P * t.minus_WDt;  // columns f_1, f_2, f_3
       node(f, t, 0) -= H.rowwise().sum();
       for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
+    };
+    if (kept_.empty()) {  // nothing kept (polar_of below)
+      for (const Tet& t : tets_) add(t, P3(*t.model, deformation(c, t), t.lame));
+      return;
+    }
+    for (std::size_t e = 0; e < tets_.size(); ++e) {
+      const Tet& t = tets_[e];
+      const Eigen::Matrix3d F = deformation(c, t);
+      add(t, t.model->P3_of_polar != nullptr ? t.model->P3_of_polar(F, polar_of(e, F), t.lame)
+                                             : P3(*t.model, F, t.lame));
     }
   }
 
