@@ -415,6 +415,22 @@ TEST(QuasiNewton, OneIterationOnALinearSpring) {
   EXPECT_EQ(r.stats.newton_iterations, 2);
 }
 
+// Implicit Euler on `model` to t_end at dt, solved by Newton and by
+// quasi-Newton to one --newton-tol; both runs must complete.
+void newton_and_quasi_newton(const ElasticModel& model, double dt, double t_end, double tol,
+                             RunResult& newton, RunResult& quasi) {
+  RunSettings s;
+  s.integrator = "implicit-euler";
+  s.dt = dt;
+  s.t_end = t_end;
+  s.options.newton_tol = tol;
+  newton = simulate(model, s);
+  s.options.solver = Solver::kQuasiNewton;
+  quasi = simulate(model, s);
+  ASSERT_EQ(newton.status, RunStatus::kCompleted) << newton.failure;
+  ASSERT_EQ(quasi.status, RunStatus::kCompleted) << quasi.failure;
+}
+
 // The search's extrapolation (quasi_newton.cc) puts the step at the secant
 // a* of the slope along d, the exact minimum on the line when Phi is
 // quadratic. One tetrahedron of linear material (poisson 0: lambda = 0,
@@ -434,16 +450,9 @@ TEST(QuasiNewton, ExtrapolationLandsOnTheMinimumOfAQuadraticStep) {
                     {"x": [0, 0, 1], "fixed": true}, {"x": [0.1, 0, 0]}],
       "springs": [], "tetrahedra": [{"nodes": [0, 1, 2, 3], "material": "m"}]})";
   const ElasticModel tet(parse_scene(text, "tet.json"));
-  RunSettings s;
-  s.integrator = "implicit-euler";
-  s.dt = 0.01;  // h^2 mu W / L^2 = 500 W, m = 250 W: a* = 1250 / 750
-  s.t_end = 0.01;
-  s.options.newton_tol = 1e-12;
-  const RunResult newton = simulate(tet, s);
-  s.options.solver = Solver::kQuasiNewton;
-  const RunResult quasi = simulate(tet, s);
-  ASSERT_EQ(newton.status, RunStatus::kCompleted) << newton.failure;
-  ASSERT_EQ(quasi.status, RunStatus::kCompleted) << quasi.failure;
+  RunResult newton, quasi;
+  // dt = 0.01: h^2 mu W / L^2 = 500 W, m = 250 W, a* = 1250 / 750
+  ASSERT_NO_FATAL_FAILURE(newton_and_quasi_newton(tet, 0.01, 0.01, 1e-12, newton, quasi));
   EXPECT_EQ(quasi.stats.newton_iterations, 2);
   EXPECT_LT((quasi.v_final - newton.v_final).lpNorm<Eigen::Infinity>(),
             1e-12 * newton.v_final.lpNorm<Eigen::Infinity>());
@@ -458,16 +467,8 @@ TEST(QuasiNewton, SolvesElementsOfAnyMaterialAsNewtonDoes) {
     SCOPED_TRACE(std::string(dimension) + "-D");
     const ElasticModel beam(
         make_builtin_scene("beam", {{"dimension", dimension}, {"nx", "10"}, {"ny", "2"}}));
-    RunSettings s;
-    s.integrator = "implicit-euler";
-    s.dt = 1.0 / 60.0;
-    s.t_end = 0.5;
-    s.options.newton_tol = 1e-9;
-    const RunResult newton = simulate(beam, s);
-    s.options.solver = Solver::kQuasiNewton;
-    const RunResult quasi = simulate(beam, s);
-    ASSERT_EQ(newton.status, RunStatus::kCompleted) << newton.failure;
-    ASSERT_EQ(quasi.status, RunStatus::kCompleted) << quasi.failure;
+    RunResult newton, quasi;
+    ASSERT_NO_FATAL_FAILURE(newton_and_quasi_newton(beam, 1.0 / 60.0, 0.5, 1e-9, newton, quasi));
     EXPECT_LT((quasi.x_final - newton.x_final).lpNorm<Eigen::Infinity>(), 1e-8);
     EXPECT_GT((newton.x_final - beam.initial_positions()).lpNorm<Eigen::Infinity>(), 1e-3);
   }
