@@ -229,10 +229,14 @@ bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
     // rest F / sqrt(k)), so w/2 dist^2 = W lambda/2 (J - 1)^2 to second
     // order with w = k lambda W.
     const double volume_weight = static_cast<double>(s.G.cols()) * s.lame.lambda * s.W;
-    mine.push_back(
-        {.nodes = s.nodes, .G = s.G, .weight = 2.0 * s.lame.mu * s.W, .project = nearest_rotation});
+    mine.push_back({.nodes = s.nodes,
+                    .fixed = {},
+                    .G = s.G,
+                    .weight = 2.0 * s.lame.mu * s.W,
+                    .project = nearest_rotation});
     if (volume_weight > 0.0) {
       mine.push_back({.nodes = std::move(s.nodes),
+                      .fixed = {},
                       .G = std::move(s.G),
                       .weight = volume_weight,
                       .project = nearest_unit_volume});
@@ -246,6 +250,7 @@ bool ElementTerm::laplacian_elements(std::vector<ProjectiveElement>& out) const 
   for (std::size_t e = 0; e < element_count(); ++e) {
     Shape s = shape(e);
     out.push_back({.nodes = std::move(s.nodes),
+                   .fixed = {},
                    .G = std::move(s.G),
                    .weight = (s.lame.lambda + 2.0 * s.lame.mu) * s.W});
   }
