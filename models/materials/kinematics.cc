@@ -94,8 +94,9 @@ bool rotation_by_newton(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
     if (!(det > 0.0) || !std::isfinite(det)) return false;
     // gamma and beta = 1 / (gamma det), the weights of X and X^-T det, as
     //   gamma = (|C| / (|X| det))^1/2,  beta = (|X| / (|C| det))^1/2
-    // from t = |C| |X| det: two square roots and a division in sequence
-    // (the iteration's latency is its cost), not four.
+    // from t = |C| |X| det: a square root, a division and a square root
+    // in sequence (the iteration's latency is its cost), where the direct
+    // form takes three divisions and two square roots.
     double gamma = 1.0, beta = 1.0 / det;
     if (scaled) {
       const double C2 = C.squaredNorm(), X2 = X.squaredNorm();

@@ -30,8 +30,8 @@ Volume volume(const Mat& F);
 // column cross products store each column as a two-double packet and a
 // double, which the next whole-matrix read (packets at other offsets)
 // cannot take from the store buffer on x86 (a store-forwarding stall per
-// column); the scalar form stays in registers. Corotated's force + dF/dx
-// (Higham's iteration takes a cofactor per step) runs about 10 % faster
+// column). With the scalar form corotated's force + dF/dx (Higham's
+// iteration takes a cofactor per step) runs about 10 % faster
 // (benchmarks/README).
 inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
   Eigen::Matrix3d g;
