@@ -53,8 +53,9 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 Tangent3 tangent_blocks3_of_polar(const Eigen::Matrix3d& F, const Polar3& p,
                                   const Eigen::Matrix3d& D, const Lame& m) {
   const Eigen::Matrix3d M_inv = (p.S.trace() * Eigen::Matrix3d::Identity() - p.S).inverse();
-  const double h = m.lambda * (F.determinant() - 1.0);
-  const Eigen::Matrix3d GD = cofactor(F) * D.transpose();  // column i: G d_i
+  const Volume3 v = volume(F);  // J and G = dJ/dF, the cofactor matrix
+  const double h = m.lambda * (v.J - 1.0);
+  const Eigen::Matrix3d GD = v.g * D.transpose();  // column i: G d_i
   std::array<Eigen::Matrix3d, 3> Ra;                        // R [d_i]x
   for (int i = 0; i < 3; ++i) Ra[static_cast<std::size_t>(i)] = p.R * cross_matrix(D.row(i));
   return symmetric_blocks([&](int i, int j) {
