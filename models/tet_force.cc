@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "models/fem_elements.h"
-#include "models/materials/kinematics.h"  // polar3
+#include "models/materials/kinematics.h"  // Derived3
 #include "models/materials/material.h"
 
 namespace springlab {
@@ -65,15 +65,15 @@ class TetrahedronForce final : public ElementTerm {
       node(f, t, 0) -= H.rowwise().sum();
       for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
     };
-    if (kept_.empty()) {  // nothing kept (polar_of below)
+    if (kept_.empty()) {  // nothing kept (derived_of below)
       for (const Tet& t : tets_) add(t, P3(*t.model, deformation(c, t), t.lame));
       return;
     }
     for (std::size_t e = 0; e < tets_.size(); ++e) {
       const Tet& t = tets_[e];
       const Eigen::Matrix3d F = deformation(c, t);
-      add(t, t.model->P3_of_polar != nullptr ? t.model->P3_of_polar(F, polar_of(e, F), t.lame)
-                                             : P3(*t.model, F, t.lame));
+      add(t, t.model->derive3 != nullptr ? t.model->P3_derived(F, derived_of(e, F), t.lame)
+                                         : P3(*t.model, F, t.lame));
     }
   }
 
@@ -82,11 +82,14 @@ class TetrahedronForce final : public ElementTerm {
     for (std::size_t e = 0; e < tets_.size(); ++e) {
       const Tet& t = tets_[e];
       const Eigen::Matrix3d F = deformation(c, t);
-      if (t.model->Psi3_of_polar == nullptr) {
+      if (t.model->derive3 == nullptr) {
         sum += t.W * t.model->Psi(Mat(F), t.lame);
-      } else {  // the same arithmetic, R and S kept or not
-        sum += t.W * (kept_.empty() ? t.model->Psi3_of_polar(F, polar3(F), t.lame)
-                                    : t.model->Psi3_of_polar(F, polar_of(e, F), t.lame));
+      } else if (kept_.empty()) {  // the same arithmetic, kept or not
+        Derived3 d;
+        t.model->derive3(F, d);
+        sum += t.W * t.model->Psi3_derived(F, d, t.lame);
+      } else {
+        sum += t.W * t.model->Psi3_derived(F, derived_of(e, F), t.lame);
       }
     }
     return sum;
@@ -178,8 +181,8 @@ class TetrahedronForce final : public ElementTerm {
                      double* values) const {
     const Tet& t = tets_[e];
     const Eigen::Matrix3d F = deformation(c, t);
-    const Tangent3 B = t.model->tangent_blocks3_of_polar != nullptr
-                           ? t.model->tangent_blocks3_of_polar(F, polar_of(e, F), t.Dw, t.lame)
+    const Tangent3 B = t.model->derive3 != nullptr
+                           ? t.model->tangent_blocks3_derived(F, derived_of(e, F), t.Dw, t.lame)
                            : tangent_blocks3(*t.model, F, t.Dw, t.lame);
     // Rows 3 (i - 1) .. of S: S_i.
     const Eigen::Matrix<double, 9, 3> S =
@@ -211,23 +214,23 @@ class TetrahedronForce final : public ElementTerm {
     }
   }
 
-  // F = R S of element e's F, for a model that takes it
-  // (MaterialModel::P3_of_polar): decomposed when F differs, bit for bit,
-  // from the F of the element's last call, else kept from it. An implicit
-  // method asks for the energy, the force and dF/dx at the state its line
-  // search accepts, and decomposes each F once for all three; the result is
-  // the same as decomposing it again. The energy and the force keep R and S
-  // only once dF/dx has been asked for (kept_ is then sized): an explicit
-  // method, which never asks, pays nothing.
-  const Polar3& polar_of(std::size_t e, const Eigen::Matrix3d& F) const {
+  // What the model derives from element e's F first (MaterialModel::derive3:
+  // corotated's R and S, neo-Hookean's ln J): derived when F differs, bit
+  // for bit, from the F of the element's last call, else kept from it. An
+  // implicit method asks for the energy, the force and dF/dx at the state
+  // its line search accepts, and derives it once per F for all three; the
+  // result is the same as deriving it again. The energy and the force keep
+  // it only once dF/dx has been asked for (kept_ is then sized): an
+  // explicit method, which never asks, pays nothing.
+  const Derived3& derived_of(std::size_t e, const Eigen::Matrix3d& F) const {
     if (kept_.empty()) kept_.resize(tets_.size());
-    KeptPolar& k = kept_[e];
+    Kept& k = kept_[e];
     if (!k.set || std::memcmp(k.F.data(), F.data(), sizeof(double) * 9) != 0) {
+      tets_[e].model->derive3(F, k.d);
       k.F = F;
-      k.p = polar3(F);
       k.set = true;
     }
-    return k.p;
+    return k.d;
   }
 
   // The slots of a dense 12 x 12 column-major matrix (the definite part
@@ -259,12 +262,12 @@ class TetrahedronForce final : public ElementTerm {
   int free_particles_;
   std::vector<Tet> tets_;
   std::vector<Slots> slots_;
-  struct KeptPolar {
+  struct Kept {
     Eigen::Matrix3d F;
-    Polar3 p;
+    Derived3 d;
     bool set = false;
   };
-  mutable std::vector<KeptPolar> kept_;  // per element, from the first dF/dx
+  mutable std::vector<Kept> kept_;  // per element, from the first dF/dx
 };
 
 }  // namespace

@@ -148,34 +148,34 @@ TEST_P(EveryMaterial, FixedSizeStressIsTheStress) {
   }
 }
 
-// A model built on the polar decomposition gives its energy, P and blocks
-// with R and S passed in (the tetrahedra keep them between calls at one
-// state): given F's own R and S each is its plain counterpart, inverted F
-// included.
-TEST_P(EveryMaterial, FunctionsOfThePolarDecompositionAreThePlainOnes) {
+// A model that derives something costly from F first (corotated: R and S;
+// neo-Hookean: ln J) gives its energy, P and blocks with it passed in (the
+// tetrahedra keep it between calls at one state): given what it derives
+// from F itself, each is its plain counterpart, inverted F included.
+TEST_P(EveryMaterial, FunctionsOfWhatItDerivesAreThePlainOnes) {
   if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
   const MaterialModel& m = model();
-  const bool any = m.Psi3_of_polar != nullptr || m.P3_of_polar != nullptr ||
-                   m.tangent_blocks3_of_polar != nullptr;
-  if (!any) GTEST_SKIP() << "does not use R";
-  // All three or none: the tetrahedra take each when they keep R and S.
-  ASSERT_TRUE(m.Psi3_of_polar != nullptr && m.P3_of_polar != nullptr &&
-              m.tangent_blocks3_of_polar != nullptr);
+  const bool any = m.derive3 != nullptr || m.Psi3_derived != nullptr ||
+                   m.P3_derived != nullptr || m.tangent_blocks3_derived != nullptr;
+  if (!any) GTEST_SKIP() << "derives nothing to keep";
+  // All four or none: the tetrahedra take each when they keep it.
+  ASSERT_TRUE(m.derive3 != nullptr && m.Psi3_derived != nullptr && m.P3_derived != nullptr &&
+              m.tangent_blocks3_derived != nullptr);
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> entry(-1.0, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
     Mat F = deformed(rng);
     if (trial % 2 == 1 && m.finite_everywhere) F.col(0) *= -1.0;  // inverted
     const Eigen::Matrix3d F3 = F;
-    const Polar3 p = polar3(F3);
+    Derived3 d;
+    m.derive3(F3, d);
     Eigen::Matrix3d D;
     for (int k = 0; k < 9; ++k) D.data()[k] = entry(rng);
     const double psi = m.Psi(F, kLame);
-    EXPECT_NEAR(m.Psi3_of_polar(F3, p, kLame), psi, 1e-14 * std::abs(psi)) << "trial " << trial;
-    const Eigen::Matrix3d P = P3(m, F3, kLame);
-    EXPECT_LT((m.P3_of_polar(F3, p, kLame) - P).norm(), 1e-14 * P.norm()) << "trial " << trial;
-    const Tangent3 blocks = tangent_blocks3(m, F3, D, kLame);
-    EXPECT_LT((m.tangent_blocks3_of_polar(F3, p, D, kLame) - blocks).norm(), 1e-14 * blocks.norm())
+    EXPECT_NEAR(m.Psi3_derived(F3, d, kLame), psi, 1e-14 * std::abs(psi)) << "trial " << trial;
+    // P and the blocks: the same arithmetic, bit for bit.
+    EXPECT_EQ(m.P3_derived(F3, d, kLame), P3(m, F3, kLame)) << "trial " << trial;
+    EXPECT_EQ(m.tangent_blocks3_derived(F3, d, D, kLame), tangent_blocks3(m, F3, D, kLame))
         << "trial " << trial;
   }
 }

@@ -74,6 +74,20 @@ Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, con
   return tangent_blocks3_of_polar(F, polar3(F), D, m);
 }
 
+// The tetrahedra keep each element's R and S between calls at one state
+// (material.h).
+void derive3(const Eigen::Matrix3d& F, Derived3& d) { d.polar = polar3(F); }
+double Psi3_derived(const Eigen::Matrix3d& F, const Derived3& d, const Lame& m) {
+  return Psi_of_polar(F, d.polar, m);
+}
+Eigen::Matrix3d P3_derived(const Eigen::Matrix3d& F, const Derived3& d, const Lame& m) {
+  return P_of_polar(F, d.polar, m);
+}
+Tangent3 tangent_blocks3_derived(const Eigen::Matrix3d& F, const Derived3& d,
+                                 const Eigen::Matrix3d& D, const Lame& m) {
+  return tangent_blocks3_of_polar(F, d.polar, D, m);
+}
+
 }  // namespace
 
 const MaterialModel& corotated_material() {
@@ -85,9 +99,10 @@ const MaterialModel& corotated_material() {
       .P3 = P<Eigen::Matrix3d>,
       .dP = dP,
       .tangent_blocks3 = tangent_blocks3,
-      .Psi3_of_polar = Psi_of_polar<Eigen::Matrix3d, Polar3>,
-      .P3_of_polar = P_of_polar<Eigen::Matrix3d, Polar3>,
-      .tangent_blocks3_of_polar = tangent_blocks3_of_polar,
+      .derive3 = derive3,
+      .Psi3_derived = Psi3_derived,
+      .P3_derived = P3_derived,
+      .tangent_blocks3_derived = tangent_blocks3_derived,
   };
   return model;
 }

@@ -61,6 +61,16 @@ struct Polar3 {
 };
 Polar3 polar3(const Eigen::Matrix3d& F);
 
+// What a material derives from a 3 x 3 F first, the costly step its
+// energy, stress and tangent blocks share (MaterialModel::derive3):
+// corotated's polar decomposition (about 100 ns), neo-Hookean's ln J (a
+// logarithm, about 12 ns). Each model fills the members it uses; the
+// tetrahedra keep each element's between calls at one state (tet_force.cc).
+struct Derived3 {
+  Polar3 polar;        // F = R S (corotated)
+  double log_J = 0.0;  // ln det F (neo-Hookean; det F > 0)
+};
+
 // The nearest matrix to F (Frobenius norm) whose J is 1: the volume
 // constraint set of projective dynamics (Bouaziz et al., "Projective
 // dynamics: fusing constraint projections for fast simulation", ACM TOG

@@ -38,7 +38,7 @@ struct Lame {
 };
 Lame lame(double young, double poisson);
 
-struct Polar3;  // F = R S of a 3 x 3 F (kinematics.h)
+struct Derived3;  // what a model derives from a 3 x 3 F first (kinematics.h)
 
 struct MaterialModel {
   std::string_view name;  // "neo-hookean": the "model" of a scene's material
@@ -66,18 +66,22 @@ struct MaterialModel {
   // passes Dm^-1 scaled by sqrt(W), which scales the blocks by W.
   Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
                               const Lame& m) = nullptr;
-  // A model built on F's polar decomposition F = R S (corotated) also gives
-  // Psi, P and the blocks of a 3 x 3 F with R and S passed in, so that a
-  // tetrahedron evaluated several times at one state (an implicit method's
-  // line search asks for the energy, then the force, then dF/dx at the point
-  // it accepts) decomposes F once: tet_force.cc keeps each element's R and
-  // S. Its Psi, P3 and tangent_blocks3 decompose F and call these. nullptr:
-  // the model does not use R.
-  double (*Psi3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p, const Lame& m) = nullptr;
-  Eigen::Matrix3d (*P3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p,
-                                 const Lame& m) = nullptr;
-  Tangent3 (*tangent_blocks3_of_polar)(const Eigen::Matrix3d& F, const Polar3& p,
-                                       const Eigen::Matrix3d& D, const Lame& m) = nullptr;
+  // A model whose energy, P and blocks of a 3 x 3 F first derive something
+  // costly from F (Derived3, kinematics.h: corotated's polar decomposition
+  // F = R S, neo-Hookean's ln J) names that step derive3 and also gives
+  // Psi, P and the blocks with its result passed in, so that a tetrahedron
+  // evaluated several times at one state (an implicit method's line search
+  // asks for the energy, then the force, then dF/dx at the point it
+  // accepts) derives it once: tet_force.cc keeps each element's. Its P3
+  // and tangent_blocks3 derive and call these (the same result bit for bit,
+  // kept or not), and the tetrahedra take its energy from Psi3_derived
+  // either way. nullptr: nothing to keep.
+  void (*derive3)(const Eigen::Matrix3d& F, Derived3& d) = nullptr;
+  double (*Psi3_derived)(const Eigen::Matrix3d& F, const Derived3& d, const Lame& m) = nullptr;
+  Eigen::Matrix3d (*P3_derived)(const Eigen::Matrix3d& F, const Derived3& d,
+                                const Lame& m) = nullptr;
+  Tangent3 (*tangent_blocks3_derived)(const Eigen::Matrix3d& F, const Derived3& d,
+                                      const Eigen::Matrix3d& D, const Lame& m) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
