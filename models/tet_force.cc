@@ -66,15 +66,23 @@ class TetrahedronForce final : public ElementTerm {
       node(f, t, 0) -= H.rowwise().sum();
       for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
     };
-    if (kept_.empty()) {  // nothing kept (derived_of below)
-      for (const Tet& t : tets_) add(t, P3(*t.model, deformation(c, t), t.lame));
-      return;
-    }
-    for (std::size_t e = 0; e < tets_.size(); ++e) {
+    const auto P_of = [&](std::size_t e) -> Eigen::Matrix3d {
       const Tet& t = tets_[e];
       const Eigen::Matrix3d F = deformation(c, t);
-      add(t, t.model->derive3 != nullptr ? t.model->P3_derived(F, derived_of(e, F), t.lame)
-                                         : P3(*t.model, F, t.lame));
+      if (kept_.empty() || t.model->derive3 == nullptr) return P3(*t.model, F, t.lame);
+      return t.model->P3_derived(F, derived_of(e, F), t.lame);
+    };
+    // Element e + 1's P is computed before element e's force is added: P
+    // comes back from the material through memory, and reading it at once
+    // would straddle the stores that have just written it and wait for them
+    // to reach the cache (a store-forwarding stall, 1-5 ns per element,
+    // benchmarks/README). A step later they have.
+    if (tets_.empty()) return;
+    Eigen::Matrix3d P_next = P_of(0);
+    for (std::size_t e = 0; e < tets_.size(); ++e) {
+      const Eigen::Matrix3d P = P_next;
+      if (e + 1 < tets_.size()) P_next = P_of(e + 1);
+      add(tets_[e], P);
     }
   }
 
