@@ -75,7 +75,7 @@ class TetrahedronForce final : public ElementTerm {
     // Element e + 1's P is computed before element e's force is added: P
     // comes back from the material through memory, and reading it at once
     // would straddle the stores that have just written it and wait for them
-    // to reach the cache (a store-forwarding stall, 1-5 ns per element,
+    // to reach the cache (a store-forwarding stall, up to 5 ns per element,
     // benchmarks/README). A step later they have.
     if (tets_.empty()) return;
     Eigen::Matrix3d P_next = P_of(0);
@@ -244,8 +244,8 @@ class TetrahedronForce final : public ElementTerm {
 
   // a == b bit for bit, entry by entry. F has just been stored, and
   // memcmp's wide loads straddle those stores and wait for them to reach
-  // the cache (a store-forwarding stall): about 4 ns more per element in
-  // neo-Hookean's force + dF/dx (benchmarks/README).
+  // the cache (a store-forwarding stall): 9 % of neo-Hookean's force +
+  // dF/dx in perf (benchmarks/README).
   static bool same_bits(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
     bool same = true;
     for (int k = 0; k < 9; ++k) {
