@@ -57,7 +57,7 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
   const Volume v = volume(F);
   if (!(v.J > 0.0)) return Mat::Constant(F.rows(), F.cols(), kNaN);
   const double dJ = contract(v.g, dF);
-  const double a = m.lambda * std::log(v.J) - m.mu;
+  const double a = m.lambda * log_J(v.J) - m.mu;
   return m.mu * dF + (m.lambda * dJ / (v.J * v.J)) * v.g +
          a * (volume_differential(F, dF) / v.J - dJ / (v.J * v.J) * v.g);
 }
