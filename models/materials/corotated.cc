@@ -7,7 +7,6 @@
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
 #include <Eigen/LU>
-#include <array>
 
 #include "models/materials/kinematics.h"
 #include "models/materials/tangent3.h"
@@ -48,23 +47,36 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 // w = M^-1 u, M = tr(S) I - S, u_k = <R [e_k]x, dF>; so
 //   dR/dF = sum_kl (M^-1)_kl vec(R [e_k]x) vec(R [e_l]x)^T,
 // three rank-one pieces with R [e_k]x a = -R [a]x e_k. Contracted:
-//   A(a, b) = 2 mu (a . b) I + 2 mu R [a]x M^-1 [b]x R^T
+//   A(a, b) = 2 mu (a . b) I - 2 mu R [a]x M^-1 [b]x^T R^T
 //             + lambda (G a)(G b)^T - lambda (J - 1) [F (a x b)]x.
+// The twist term needs no inverse. M is symmetric, so M^-1 = cof(M) / det M,
+// and cof(M) (x x y) = (M x) x (M y) with the Binet-Cauchy identity
+// (u x v) . (w x z) = (u . w)(v . z) - (u . z)(v . w) give, entry (p, q)
+// being (e_p x a)^T cof(M) (e_q x b),
+//   [a]x cof(M) [b]x^T = (a^T M b) M - (M b)(M a)^T.
+// Turned by R (R M R^T = tr(S) I - F R^T, since R S R^T = F R^T):
+//   R [a]x M^-1 [b]x^T R^T = ((a^T M b)(tr(S) I - F R^T) - c_b c_a^T) / det M,
+// with c_a = R M a. det M = (s1 + s2)(s2 + s3)(s3 + s1) for the singular
+// values s_i, so the term is singular where an inverted element has
+// s2 + s3 = 0, as M^-1 is.
 Tangent3 tangent_blocks3_of_polar(const Eigen::Matrix3d& F, const Polar3& p,
                                   const Eigen::Matrix3d& D, const Lame& m) {
-  const Eigen::Matrix3d M_inv = (p.S.trace() * Eigen::Matrix3d::Identity() - p.S).inverse();
+  const double trS = p.S.trace();
+  const Eigen::Matrix3d M = trS * Eigen::Matrix3d::Identity() - p.S;
+  const double two_mu_over_det_M = 2.0 * m.mu / M.determinant();
+  const Eigen::Matrix3d MD = M * D.transpose();  // column i: M d_i
+  const Eigen::Matrix3d c = p.R * MD;            // column i: c_i = R M d_i
+  const Eigen::Matrix3d V = F * p.R.transpose(); // R S R^T, the left stretch
   const Volume3 v = volume(F);  // J and G = dJ/dF, the cofactor matrix
   const double h = m.lambda * (v.J - 1.0);
   const Eigen::Matrix3d GD = v.g * D.transpose();  // column i: G d_i
-  std::array<Eigen::Matrix3d, 3> Ra;                        // R [d_i]x
-  for (int i = 0; i < 3; ++i) Ra[static_cast<std::size_t>(i)] = p.R * cross_matrix(D.row(i));
   return symmetric_blocks([&](int i, int j) {
     const Eigen::Vector3d a = D.row(i), b = D.row(j);
-    const Eigen::Matrix3d twist =
-        Ra[static_cast<std::size_t>(i)] * M_inv * Ra[static_cast<std::size_t>(j)].transpose();
+    const double aMb = a.dot(MD.col(j));
     Block3 block = Block3()
-                       .identity(2.0 * m.mu * a.dot(b))
-                       .matrix(-2.0 * m.mu, twist)
+                       .identity(2.0 * m.mu * a.dot(b) - two_mu_over_det_M * aMb * trS)
+                       .matrix(two_mu_over_det_M * aMb, V)
+                       .outer(two_mu_over_det_M, c.col(j), c.col(i))
                        .outer(m.lambda, GD.col(i), GD.col(j));
     return i == j ? block : block.volume_hessian(h, F, a, b);  // H_J(a, a) = 0 (a x a = 0)
   });
