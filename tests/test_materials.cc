@@ -233,26 +233,34 @@ TEST(Materials, NeoHookeanHasNoEnergyWhereTheElementIsInverted) {
   EXPECT_LT(snh.P(F, kLame)(2, 2), 0.0);
 }
 
-// polar3 (Newton's iteration where det F > 0, the SVD elsewhere) gives the
+// polar3 (the Newton-Schulz iteration near a rotation, Higham's Newton
+// iteration elsewhere where det F > 0, the SVD where det F <= 0) gives the
 // proper rotation U V^T of the SVD, sign-flipped where det F < 0, and
-// F = R S with S symmetric: near rest, strongly stretched (condition 1e6),
-// nearly flat, and inverted.
+// F = R S with S symmetric: near rest, turned and deformed by up to about
+// 30 % (all but one of these in the Newton-Schulz range, |F^T F - I|_F < 0.6),
+// strongly stretched (condition 1e6), nearly flat, and inverted.
 TEST(Materials, PolarDecompositionIsTheSvdsRotation) {
   std::mt19937 rng(5);
   std::normal_distribution<double> n(0.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
     Eigen::Matrix3d F;
     for (int k = 0; k < 9; ++k) F.data()[k] = n(rng);
-    if (trial % 4 == 0) F = Eigen::Matrix3d::Identity() + 1e-3 * F;  // near rest
-    if (trial % 4 == 1) F.col(0) *= 1e6;                            // condition ~1e6
-    if (trial % 4 == 2) F.col(2) = F.col(0) + F.col(1) + 1e-7 * F.col(2);  // nearly flat
+    if (trial % 5 == 0) F = Eigen::Matrix3d::Identity() + 1e-3 * F;  // near rest
+    if (trial % 5 == 1) F.col(0) *= 1e6;                            // condition ~1e6
+    if (trial % 5 == 2) F.col(2) = F.col(0) + F.col(1) + 1e-7 * F.col(2);  // nearly flat
+    if (trial % 5 == 4) {  // turned by up to 5 pi / 6, deformed by up to about 30 %
+      const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+      const double angle = 3.14159 * (trial % 7) / 6.0;
+      F = Eigen::AngleAxisd(angle, axis).toRotationMatrix() *
+          (Eigen::Matrix3d::Identity() + 0.09 * F);
+    }
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d U = svd.matrixU();
     if ((U * svd.matrixV().transpose()).determinant() < 0.0) U.col(2) *= -1.0;
     const Eigen::Matrix3d expected = U * svd.matrixV().transpose();
     const Polar3 p = polar3(F);
     // Both are exact to rounding times R's sensitivity, ~ sigma_max / sigma_min.
-    const double tolerance = trial % 4 == 1 ? 1e-11 : 1e-13;
+    const double tolerance = trial % 5 == 1 ? 1e-11 : 1e-13;
     EXPECT_LT((p.R - expected).norm(), tolerance)
         << "trial " << trial << ", det " << F.determinant();
     EXPECT_LT((p.R.transpose() * p.R - Eigen::Matrix3d::Identity()).norm(), 1e-14) << trial;
