@@ -194,7 +194,7 @@ TEST(FiniteElements, TetrahedronFastPathIsThePlainElementForce) {
 }
 
 // A model keeps what a material derives from each element's F between
-// calls at one state (tet_force.cc: corotated's R and S, for its energy,
+// calls at one state (tet_force.cc: corotated's R, for its energy,
 // force and dF/dx). Whatever it keeps, each result depends only on the state it is
 // asked at: calls that alternate between two states give, bit for bit, what
 // a fresh model gives at each, for every material.

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <string>
@@ -180,6 +182,67 @@ TEST_P(EveryMaterial, FunctionsOfWhatItDerivesAreThePlainOnes) {
   }
 }
 
+// A model that derives and gives its blocks for kLanes elements at once, in
+// vector lanes (MaterialModel::derive3_lanes and
+// tangent_blocks3_derived_lanes; lanes.h), gives in each lane what its
+// one-element functions give for that element, bit for bit, whichever
+// elements share the call: rotated and deformed ones (some turned by more
+// than the series' range of the polar decomposition allows), inverted ones
+// and strongly stretched ones side by side, each with its own D and
+// Lame parameters.
+TEST_P(EveryMaterial, LanesAreTheOneElementFunctionsBitForBit) {
+  if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
+  const MaterialModel& m = model();
+  if (m.derive3_lanes == nullptr && m.tangent_blocks3_derived_lanes == nullptr) {
+    GTEST_SKIP() << "no lanes";
+  }
+  // The blocks in lanes take what derive3 gives.
+  ASSERT_NE(m.derive3, nullptr);
+  ASSERT_NE(m.derive3_lanes, nullptr);
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> entry(-1.0, 1.0);
+  std::uniform_int_distribution<int> kind(0, 3);
+  for (int call = 0; call < 50; ++call) {
+    std::array<Eigen::Matrix3d, kLanes> F, D;
+    std::array<Lame, kLanes> lames;
+    std::array<Derived3, kLanes> d;
+    alignas(64) double blocks[81][kLanes];
+    const Eigen::Matrix3d* F_in[kLanes];
+    const Eigen::Matrix3d* D_in[kLanes];
+    const Lame* m_in[kLanes];
+    Derived3* d_out[kLanes];
+    const Derived3* d_in[kLanes];
+    for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
+      F[l] = Eigen::Matrix3d(rotation(rng)) * Eigen::Matrix3d(deformed(rng));
+      const int k = kind(rng);
+      if (k == 1 && m.finite_everywhere) F[l].col(0) *= -1.0;  // inverted
+      if (k == 2) F[l].col(1) *= 3.0;                          // stretched
+      for (int i = 0; i < 9; ++i) D[l].data()[i] = entry(rng);
+      lames[l] = lame(1e5 * (1.0 + entry(rng) * entry(rng)), 0.3 + 0.1 * entry(rng));
+      F_in[l] = &F[l];
+      D_in[l] = &D[l];
+      m_in[l] = &lames[l];
+      d_out[l] = &d[l];
+      d_in[l] = &d[l];
+    }
+    m.derive3_lanes(F_in, d_out);
+    for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
+      Derived3 one;
+      m.derive3(F[l], one);
+      EXPECT_EQ(d[l].R, one.R) << "call " << call << ", lane " << l;
+      EXPECT_EQ(d[l].log_J, one.log_J) << "call " << call << ", lane " << l;
+    }
+    if (m.tangent_blocks3_derived_lanes == nullptr) continue;
+    m.tangent_blocks3_derived_lanes(F_in, d_in, D_in, m_in, blocks);
+    for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
+      Tangent3 in_lane;
+      for (int k = 0; k < 81; ++k) in_lane.data()[k] = blocks[k][l];
+      EXPECT_EQ(in_lane, m.tangent_blocks3_derived(F[l], d[l], D[l], lames[l]))
+          << "call " << call << ", lane " << l;
+    }
+  }
+}
+
 TEST_P(EveryMaterial, EnergyIsInvariantUnderRotationButLinearIsNot) {
   std::mt19937 rng(3);
   const Mat F = deformed(rng);
@@ -267,6 +330,43 @@ TEST(Materials, PolarDecompositionIsTheSvdsRotation) {
     EXPECT_NEAR(p.R.determinant(), 1.0, 1e-14) << trial;
     EXPECT_LT((p.R * p.S - F).norm(), 1e-14 * F.norm()) << trial;
     EXPECT_EQ(p.S, p.S.transpose()) << trial;
+  }
+}
+
+// rotation3_lanes finds the rotation of kLanes matrices at once, in vector
+// lanes: each lane's R is polar3's bit for bit, whichever matrices share
+// the call: near rest and deformed by up to 30 % (the series in lanes,
+// taking different numbers of steps side by side), and, in the same calls,
+// matrices outside the series' range (strongly stretched, inverted, flat)
+// that polar3 hands to Higham's iteration or the SVD.
+TEST(Materials, RotationInLanesIsPolar3sBitForBit) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_int_distribution<int> kind(0, 5);
+  for (int call = 0; call < 100; ++call) {
+    std::array<Eigen::Matrix3d, kLanes> F, R;
+    const Eigen::Matrix3d* in[kLanes];
+    Eigen::Matrix3d* out[kLanes];
+    for (int l = 0; l < kLanes; ++l) {
+      Eigen::Matrix3d& f = F[static_cast<std::size_t>(l)];
+      for (int k = 0; k < 9; ++k) f.data()[k] = n(rng);
+      const Eigen::Matrix3d turn =
+          Eigen::AngleAxisd(3.0 * n(rng), Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized())
+              .toRotationMatrix();
+      switch (kind(rng)) {
+        case 0: f = turn * (Eigen::Matrix3d::Identity() + 1e-4 * f); break;  // near rest
+        case 1: case 2: f = turn * (Eigen::Matrix3d::Identity() + 0.09 * f); break;
+        case 3: f.col(0) *= 10.0; break;                                     // stretched
+        case 4: f = turn * (Eigen::Matrix3d::Identity() + 0.05 * f); f.col(2) *= -1.0; break;
+        default: f.col(2) = f.col(0) + 1e-9 * f.col(2); break;               // flat
+      }
+      in[l] = &f;
+      out[l] = &R[static_cast<std::size_t>(l)];
+    }
+    rotation3_lanes(in, out);
+    for (int l = 0; l < kLanes; ++l) {
+      EXPECT_EQ(*out[l], polar3(*in[l]).R) << "call " << call << ", lane " << l;
+    }
   }
 }
 

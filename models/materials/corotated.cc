@@ -7,30 +7,32 @@
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
 #include <Eigen/LU>
+#include <cstring>
 
 #include "models/materials/kinematics.h"
-#include "models/materials/tangent3.h"
+#include "models/materials/lanes.h"
 
 namespace springlab {
 namespace {
 
-template <typename Matrix, typename Polar>
-double Psi_of_polar(const Matrix& F, const Polar& p, const Lame& m) {
+// Psi and P need only the rotation R of F = R S.
+template <typename Matrix>
+double Psi_of_rotation(const Matrix& F, const Matrix& R, const Lame& m) {
   const double J = volume(F).J;
-  return m.mu * (F - p.R).squaredNorm() + 0.5 * m.lambda * (J - 1.0) * (J - 1.0);
+  return m.mu * (F - R).squaredNorm() + 0.5 * m.lambda * (J - 1.0) * (J - 1.0);
 }
 
-double Psi(const Mat& F, const Lame& m) { return Psi_of_polar(F, polar(F), m); }
+double Psi(const Mat& F, const Lame& m) { return Psi_of_rotation(F, polar(F).R, m); }
 
-template <typename Matrix, typename Polar>
-Matrix P_of_polar(const Matrix& F, const Polar& p, const Lame& m) {
+template <typename Matrix>
+Matrix P_of_rotation(const Matrix& F, const Matrix& R, const Lame& m) {
   const auto v = volume(F);
-  return 2.0 * m.mu * (F - p.R) + m.lambda * (v.J - 1.0) * v.g;
+  return 2.0 * m.mu * (F - R) + m.lambda * (v.J - 1.0) * v.g;
 }
 
 template <typename Matrix>
 Matrix P(const Matrix& F, const Lame& m) {
-  return P_of_polar(F, polar(F), m);
+  return P_of_rotation(F, Matrix(polar(F).R), m);
 }
 
 Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
@@ -59,45 +61,145 @@ Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
 // with c_a = R M a. det M = (s1 + s2)(s2 + s3)(s3 + s1) for the singular
 // values s_i, so the term is singular where an inverted element has
 // s2 + s3 = 0, as M^-1 is.
-Tangent3 tangent_blocks3_of_polar(const Eigen::Matrix3d& F, const Polar3& p,
-                                  const Eigen::Matrix3d& D, const Lame& m) {
-  const double trS = p.S.trace();
-  const Eigen::Matrix3d M = trS * Eigen::Matrix3d::Identity() - p.S;
-  const double two_mu_over_det_M = 2.0 * m.mu / M.determinant();
-  const Eigen::Matrix3d MD = M * D.transpose();  // column i: M d_i
-  const Eigen::Matrix3d c = p.R * MD;            // column i: c_i = R M d_i
-  const Eigen::Matrix3d V = F * p.R.transpose(); // R S R^T, the left stretch
-  const Volume3 v = volume(F);  // J and G = dJ/dF, the cofactor matrix
-  const double h = m.lambda * (v.J - 1.0);
-  const Eigen::Matrix3d GD = v.g * D.transpose();  // column i: G d_i
-  return symmetric_blocks([&](int i, int j) {
-    const Eigen::Vector3d a = D.row(i), b = D.row(j);
-    const double aMb = a.dot(MD.col(j));
-    Block3 block = Block3()
-                       .identity(2.0 * m.mu * a.dot(b) - two_mu_over_det_M * aMb * trS)
-                       .matrix(two_mu_over_det_M * aMb, V)
-                       .outer(two_mu_over_det_M, c.col(j), c.col(i))
-                       .outer(m.lambda, GD.col(i), GD.col(j));
-    return i == j ? block : block.volume_hessian(h, F, a, b);  // H_J(a, a) = 0 (a x a = 0)
-  });
+//
+// Written once for one element (T = double) and for kLanes elements in
+// vector lanes (T = Lanes, lanes.h), from row-major 3 x 3 arrays (F[3 r +
+// c]; D's rows are d_1, d_2, d_3). K is the 9 x 9 matrix of blocks
+// column-major, entry (3 i + r, 3 j + s) at index 3 i + r + 9 (3 j + s), as
+// in a Tangent3: store(index, value) writes it.
+template <typename T, typename Store>
+SPRINGLAB_LANES_INLINE void tangent_blocks(const T (&F)[9], const T (&R)[9], const T (&D)[9],
+                                           const T& mu, const T& lambda, const Store& store) {
+  T S[9];  // F = R S
+  stretch(R, F, S);
+  const T trS = S[0] + S[4] + S[8];
+  T M[9];  // tr(S) I - S
+  for (int k = 0; k < 9; ++k) M[k] = k % 4 == 0 ? trS - S[k] : -S[k];
+  const T det_M = M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) +
+                  M[2] * (M[3] * M[7] - M[4] * M[6]);
+  const T two_mu_over_det_M = 2.0 * mu / det_M;
+  T G[9];  // the cofactor matrix dJ/dF: column c is f_a x f_b, (c, a, b) cyclic
+  for (int r = 0; r < 3; ++r) {
+    const int p = (r + 1) % 3, q = (r + 2) % 3;
+    for (int c = 0; c < 3; ++c) {
+      const int a = (c + 1) % 3, b = (c + 2) % 3;
+      G[3 * r + c] = F[3 * p + a] * F[3 * q + b] - F[3 * q + a] * F[3 * p + b];
+    }
+  }
+  const T h = lambda * (F[0] * G[0] + F[3] * G[3] + F[6] * G[6] - 1.0);  // lambda (J - 1)
+  T MD[3][3], c[3][3], GD[3][3];  // M d_i, c_i = R M d_i and G d_i
+  for (int i = 0; i < 3; ++i) {
+    for (int r = 0; r < 3; ++r) {
+      MD[i][r] = M[3 * r] * D[3 * i] + M[3 * r + 1] * D[3 * i + 1] + M[3 * r + 2] * D[3 * i + 2];
+      GD[i][r] = G[3 * r] * D[3 * i] + G[3 * r + 1] * D[3 * i + 1] + G[3 * r + 2] * D[3 * i + 2];
+    }
+    for (int r = 0; r < 3; ++r) {
+      c[i][r] = R[3 * r] * MD[i][0] + R[3 * r + 1] * MD[i][1] + R[3 * r + 2] * MD[i][2];
+    }
+  }
+  T V[9];  // F R^T = R S R^T, the left stretch
+  for (int r = 0; r < 3; ++r) {
+    for (int s = 0; s < 3; ++s) {
+      V[3 * r + s] =
+          F[3 * r] * R[3 * s] + F[3 * r + 1] * R[3 * s + 1] + F[3 * r + 2] * R[3 * s + 2];
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) {
+      const T* a = &D[3 * i];
+      const T* b = &D[3 * j];
+      const T aMb = a[0] * MD[j][0] + a[1] * MD[j][1] + a[2] * MD[j][2];
+      const T ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+      const T beta = two_mu_over_det_M * aMb;
+      const T alpha = 2.0 * mu * ab - beta * trS;
+      T B[3][3];
+      for (int r = 0; r < 3; ++r) {
+        for (int s = 0; s < 3; ++s) {
+          B[r][s] = beta * V[3 * r + s] + two_mu_over_det_M * c[j][r] * c[i][s] +
+                    lambda * GD[i][r] * GD[j][s];
+        }
+        B[r][r] += alpha;
+      }
+      if (i != j) {  // - lambda (J - 1) [F (a x b)]x; H_J(a, a) = 0 (a x a = 0)
+        const T axb[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                          a[0] * b[1] - a[1] * b[0]};
+        T w[3];
+        for (int r = 0; r < 3; ++r) {
+          w[r] = F[3 * r] * axb[0] + F[3 * r + 1] * axb[1] + F[3 * r + 2] * axb[2];
+        }
+        B[0][1] += h * w[2];
+        B[0][2] -= h * w[1];
+        B[1][0] -= h * w[2];
+        B[1][2] += h * w[0];
+        B[2][0] += h * w[1];
+        B[2][1] -= h * w[0];
+      }
+      // Block (j, i) is block (i, j) transposed (a Hessian is symmetric);
+      // a diagonal block is written from its upper triangle.
+      for (int r = 0; r < 3; ++r) {
+        for (int s = i == j ? r : 0; s < 3; ++s) {
+          store(3 * i + r + 9 * (3 * j + s), B[r][s]);
+          store(3 * j + s + 9 * (3 * i + r), B[r][s]);
+        }
+      }
+    }
+  }
+}
+
+Tangent3 tangent_blocks3_of_rotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
+                                     const Eigen::Matrix3d& D, const Lame& m) {
+  double f[9], r[9], d[9];
+  for (int k = 0; k < 9; ++k) {
+    f[k] = F(k / 3, k % 3);
+    r[k] = R(k / 3, k % 3);
+    d[k] = D(k / 3, k % 3);
+  }
+  Tangent3 K;
+  tangent_blocks(f, r, d, m.mu, m.lambda, [&](int k, const double& v) { K.data()[k] = v; });
+  return K;
 }
 
 Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
-  return tangent_blocks3_of_polar(F, polar3(F), D, m);
+  return tangent_blocks3_of_rotation(F, polar3(F).R, D, m);
 }
 
-// The tetrahedra keep each element's R and S between calls at one state
+// The tetrahedra keep each element's R between calls at one state
 // (material.h).
-void derive3(const Eigen::Matrix3d& F, Derived3& d) { d.polar = polar3(F); }
+void derive3(const Eigen::Matrix3d& F, Derived3& d) { d.R = polar3(F).R; }
 double Psi3_derived(const Eigen::Matrix3d& F, const Derived3& d, const Lame& m) {
-  return Psi_of_polar(F, d.polar, m);
+  return Psi_of_rotation(F, d.R, m);
 }
 Eigen::Matrix3d P3_derived(const Eigen::Matrix3d& F, const Derived3& d, const Lame& m) {
-  return P_of_polar(F, d.polar, m);
+  return P_of_rotation(F, d.R, m);
 }
 Tangent3 tangent_blocks3_derived(const Eigen::Matrix3d& F, const Derived3& d,
                                  const Eigen::Matrix3d& D, const Lame& m) {
-  return tangent_blocks3_of_polar(F, d.polar, D, m);
+  return tangent_blocks3_of_rotation(F, d.R, D, m);
+}
+
+// The same for kLanes elements at once, in vector lanes (lanes.h).
+void derive3_lanes(const Eigen::Matrix3d* const (&F)[kLanes], Derived3* const (&d)[kLanes]) {
+  Eigen::Matrix3d* R[kLanes];
+  for (int l = 0; l < kLanes; ++l) R[l] = &d[l]->R;
+  rotation3_lanes(F, R);
+}
+SPRINGLAB_LANES_CLONES
+void tangent_blocks3_derived_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
+                                   const Derived3* const (&d)[kLanes],
+                                   const Eigen::Matrix3d* const (&D)[kLanes],
+                                   const Lame* const (&m)[kLanes], double (&K)[81][kLanes]) {
+  Lanes f[9], r[9], rows[9], mu, lambda;
+  for (int l = 0; l < kLanes; ++l) {
+    for (int k = 0; k < 9; ++k) {
+      f[k][l] = (*F[l])(k / 3, k % 3);
+      r[k][l] = d[l]->R(k / 3, k % 3);
+      rows[k][l] = (*D[l])(k / 3, k % 3);
+    }
+    mu[l] = m[l]->mu;
+    lambda[l] = m[l]->lambda;
+  }
+  tangent_blocks(f, r, rows, mu, lambda,
+                 [&](int k, const Lanes& v) { std::memcpy(K[k], &v, sizeof v); });
 }
 
 }  // namespace
@@ -115,6 +217,8 @@ const MaterialModel& corotated_material() {
       .Psi3_derived = Psi3_derived,
       .P3_derived = P3_derived,
       .tangent_blocks3_derived = tangent_blocks3_derived,
+      .derive3_lanes = derive3_lanes,
+      .tangent_blocks3_derived_lanes = tangent_blocks3_derived_lanes,
   };
   return model;
 }

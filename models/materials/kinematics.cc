@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "models/materials/lanes.h"
+
 namespace springlab {
 namespace {
 
@@ -127,61 +129,100 @@ bool rotation_by_newton(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
 // to one with e' = 5/8 e^3 + O(e^4): from e = 0.1 three steps leave X
 // orthogonal to rounding (the last one taken at |E|_F < 3e-6, where
 // e' < 2e-17). A step is products only, no division or square root, so it
-// is a short chain of multiplications where Higham's Newton step (below)
+// is a short chain of multiplications where Higham's Newton step (above)
 // waits on a square root, a division and a square root in turn: near rest
-// it takes about 70 ns where Higham's iteration takes 94 (benchmarks/README;
-// the plain Newton-Schulz step, E/2 only, took 85 in four or five steps). X
-// stays in scalars (x[r][c]). Returns false outside that range (then
-// Higham's iteration decides).
-bool rotation_by_series(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
-  double x[3][3];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) x[r][c] = F(r, c);
+// it takes about 52 ns where Higham's iteration takes 94, and eight
+// matrices in lanes (lanes.h, rotation3_lanes) about 10 ns each
+// (benchmarks/README).
+//
+// For one element (T = double, M = bool) or kLanes (T = Lanes, M = Mask):
+// F and X are row-major, F[3 r + c]. Where `proper` (det F > 0) the
+// iteration runs until E is small; `converged` tells where it got there
+// (false: F out of range, then Higham's iteration decides). A lane that
+// has converged stays as it is while the others go on, so that each lane's
+// steps are those of its element alone.
+template <typename T, typename M>
+SPRINGLAB_LANES_INLINE void rotation_by_series(const T (&F)[9], const M& proper, T (&x)[9],
+                                               M& converged) {
+  for (int k = 0; k < 9; ++k) x[k] = F[k];
+  M active = proper;
+  converged = proper ^ proper;  // nowhere yet
   for (int step = 0; step < 12; ++step) {
-    double E[3][3];  // X^T X - I
+    T E[3][3];  // X^T X - I
     for (int a = 0; a < 3; ++a) {
       for (int b = a; b < 3; ++b) {
-        E[a][b] = x[0][a] * x[0][b] + x[1][a] * x[1][b] + x[2][a] * x[2][b] - (a == b ? 1.0 : 0.0);
+        const T XtX = x[a] * x[b] + x[3 + a] * x[3 + b] + x[6 + a] * x[6 + b];
+        E[a][b] = XtX - (a == b ? 1.0 : 0.0);
         E[b][a] = E[a][b];
       }
     }
-    double error2 = 0.0;  // |E|_F^2
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) error2 += E[a][b] * E[a][b];
-    if (step == 0 && !(error2 < 0.36)) return false;
-    double T[3][3];  // I - E/2 + 3/8 E^2
+    T error2 = E[0][0] * E[0][0];  // |E|_F^2
+    for (int k = 1; k < 9; ++k) error2 += E[k / 3][k % 3] * E[k / 3][k % 3];
+    if (step == 0) active = active & (error2 < 0.36);
+    T S[3][3];  // I - E/2 + 3/8 E^2
     for (int a = 0; a < 3; ++a) {
       for (int b = a; b < 3; ++b) {
-        const double E2 = E[a][0] * E[0][b] + E[a][1] * E[1][b] + E[a][2] * E[2][b];
-        T[a][b] = (a == b ? 1.0 : 0.0) - 0.5 * E[a][b] + 0.375 * E2;
-        T[b][a] = T[a][b];
+        const T E2 = E[a][0] * E[0][b] + E[a][1] * E[1][b] + E[a][2] * E[2][b];
+        S[a][b] = (a == b ? 1.0 : 0.0) - 0.5 * E[a][b] + 0.375 * E2;
+        S[b][a] = S[a][b];
       }
     }
-    double next[3][3];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) next[r][c] = x[r][0] * T[0][c] + x[r][1] * T[1][c] + x[r][2] * T[2][c];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) x[r][c] = next[r][c];
-    if (error2 < 1e-11) {
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) R(r, c) = x[r][c];
-      return true;
+    T next[9];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        next[3 * r + c] = x[3 * r] * S[0][c] + x[3 * r + 1] * S[1][c] + x[3 * r + 2] * S[2][c];
+      }
     }
+    for (int k = 0; k < 9; ++k) assign_where(x[k], active, next[k]);
+    const M last = active & (error2 < 1e-11);
+    converged = converged | last;
+    active = active ^ last;  // last is within active
+    if (!any(active)) break;
   }
-  return false;
 }
 
 }  // namespace
 
 Polar3 polar3(const Eigen::Matrix3d& F) {
   // As polar() below for a solid, with fixed sizes.
-  Polar3 p;
+  double f[9], r[9], s[9];
+  for (int k = 0; k < 9; ++k) f[k] = F(k / 3, k % 3);
   const bool proper = F.determinant() > 0.0;
-  if (!proper || (!rotation_by_series(F, p.R) && !rotation_by_newton(F, p.R)))
-    p.R = rotation_by_svd(F);
-  const Eigen::Matrix3d S = p.R.transpose() * F;
-  p.S = 0.5 * (S + S.transpose());
+  bool converged = false;
+  if (proper) rotation_by_series(f, proper, r, converged);
+  Polar3 p;
+  if (!converged) {
+    if (!proper || !rotation_by_newton(F, p.R)) p.R = rotation_by_svd(F);
+    for (int k = 0; k < 9; ++k) r[k] = p.R(k / 3, k % 3);
+  }
+  stretch(r, f, s);
+  for (int k = 0; k < 9; ++k) {
+    p.R(k / 3, k % 3) = r[k];
+    p.S(k / 3, k % 3) = s[k];
+  }
   return p;
+}
+
+SPRINGLAB_LANES_CLONES
+void rotation3_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
+                     Eigen::Matrix3d* const (&R)[kLanes]) {
+  Lanes f[9], r[9];
+  for (int l = 0; l < kLanes; ++l) {
+    for (int k = 0; k < 9; ++k) f[k][l] = (*F[l])(k / 3, k % 3);
+  }
+  // det F (in the series' range |det F| > 0.25, so its sign is F.determinant()'s).
+  const Lanes det = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
+                    f[2] * (f[3] * f[7] - f[4] * f[6]);
+  const Mask proper = det > 0.0;
+  Mask converged;
+  rotation_by_series(f, proper, r, converged);
+  for (int l = 0; l < kLanes; ++l) {
+    if (converged[l] == 0) {
+      *R[l] = polar3(*F[l]).R;
+      continue;
+    }
+    for (int k = 0; k < 9; ++k) (*R[l])(k / 3, k % 3) = r[k][l];
+  }
 }
 
 Polar polar(const Mat& F) {

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>  // cross
 
+#include "models/materials/lanes.h"  // kLanes
 #include "models/materials/material.h"
 
 namespace springlab {
@@ -30,9 +31,9 @@ Volume volume(const Mat& F);
 // column cross products store each column as a two-double packet and a
 // double, which the next whole-matrix read (packets at other offsets)
 // cannot take from the store buffer on x86 (a store-forwarding stall per
-// column). With the scalar form corotated's force + dF/dx (Higham's
-// iteration takes a cofactor per step) runs about 10 % faster
-// (benchmarks/README).
+// column). With the scalar form corotated's force + dF/dx ran about 10 %
+// faster when Higham's iteration, a cofactor per step, decomposed every
+// element (benchmarks/README).
 inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
   Eigen::Matrix3d g;
   for (int c = 0; c < 3; ++c) {
@@ -60,14 +61,36 @@ struct Polar3 {
   Eigen::Matrix3d R, S;
 };
 Polar3 polar3(const Eigen::Matrix3d& F);
+// polar3(F).R of kLanes matrices at once, in vector lanes (lanes.h): *R[l]
+// is polar3(*F[l]).R bit for bit. (The pointers may repeat: a caller with
+// fewer matrices fills the rest of F with one of them and of R with
+// scratch.)
+void rotation3_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
+                     Eigen::Matrix3d* const (&R)[kLanes]);
+// S = (R^T F + F^T R) / 2 of row-major 3 x 3 arrays (R[3 r + c]), for one
+// matrix (T = double) or kLanes (T = Lanes): polar3's S from its R, the
+// same arithmetic as polar3 runs.
+template <typename T>
+SPRINGLAB_LANES_INLINE void stretch(const T (&R)[9], const T (&F)[9], T (&S)[9]) {
+  T RtF[9];
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      RtF[3 * a + b] = R[a] * F[b] + R[3 + a] * F[3 + b] + R[6 + a] * F[6 + b];
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) S[3 * a + b] = 0.5 * (RtF[3 * a + b] + RtF[3 * b + a]);
+  }
+}
 
 // What a material derives from a 3 x 3 F first, the costly step its
 // energy, stress and tangent blocks share (MaterialModel::derive3):
-// corotated's polar decomposition (about 100 ns), neo-Hookean's ln J (a
-// logarithm, about 12 ns). Each model fills the members it uses; the
-// tetrahedra keep each element's between calls at one state (tet_force.cc).
+// corotated's rotation R of F = R S (about 50 ns; S follows from R and F in
+// a few dozen flops, stretch), neo-Hookean's ln J (a logarithm, about
+// 12 ns). Each model fills the members it uses; the tetrahedra keep each
+// element's between calls at one state (tet_force.cc).
 struct Derived3 {
-  Polar3 polar;        // F = R S (corotated)
+  Eigen::Matrix3d R;   // F = R S (corotated)
   double log_J = 0.0;  // ln det F (neo-Hookean; det F > 0)
 };
 

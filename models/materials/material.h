@@ -21,6 +21,8 @@
 #include <string_view>
 #include <vector>
 
+#include "models/materials/lanes.h"  // kLanes
+
 namespace springlab {
 
 // A matrix of at most 3 x 3, on the stack.
@@ -67,7 +69,7 @@ struct MaterialModel {
   Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
                               const Lame& m) = nullptr;
   // A model whose energy, P and blocks of a 3 x 3 F first derive something
-  // costly from F (Derived3, kinematics.h: corotated's polar decomposition
+  // costly from F (Derived3, kinematics.h: corotated's rotation R of
   // F = R S, neo-Hookean's ln J) names that step derive3 and also gives
   // Psi, P and the blocks with its result passed in, so that a tetrahedron
   // evaluated several times at one state (an implicit method's line search
@@ -82,6 +84,20 @@ struct MaterialModel {
                                 const Lame& m) = nullptr;
   Tangent3 (*tangent_blocks3_derived)(const Eigen::Matrix3d& F, const Derived3& d,
                                       const Eigen::Matrix3d& D, const Lame& m) = nullptr;
+  // Optional, with derive3: derive3 and tangent_blocks3_derived for
+  // kLanes elements at once, in vector lanes (lanes.h), lane l's result bit
+  // for bit the one-element function's for element l (the shared tests
+  // check it). The tetrahedra call them kLanes elements at a time where a
+  // model has them (a pointer may repeat, to fill the lanes). The blocks
+  // stay in lanes: entry k of element l's 9 x 9 matrix (column-major, as
+  // in a Tangent3) is K[k][l].
+  void (*derive3_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
+                        Derived3* const (&d)[kLanes]) = nullptr;
+  void (*tangent_blocks3_derived_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
+                                        const Derived3* const (&d)[kLanes],
+                                        const Eigen::Matrix3d* const (&D)[kLanes],
+                                        const Lame* const (&m)[kLanes],
+                                        double (&K)[81][kLanes]) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
