@@ -15,6 +15,7 @@
 // g_0 = -(d_1 + d_2 + d_3):
 //   K_i0 = -sum_j K_ij,  K_0j = -sum_i K_ij,  K_00 = sum_ij K_ij.
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <bit>
@@ -50,8 +51,7 @@ class TetrahedronForce final : public ElementTerm {
       const RestShape shape = rest_shape(X, 3);
       t.D = shape.G.bottomRows(3);
       t.W = shape.W;
-      t.Dw = std::sqrt(t.W) * t.D;
-      t.minus_WDt = -t.W * t.D.transpose();
+      t.sqrt_W = std::sqrt(t.W);
       const MaterialSpec& m = materials[static_cast<std::size_t>(block.materials[e])];
       t.model = find_material_model(m.model);
       t.lame = lame(m.young, m.poisson);
@@ -61,44 +61,39 @@ class TetrahedronForce final : public ElementTerm {
 
   std::string_view name() const override { return name_; }
   void add_force(const Configuration& c, double* f) const override {
-    const auto add = [&](const Tet& t, const Eigen::Matrix3d& P) {
-      const Eigen::Matrix3d H = P * t.minus_WDt;  // columns f_1, f_2, f_3
-      node(f, t, 0) -= H.rowwise().sum();
-      for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
-    };
-    const auto P_of = [&](std::size_t e) -> Eigen::Matrix3d {
-      const Tet& t = tets_[e];
-      const Eigen::Matrix3d F = deformation(c, t);
-      if (kept_.empty() || t.model->derive3 == nullptr) return P3(*t.model, F, t.lame);
-      return t.model->P3_derived(F, derived_of(e, F), t.lame);
-    };
-    // Element e + 1's P is computed before element e's force is added: P
-    // comes back from the material through memory, and reading it at once
-    // would straddle the stores that have just written it and wait for them
-    // to reach the cache (a store-forwarding stall, up to 5 ns per element,
-    // benchmarks/README). A step later they have.
-    if (tets_.empty()) return;
-    Eigen::Matrix3d P_next = P_of(0);
-    for (std::size_t e = 0; e < tets_.size(); ++e) {
-      const Eigen::Matrix3d P = P_next;
-      if (e + 1 < tets_.size()) P_next = P_of(e + 1);
-      add(tets_[e], P);
+    Chunk chunk;
+    for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
+      fill(c, first, chunk);
+      // Every P of the chunk before any is added: P comes back from the
+      // material through memory, and reading it at once would straddle the
+      // stores that have just written it and wait for them to reach the
+      // cache (a store-forwarding stall, up to 5 ns per element,
+      // benchmarks/README).
+      std::array<Eigen::Matrix3d, kLanes> P;
+      for (std::size_t l = 0; l < chunk.size; ++l) {
+        const Tet& t = tets_[first + l];
+        P[l] = chunk.d[l] != nullptr ? t.model->P3_derived(chunk.F[l], *chunk.d[l], t.lame)
+                                     : P3(*t.model, chunk.F[l], t.lame);
+      }
+      for (std::size_t l = 0; l < chunk.size; ++l) {
+        const Tet& t = tets_[first + l];
+        const Eigen::Matrix3d minus_WDt = -t.W * t.D.transpose();
+        const Eigen::Matrix3d H = P[l] * minus_WDt;  // columns f_1, f_2, f_3
+        node(f, t, 0) -= H.rowwise().sum();
+        for (int j = 1; j < 4; ++j) node(f, t, j) += H.col(j - 1);
+      }
     }
   }
 
   double potential_energy(const Configuration& c) const override {
     double sum = 0.0;
-    for (std::size_t e = 0; e < tets_.size(); ++e) {
-      const Tet& t = tets_[e];
-      const Eigen::Matrix3d F = deformation(c, t);
-      if (t.model->derive3 == nullptr) {
-        sum += t.W * t.model->Psi(Mat(F), t.lame);
-      } else if (kept_.empty()) {  // the same arithmetic, kept or not
-        Derived3 d;
-        t.model->derive3(F, d);
-        sum += t.W * t.model->Psi3_derived(F, d, t.lame);
-      } else {
-        sum += t.W * t.model->Psi3_derived(F, derived_of(e, F), t.lame);
+    Chunk chunk;
+    for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
+      fill(c, first, chunk);
+      for (std::size_t l = 0; l < chunk.size; ++l) {
+        const Tet& t = tets_[first + l];
+        sum += t.W * (chunk.d[l] != nullptr ? t.model->Psi3_derived(chunk.F[l], *chunk.d[l], t.lame)
+                                            : t.model->Psi(Mat(chunk.F[l]), t.lame));
       }
     }
     return sum;
@@ -127,18 +122,35 @@ class TetrahedronForce final : public ElementTerm {
 
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx == nullptr) return;
-    for (std::size_t e = 0; e < tets_.size(); ++e) add_stiffness(c, e, slots_[e], dfdx);
-  }
-
-  void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
-    for (std::size_t e = 0; e < tets_.size(); ++e) {
-      Matrix12 K = Matrix12::Zero();
-      add_stiffness(c, e, dense_slots(), K.data());
-      make_definite(K);
-      scatter(slots_[e], K, dfdx);
+    if (kept_.empty()) kept_.resize(tets_.size());  // keep from the first dF/dx on
+    Chunk chunk;
+    alignas(64) double K[81][kLanes];
+    for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
+      fill(c, first, chunk);
+      if (blocks_in_lanes(chunk, K)) {
+        for (std::size_t l = 0; l < chunk.size; ++l) {
+          add_blocks([&](int r, int col) { return K[r + 9 * col][l]; }, slots_[first + l], dfdx);
+        }
+      } else {
+        for (std::size_t l = 0; l < chunk.size; ++l)
+          add_blocks(blocks(chunk, l), slots_[first + l], dfdx);
+      }
     }
   }
 
+  void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
+    if (kept_.empty()) kept_.resize(tets_.size());
+    Chunk chunk;
+    for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
+      fill(c, first, chunk);
+      for (std::size_t l = 0; l < chunk.size; ++l) {
+        Matrix12 K = Matrix12::Zero();
+        add_blocks(blocks(chunk, l), dense_slots(), K.data());
+        make_definite(K);
+        scatter(slots_[first + l], K, dfdx);
+      }
+    }
+  }
 
  protected:
   std::size_t element_count() const override { return tets_.size(); }
@@ -155,9 +167,8 @@ class TetrahedronForce final : public ElementTerm {
   struct Tet {
     std::array<int, 4> nodes{};  // internal indices
     Eigen::Matrix3d D;           // Dm^-1: its rows are g_1, g_2, g_3
-    Eigen::Matrix3d Dw;          // sqrt(W) D (add_stiffness)
-    Eigen::Matrix3d minus_WDt;   // -W D^T (add_force)
     double W = 0.0;              // the rest volume
+    double sqrt_W = 0.0;         // (the blocks take the rows of sqrt(W) D)
     const MaterialModel* model = nullptr;
     Lame lame;
   };
@@ -172,6 +183,8 @@ class TetrahedronForce final : public ElementTerm {
     return Eigen::Map<const Eigen::Vector3d>(c.x + 3 * t.nodes[static_cast<std::size_t>(j)]);
   }
 
+  static Eigen::Matrix3d Dw(const Tet& t) { return t.sqrt_W * t.D; }
+
   // F = Ds Dm^-1.
   static Eigen::Matrix3d deformation(const Configuration& c, const Tet& t) {
     Eigen::Matrix3d Ds;
@@ -180,27 +193,158 @@ class TetrahedronForce final : public ElementTerm {
     return Ds * t.D;
   }
 
+  // Up to kLanes consecutive elements, first .. first + size - 1: their F,
+  // and what each one's model derives from it first (MaterialModel::derive3;
+  // d[l] = nullptr where it derives nothing).
+  struct Chunk {
+    std::size_t first = 0, size = 0;
+    std::array<Eigen::Matrix3d, kLanes> F;
+    std::array<Derived3*, kLanes> d{};
+    std::array<Derived3, kLanes> scratch;  // when nothing is kept
+    Derived3 spare;                        // the output of lanes left over
+    bool one_model = false;                // every element's model is the first's
+  };
+
+  // Fills chunk with elements first, first + 1, ... What a model derives
+  // from F is kept per element once dF/dx has been asked for (kept_ is then
+  // sized): derived when F differs, bit for bit, from the F of the
+  // element's last call, else kept from it. An implicit method asks for the
+  // energy, the force and dF/dx at the state its line search accepts, and
+  // derives it once per F for all three; the result is the same as
+  // deriving it again. An explicit method, which never asks for dF/dx,
+  // keeps nothing. Elements whose model derives in lanes
+  // (MaterialModel::derive3_lanes) are derived kLanes at a time, the same
+  // result bit for bit.
+  void fill(const Configuration& c, std::size_t first, Chunk& chunk) const {
+    chunk.first = first;
+    chunk.size = std::min<std::size_t>(kLanes, tets_.size() - first);
+    const MaterialModel* model = tets_[first].model;
+    chunk.one_model = true;
+    std::array<std::size_t, kLanes> missing{};  // lanes to derive
+    std::size_t n_missing = 0;
+    for (std::size_t l = 0; l < chunk.size; ++l) {
+      const Tet& t = tets_[first + l];
+      chunk.one_model = chunk.one_model && t.model == model;
+      chunk.F[l] = deformation(c, t);
+    }
+    // In a second pass: F has just been stored, and copying it at once
+    // would straddle those stores and wait for them (a store-forwarding
+    // stall, benchmarks/README).
+    for (std::size_t l = 0; l < chunk.size; ++l) {
+      const Tet& t = tets_[first + l];
+      chunk.d[l] = nullptr;
+      if (t.model->derive3 == nullptr) continue;
+      if (kept_.empty()) {
+        chunk.d[l] = &chunk.scratch[l];
+        missing[n_missing++] = l;
+        continue;
+      }
+      Kept& k = kept_[first + l];
+      chunk.d[l] = &k.d;
+      if (!k.set || !same_bits(k.F, chunk.F[l])) {
+        k.F = chunk.F[l];
+        k.set = true;
+        missing[n_missing++] = l;
+      }
+    }
+    if (n_missing == 0) return;
+    if (chunk.one_model && model->derive3_lanes != nullptr) {
+      const Eigen::Matrix3d* in[kLanes];
+      Derived3* out[kLanes];
+      for (std::size_t m = 0; m < static_cast<std::size_t>(kLanes); ++m) {
+        in[m] = &chunk.F[missing[m < n_missing ? m : 0]];
+        out[m] = m < n_missing ? chunk.d[missing[m]] : &chunk.spare;
+      }
+      model->derive3_lanes(in, out);
+      return;
+    }
+    for (std::size_t m = 0; m < n_missing; ++m) {
+      const std::size_t l = missing[m];
+      tets_[first + l].model->derive3(chunk.F[l], *chunk.d[l]);
+    }
+  }
+
+  // W A(d_i, d_j) for element l of the chunk: its blocks from the rows of D
+  // scaled by w = sqrt(W) (A(a, b) is bilinear). (Dw and -W D^T are
+  // computed where they are used, not kept per element: an element's data
+  // is read from memory at every call, and half as many bytes per element
+  // take less time to read than the nine products do.)
+  Tangent3 blocks(const Chunk& chunk, std::size_t l) const {
+    const Tet& t = tets_[chunk.first + l];
+    return chunk.d[l] != nullptr
+               ? t.model->tangent_blocks3_derived(chunk.F[l], *chunk.d[l], Dw(t), t.lame)
+               : tangent_blocks3(*t.model, chunk.F[l], Dw(t), t.lame);
+  }
+  // The same for every element of the chunk at once, in lanes (entry k of
+  // element l's at K[k][l]), where its model computes them so
+  // (MaterialModel::tangent_blocks3_derived_lanes); false where it does not.
+  bool blocks_in_lanes(const Chunk& chunk, double (&K)[81][kLanes]) const {
+    const MaterialModel* model = tets_[chunk.first].model;
+    if (!chunk.one_model || model->tangent_blocks3_derived_lanes == nullptr) return false;
+    const Eigen::Matrix3d* F[kLanes];
+    const Derived3* d[kLanes];
+    const Eigen::Matrix3d* D[kLanes];
+    const Lame* m[kLanes];
+    std::array<Eigen::Matrix3d, kLanes> rows;  // sqrt(W) D
+    for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
+      const std::size_t e = l < chunk.size ? l : 0;
+      const Tet& t = tets_[chunk.first + e];
+      F[l] = &chunk.F[e];
+      d[l] = chunk.d[e];
+      rows[l] = Dw(t);
+      D[l] = &rows[l];
+      m[l] = &t.lame;
+    }
+    model->tangent_blocks3_derived_lanes(F, d, D, m, K);
+    return true;
+  }
+
   // Adds the element's df/dx (above) to the value array at `slots`, block by
-  // block, without forming the 12 x 12 matrix. A(a, b) is bilinear, so the
-  // rows of D scaled by w = sqrt(W) (Tet::Dw) give B_ij = W A(d_i, d_j)
-  // with no 9 x 9 product: K_ij = -B_ij for nodes 1..3, and node 0's blocks
-  // are K_i0 = -sum_j K_ij = S_i (S_i = sum_j B_ij), K_0i = K_i0^T (K is
+  // block, without forming the 12 x 12 matrix, from B_ij = W A(d_i, d_j)
+  // (entry (r, c) of the 9 x 9 matrix of blocks is B(r, c)):
+  // K_ij = -B_ij for nodes 1..3, and node 0's blocks are
+  // K_i0 = -sum_j K_ij = S_i (S_i = sum_j B_ij), K_0i = K_i0^T (K is
   // symmetric) and K_00 = -sum_i K_i0 = -sum_i S_i.
-  void add_stiffness(const Configuration& c, std::size_t e, const Slots& slots,
-                     double* values) const {
-    const Tet& t = tets_[e];
-    const Eigen::Matrix3d F = deformation(c, t);
-    const Tangent3 B = t.model->derive3 != nullptr
-                           ? t.model->tangent_blocks3_derived(F, derived_of(e, F), t.Dw, t.lame)
-                           : tangent_blocks3(*t.model, F, t.Dw, t.lame);
-    // Rows 3 (i - 1) .. of S: S_i.
-    const Eigen::Matrix<double, 9, 3> S =
-        B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
-    const Eigen::Matrix3d S_sum = S.middleRows<3>(0) + S.middleRows<3>(3) + S.middleRows<3>(6);
+  template <typename Entry>
+  static void add_blocks(const Entry& B, const Slots& slots, double* values) {
+    double S[9][3];  // rows 3 (i - 1) ..: S_i
+    for (int row = 0; row < 9; ++row) {
+      for (int s = 0; s < 3; ++s) S[row][s] = B(row, s) + B(row, 3 + s) + B(row, 6 + s);
+    }
+    double S_sum[3][3];
+    for (int r = 0; r < 3; ++r) {
+      for (int s = 0; s < 3; ++s) S_sum[r][s] = S[r][s] + S[3 + r][s] + S[6 + r][s];
+    }
     // All four nodes free (each has its diagonal block, slot 15 k): no slot is
     // -1, and the adds below need no test.
     const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
     // Adds sign * (u, v, w), column s of a block, to block (i, j).
+    const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
+      const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
+      if (!all_free && offset < 0) return;
+      double* to = values + offset;
+      to[0] += sign * u;
+      to[1] += sign * v;
+      to[2] += sign * w;
+    };
+    for (int s = 0; s < 3; ++s) {
+      add(0, 0, s, -1.0, S_sum[0][s], S_sum[1][s], S_sum[2][s]);
+      for (int i = 1; i < 4; ++i) {
+        const int r = 3 * (i - 1);
+        add(i, 0, s, 1.0, S[r][s], S[r + 1][s], S[r + 2][s]);
+        add(0, i, s, 1.0, S[r + s][0], S[r + s][1], S[r + s][2]);
+        for (int j = 1; j < 4; ++j) {
+          const int column = 3 * (j - 1) + s;
+          add(i, j, s, -1.0, B(r, column), B(r + 1, column), B(r + 2, column));
+        }
+      }
+    }
+  }
+  static void add_blocks(const Tangent3& B, const Slots& slots, double* values) {
+    const Eigen::Matrix<double, 9, 3> S =
+        B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
+    const Eigen::Matrix3d S_sum = S.middleRows<3>(0) + S.middleRows<3>(3) + S.middleRows<3>(6);
+    const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
     const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
       const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
       if (!all_free && offset < 0) return;
@@ -221,25 +365,6 @@ class TetrahedronForce final : public ElementTerm {
         for (int j = 1; j < 4; ++j) add_column(i, j, s, -1.0, B.col(3 * (j - 1) + s).data() + r);
       }
     }
-  }
-
-  // What the model derives from element e's F first (MaterialModel::derive3:
-  // corotated's R and S, neo-Hookean's ln J): derived when F differs, bit
-  // for bit, from the F of the element's last call, else kept from it. An
-  // implicit method asks for the energy, the force and dF/dx at the state
-  // its line search accepts, and derives it once per F for all three; the
-  // result is the same as deriving it again. The energy and the force keep
-  // it only once dF/dx has been asked for (kept_ is then sized): an
-  // explicit method, which never asks, pays nothing.
-  const Derived3& derived_of(std::size_t e, const Eigen::Matrix3d& F) const {
-    if (kept_.empty()) kept_.resize(tets_.size());
-    Kept& k = kept_[e];
-    if (!k.set || !same_bits(k.F, F)) {
-      tets_[e].model->derive3(F, k.d);
-      k.F = F;
-      k.set = true;
-    }
-    return k.d;
   }
 
   // a == b bit for bit, entry by entry. F has just been stored, and
