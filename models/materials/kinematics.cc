@@ -156,8 +156,11 @@ SPRINGLAB_LANES_INLINE void rotation_by_series(const T (&F)[9], const M& proper,
         E[b][a] = E[a][b];
       }
     }
-    T error2 = E[0][0] * E[0][0];  // |E|_F^2
-    for (int k = 1; k < 9; ++k) error2 += E[k / 3][k % 3] * E[k / 3][k % 3];
+    // |E|_F^2 (E is symmetric), summed as a short tree: in lanes the next
+    // X waits on it (a lane stops where it is small).
+    const T diagonal = (E[0][0] * E[0][0] + E[1][1] * E[1][1]) + E[2][2] * E[2][2];
+    const T off_diagonal = (E[0][1] * E[0][1] + E[0][2] * E[0][2]) + E[1][2] * E[1][2];
+    const T error2 = diagonal + 2.0 * off_diagonal;
     if (step == 0) active = active & (error2 < 0.36);
     T S[3][3];  // I - E/2 + 3/8 E^2
     for (int a = 0; a < 3; ++a) {
