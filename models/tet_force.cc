@@ -341,30 +341,7 @@ class TetrahedronForce final : public ElementTerm {
     }
   }
   static void add_blocks(const Tangent3& B, const Slots& slots, double* values) {
-    const Eigen::Matrix<double, 9, 3> S =
-        B.middleCols<3>(0) + B.middleCols<3>(3) + B.middleCols<3>(6);
-    const Eigen::Matrix3d S_sum = S.middleRows<3>(0) + S.middleRows<3>(3) + S.middleRows<3>(6);
-    const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
-    const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
-      const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
-      if (!all_free && offset < 0) return;
-      double* to = values + offset;
-      to[0] += sign * u;
-      to[1] += sign * v;
-      to[2] += sign * w;
-    };
-    const auto add_column = [&](int i, int j, int s, double sign, const double* column) {
-      add(i, j, s, sign, column[0], column[1], column[2]);
-    };
-    for (int s = 0; s < 3; ++s) {
-      add_column(0, 0, s, -1.0, S_sum.col(s).data());
-      for (int i = 1; i < 4; ++i) {
-        const int r = 3 * (i - 1);
-        add_column(i, 0, s, 1.0, S.col(s).data() + r);
-        add(0, i, s, 1.0, S(r + s, 0), S(r + s, 1), S(r + s, 2));
-        for (int j = 1; j < 4; ++j) add_column(i, j, s, -1.0, B.col(3 * (j - 1) + s).data() + r);
-      }
-    }
+    add_blocks([&](int r, int c) { return B(r, c); }, slots, values);
   }
 
   // a == b bit for bit, entry by entry. F has just been stored, and
