@@ -266,9 +266,9 @@ class TetrahedronForce final : public ElementTerm {
 
   // W A(d_i, d_j) for element l of the chunk: its blocks from the rows of D
   // scaled by w = sqrt(W) (A(a, b) is bilinear). (Dw and -W D^T are
-  // computed where they are used, not kept per element: an element's data
-  // is read from memory at every call, and half as many bytes per element
-  // take less time to read than the nine products do.)
+  // computed where they are used rather than stored per element: the
+  // element's data is read from memory at every call, and halving it saved
+  // more time than the nine products cost, benchmarks/README.)
   Tangent3 blocks(const Chunk& chunk, std::size_t l) const {
     const Tet& t = tets_[chunk.first + l];
     return chunk.d[l] != nullptr

@@ -132,7 +132,7 @@ bool rotation_by_newton(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
 // is a short chain of multiplications where Higham's Newton step (above)
 // waits on a square root, a division and a square root in turn: near rest
 // it takes about 52 ns where Higham's iteration takes 94, and eight
-// matrices in lanes (lanes.h, rotation3_lanes) about 10 ns each
+// matrices in lanes (lanes.h, rotation3_lanes) about 16 ns each
 // (benchmarks/README).
 //
 // For one element (T = double, M = bool) or kLanes (T = Lanes, M = Mask):

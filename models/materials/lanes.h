@@ -12,8 +12,8 @@
 //
 // Lanes is a GCC and Clang vector type: + - * / and comparisons act lane by
 // lane (a comparison gives a Mask, -1 in a lane where it holds, 0
-// elsewhere; & | ~ combine masks, as they combine bools, promoted to int,
-// for one element). A function whose kernel runs on Lanes is compiled twice
+// elsewhere; & | ^ ~ combine masks, as & | ^ combine bools, promoted to
+// int, for one element). A function whose kernel runs on Lanes is compiled twice
 // (SPRINGLAB_LANES_CLONES): for x86-64-v4 (AVX-512, one instruction for all
 // eight lanes) and for the default target (four SSE2 instructions for
 // eight lanes), and the loader picks the one the processor runs. A Lanes
@@ -36,8 +36,9 @@ using Mask = decltype(Lanes{} < Lanes{});
 #define SPRINGLAB_LANES_CLONES
 #endif
 
-// A kernel template, built into each clone of the function that calls it
-// (not called from the default target's copy).
+// A kernel template is always inlined, so that each clone of the function
+// that runs it compiles it for its own target (a call would run the
+// default target's code).
 #define SPRINGLAB_LANES_INLINE [[gnu::always_inline]] inline
 
 // x = where ? a : x, lane by lane (for one element, a bool).
