@@ -16,7 +16,9 @@
 // int, for one element). A function whose kernel runs on Lanes is compiled twice
 // (SPRINGLAB_LANES_CLONES): for x86-64-v4 (AVX-512, one instruction for all
 // eight lanes) and for the default target (four SSE2 instructions for
-// eight lanes), and the loader picks the one the processor runs. A Lanes
+// eight lanes), and the loader picks the one the processor runs
+// (SPRINGLAB_NO_LANES_CLONES builds the default one only: the sanitizer
+// preset does, so that its tests run that copy). A Lanes
 // value is passed by reference only: passing a 64-byte vector by value
 // from code built for the default target changes the calling convention,
 // which Clang refuses.
