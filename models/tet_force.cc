@@ -14,6 +14,9 @@
 // 9 x 9 dPdF and two 9 x 9 products. Node 0's blocks follow from
 // g_0 = -(d_1 + d_2 + d_3):
 //   K_i0 = -sum_j K_ij,  K_0j = -sum_i K_ij,  K_00 = sum_ij K_ij.
+// Each pass takes the elements kLanes at a time (a Chunk, fill below), so
+// that a model that derives, or gives its blocks, in vector lanes
+// (MaterialModel::derive3_lanes, lanes.h) computes a chunk's in one call.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
