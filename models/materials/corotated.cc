@@ -6,7 +6,6 @@
 // rotation). An inverted solid keeps det R = 1, so its last sigma is
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
-#include <Eigen/LU>
 #include <cstring>
 
 #include "models/materials/kinematics.h"
@@ -75,17 +74,11 @@ SPRINGLAB_LANES_INLINE void tangent_blocks(const T (&F)[9], const T (&R)[9], con
   const T trS = S[0] + S[4] + S[8];
   T M[9];  // tr(S) I - S
   for (int k = 0; k < 9; ++k) M[k] = k % 4 == 0 ? trS - S[k] : -S[k];
-  const T det_M = M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) +
-                  M[2] * (M[3] * M[7] - M[4] * M[6]);
+  T det_M;
+  determinant(M, det_M);
   const T two_mu_over_det_M = 2.0 * mu / det_M;
-  T G[9];  // the cofactor matrix dJ/dF: column c is f_a x f_b, (c, a, b) cyclic
-  for (int r = 0; r < 3; ++r) {
-    const int p = (r + 1) % 3, q = (r + 2) % 3;
-    for (int c = 0; c < 3; ++c) {
-      const int a = (c + 1) % 3, b = (c + 2) % 3;
-      G[3 * r + c] = F[3 * p + a] * F[3 * q + b] - F[3 * q + a] * F[3 * p + b];
-    }
-  }
+  T G[9];  // the cofactor matrix dJ/dF (kinematics.h)
+  cofactor(F, G);
   const T h = lambda * (F[0] * G[0] + F[3] * G[3] + F[6] * G[6] - 1.0);  // lambda (J - 1)
   T MD[3][3], c[3][3], GD[3][3];  // M d_i, c_i = R M d_i and G d_i
   for (int i = 0; i < 3; ++i) {

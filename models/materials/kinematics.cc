@@ -214,8 +214,8 @@ void rotation3_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
     for (int k = 0; k < 9; ++k) f[k][l] = (*F[l])(k / 3, k % 3);
   }
   // det F (in the series' range |det F| > 0.25, so its sign is F.determinant()'s).
-  const Lanes det = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
-                    f[2] * (f[3] * f[7] - f[4] * f[6]);
+  Lanes det;
+  determinant(f, det);
   const Mask proper = det > 0.0;
   Mask converged;
   rotation_by_series(f, proper, r, converged);

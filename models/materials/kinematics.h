@@ -24,26 +24,41 @@ struct Volume {
   Mat g;  // dJ/dF, the shape of F
 };
 Volume volume(const Mat& F);
-// g = dJ/dF of a solid's 3 x 3 F, fixed size: the cofactor matrix, columns
-// f1 x f2, f2 x f0, f0 x f1 (volume() uses it; so do the closed-form
-// tangents, tangent3.h). Written entry by entry, (f_a x f_b)_r =
-// F_pa F_qb - F_qa F_pb with (r, p, q) and (c, a, b) cyclic: Eigen's
-// column cross products store each column as a two-double packet and a
-// double, which the next whole-matrix read (packets at other offsets)
-// cannot take from the store buffer on x86 (a store-forwarding stall per
-// column). With the scalar form corotated's force + dF/dx ran about 10 %
-// faster when Higham's iteration, a cofactor per step, decomposed every
-// element (benchmarks/README).
-inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
-  Eigen::Matrix3d g;
-  for (int c = 0; c < 3; ++c) {
-    const int a = (c + 1) % 3, b = (c + 2) % 3;  // g_c = f_a x f_b
-    for (int r = 0; r < 3; ++r) {
-      const int p = (r + 1) % 3, q = (r + 2) % 3;
-      g(r, c) = F(p, a) * F(q, b) - F(q, a) * F(p, b);
+// g = dJ/dF of a solid's 3 x 3 F: the cofactor matrix, columns f1 x f2,
+// f2 x f0, f0 x f1, and det F, on row-major arrays (F[3 r + c]) for one
+// matrix (T = double) or kLanes (T = Lanes, lanes.h). Written entry by
+// entry, (f_a x f_b)_r = F_pa F_qb - F_qa F_pb with (r, p, q) and (c, a, b)
+// cyclic.
+template <typename T>
+SPRINGLAB_LANES_INLINE void cofactor(const T (&F)[9], T (&G)[9]) {
+  for (int r = 0; r < 3; ++r) {
+    const int p = (r + 1) % 3, q = (r + 2) % 3;
+    for (int c = 0; c < 3; ++c) {
+      const int a = (c + 1) % 3, b = (c + 2) % 3;  // g_c = f_a x f_b
+      G[3 * r + c] = F[3 * p + a] * F[3 * q + b] - F[3 * q + a] * F[3 * p + b];
     }
   }
-  return g;
+}
+template <typename T>
+SPRINGLAB_LANES_INLINE void determinant(const T (&A)[9], T& det) {
+  det = A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+        A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+// The cofactor matrix of an Eigen 3 x 3 F, fixed size (volume() uses it;
+// so do the closed-form tangents, tangent3.h), entry by entry as above:
+// Eigen's column cross products store each column as a two-double packet
+// and a double, which the next whole-matrix read (packets at other
+// offsets) cannot take from the store buffer on x86 (a store-forwarding
+// stall per column). With the scalar form corotated's force + dF/dx ran
+// about 10 % faster when Higham's iteration, a cofactor per step,
+// decomposed every element (benchmarks/README).
+inline Eigen::Matrix3d cofactor(const Eigen::Matrix3d& F) {
+  double f[9], g[9];
+  for (int k = 0; k < 9; ++k) f[k] = F(k / 3, k % 3);
+  cofactor(f, g);
+  Eigen::Matrix3d G;
+  for (int k = 0; k < 9; ++k) G(k / 3, k % 3) = g[k];
+  return G;
 }
 // (dg/dF)[dF] (the second derivative of J along dF).
 Mat volume_differential(const Mat& F, const Mat& dF);
