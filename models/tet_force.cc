@@ -23,17 +23,70 @@
 #include <cmath>
 #include <bit>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "models/fem_elements.h"
 #include "models/materials/kinematics.h"  // Derived3
+#include "models/materials/lanes.h"
 #include "models/materials/material.h"
 
 namespace springlab {
 namespace {
 
 using Matrix12 = Eigen::Matrix<double, 12, 12>;
+
+// The element's df/dx (above), block by block, from B_ij = W A(d_i,
+// d_j) (entry (r, c) of the 9 x 9 matrix of blocks is B(r, c)):
+// K_ij = -B_ij for nodes 1..3, and node 0's blocks are
+// K_i0 = -sum_j K_ij = S_i (S_i = sum_j B_ij), K_0i = K_i0^T (K is
+// symmetric) and K_00 = -sum_i K_i0 = -sum_i S_i. Gives column s of
+// each block (i, j) as add(i, j, s, u, v, w). For one element (T =
+// double) or kLanes (T = Lanes, lanes.h), the same sums in the same
+// order.
+template <typename T, typename Entry, typename Add>
+SPRINGLAB_LANES_INLINE void element_matrix(const Entry& B, const Add& add) {
+  T S[9][3];  // rows 3 (i - 1) ..: S_i
+  for (int row = 0; row < 9; ++row) {
+    for (int s = 0; s < 3; ++s) S[row][s] = B(row, s) + B(row, 3 + s) + B(row, 6 + s);
+  }
+  T S_sum[3][3];
+  for (int r = 0; r < 3; ++r) {
+    for (int s = 0; s < 3; ++s) S_sum[r][s] = S[r][s] + S[3 + r][s] + S[6 + r][s];
+  }
+  for (int s = 0; s < 3; ++s) {
+    add(0, 0, s, -S_sum[0][s], -S_sum[1][s], -S_sum[2][s]);
+    for (int i = 1; i < 4; ++i) {
+      const int r = 3 * (i - 1);
+      add(i, 0, s, S[r][s], S[r + 1][s], S[r + 2][s]);
+      add(0, i, s, S[r + s][0], S[r + s][1], S[r + s][2]);
+      for (int j = 1; j < 4; ++j) {
+        const int column = 3 * (j - 1) + s;
+        add(i, j, s, -B(r, column), -B(r + 1, column), -B(r + 2, column));
+      }
+    }
+  }
+}
+
+// The same for kLanes elements whose blocks are in lanes (B[k][l]: entry
+// k of element l's Tangent3): their matrices in lanes first, column s of
+// block (i, j) at K[3 (12 j + 3 i + s) ..][l], then added element by
+// element.
+using LaneMatrices = double[144][kLanes];
+SPRINGLAB_LANES_CLONES
+void element_matrices_in_lanes(const double (&B)[81][kLanes], LaneMatrices& K) {
+  Lanes b[81];
+  std::memcpy(b, B, sizeof b);
+  element_matrix<Lanes>(
+      [&](int r, int c) -> const Lanes& { return b[r + 9 * c]; },
+      [&](int i, int j, int s, const Lanes& u, const Lanes& v, const Lanes& w) {
+        double(*to)[kLanes] = &K[3 * (12 * j + 3 * i + s)];
+        std::memcpy(to[0], &u, sizeof u);
+        std::memcpy(to[1], &v, sizeof v);
+        std::memcpy(to[2], &w, sizeof w);
+      });
+}
 
 class TetrahedronForce final : public ElementTerm {
  public:
@@ -127,13 +180,13 @@ class TetrahedronForce final : public ElementTerm {
     if (dfdx == nullptr) return;
     if (kept_.empty()) kept_.resize(tets_.size());  // keep from the first dF/dx on
     Chunk chunk;
-    alignas(64) double K[81][kLanes];
+    alignas(64) double B[81][kLanes];
+    alignas(64) LaneMatrices K;
     for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
       fill(c, first, chunk);
-      if (blocks_in_lanes(chunk, K)) {
-        for (std::size_t l = 0; l < chunk.size; ++l) {
-          add_blocks([&](int r, int col) { return K[r + 9 * col][l]; }, slots_[first + l], dfdx);
-        }
+      if (blocks_in_lanes(chunk, B)) {
+        element_matrices_in_lanes(B, K);
+        for (std::size_t l = 0; l < chunk.size; ++l) add_blocks(K, l, slots_[first + l], dfdx);
       } else {
         for (std::size_t l = 0; l < chunk.size; ++l)
           add_blocks(blocks(chunk, l), slots_[first + l], dfdx);
@@ -302,49 +355,37 @@ class TetrahedronForce final : public ElementTerm {
     return true;
   }
 
-  // Adds the element's df/dx (above) to the value array at `slots`, block by
-  // block, without forming the 12 x 12 matrix, from B_ij = W A(d_i, d_j)
-  // (entry (r, c) of the 9 x 9 matrix of blocks is B(r, c)):
-  // K_ij = -B_ij for nodes 1..3, and node 0's blocks are
-  // K_i0 = -sum_j K_ij = S_i (S_i = sum_j B_ij), K_0i = K_i0^T (K is
-  // symmetric) and K_00 = -sum_i K_i0 = -sum_i S_i.
-  template <typename Entry>
-  static void add_blocks(const Entry& B, const Slots& slots, double* values) {
-    double S[9][3];  // rows 3 (i - 1) ..: S_i
-    for (int row = 0; row < 9; ++row) {
-      for (int s = 0; s < 3; ++s) S[row][s] = B(row, s) + B(row, 3 + s) + B(row, 6 + s);
-    }
-    double S_sum[3][3];
-    for (int r = 0; r < 3; ++r) {
-      for (int s = 0; s < 3; ++s) S_sum[r][s] = S[r][s] + S[3 + r][s] + S[6 + r][s];
-    }
+  // Adds one element's df/dx to the value array at `slots`.
+  static void add_blocks(const Tangent3& B, const Slots& slots, double* values) {
     // All four nodes free (each has its diagonal block, slot 15 k): no slot is
     // -1, and the adds below need no test.
     const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
-    // Adds sign * (u, v, w), column s of a block, to block (i, j).
-    const auto add = [&](int i, int j, int s, double sign, double u, double v, double w) {
-      const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
-      if (!all_free && offset < 0) return;
-      double* to = values + offset;
-      to[0] += sign * u;
-      to[1] += sign * v;
-      to[2] += sign * w;
-    };
-    for (int s = 0; s < 3; ++s) {
-      add(0, 0, s, -1.0, S_sum[0][s], S_sum[1][s], S_sum[2][s]);
-      for (int i = 1; i < 4; ++i) {
-        const int r = 3 * (i - 1);
-        add(i, 0, s, 1.0, S[r][s], S[r + 1][s], S[r + 2][s]);
-        add(0, i, s, 1.0, S[r + s][0], S[r + s][1], S[r + s][2]);
-        for (int j = 1; j < 4; ++j) {
-          const int column = 3 * (j - 1) + s;
-          add(i, j, s, -1.0, B(r, column), B(r + 1, column), B(r + 2, column));
-        }
-      }
-    }
+    element_matrix<double>(
+        [&](int r, int c) { return B(r, c); },
+        [&](int i, int j, int s, double u, double v, double w) {
+          const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
+          if (!all_free && offset < 0) return;
+          double* to = values + offset;
+          to[0] += u;
+          to[1] += v;
+          to[2] += w;
+        });
   }
-  static void add_blocks(const Tangent3& B, const Slots& slots, double* values) {
-    add_blocks([&](int r, int c) { return B(r, c); }, slots, values);
+
+  // The same for element l of a chunk whose matrices are in lanes
+  // (element_matrices_in_lanes: the sums of node 0's blocks done for eight
+  // elements at once, and the signs in place, so that only the adds are left
+  // here).
+  static void add_blocks(const LaneMatrices& K, std::size_t l, const Slots& slots,
+                         double* values) {
+    for (std::size_t t = 0; t < 48; ++t) {
+      const int offset = slots[t];
+      if (offset < 0) continue;
+      double* to = values + offset;
+      to[0] += K[3 * t][l];
+      to[1] += K[3 * t + 1][l];
+      to[2] += K[3 * t + 2][l];
+    }
   }
 
   // a == b bit for bit, entry by entry. F has just been stored, and
