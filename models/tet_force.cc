@@ -55,12 +55,15 @@ SPRINGLAB_LANES_INLINE void element_matrix(const Entry& B, const Add& add) {
   for (int r = 0; r < 3; ++r) {
     for (int s = 0; s < 3; ++s) S_sum[r][s] = S[r][s] + S[3 + r][s] + S[6 + r][s];
   }
+#pragma GCC unroll 3
   for (int s = 0; s < 3; ++s) {
     add(0, 0, s, -S_sum[0][s], -S_sum[1][s], -S_sum[2][s]);
+#pragma GCC unroll 3
     for (int i = 1; i < 4; ++i) {
       const int r = 3 * (i - 1);
       add(i, 0, s, S[r][s], S[r + 1][s], S[r + 2][s]);
       add(0, i, s, S[r + s][0], S[r + s][1], S[r + s][2]);
+#pragma GCC unroll 3
       for (int j = 1; j < 4; ++j) {
         const int column = 3 * (j - 1) + s;
         add(i, j, s, -B(r, column), -B(r + 1, column), -B(r + 2, column));
@@ -355,21 +358,28 @@ class TetrahedronForce final : public ElementTerm {
     return true;
   }
 
+  // All four nodes free (each has its diagonal block, slot 15 k): no slot is
+  // -1, and the adds need no test.
+  static bool all_free(const Slots& slots) {
+    return slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
+  }
+
   // Adds one element's df/dx to the value array at `slots`.
   static void add_blocks(const Tangent3& B, const Slots& slots, double* values) {
-    // All four nodes free (each has its diagonal block, slot 15 k): no slot is
-    // -1, and the adds below need no test.
-    const bool all_free = slots[0] >= 0 && slots[15] >= 0 && slots[30] >= 0 && slots[45] >= 0;
-    element_matrix<double>(
-        [&](int r, int c) { return B(r, c); },
-        [&](int i, int j, int s, double u, double v, double w) {
-          const int offset = slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
-          if (!all_free && offset < 0) return;
-          double* to = values + offset;
-          to[0] += u;
-          to[1] += v;
-          to[2] += w;
-        });
+    const auto entry = [&](int r, int c) { return B(r, c); };
+    const auto add = [&](int i, int j, int s, double u, double v, double w) {
+      double* to = values + slots[static_cast<std::size_t>(12 * j + 3 * i + s)];
+      to[0] += u;
+      to[1] += v;
+      to[2] += w;
+    };
+    if (all_free(slots)) {
+      element_matrix<double>(entry, add);
+    } else {
+      element_matrix<double>(entry, [&](int i, int j, int s, double u, double v, double w) {
+        if (slots[static_cast<std::size_t>(12 * j + 3 * i + s)] >= 0) add(i, j, s, u, v, w);
+      });
+    }
   }
 
   // The same for element l of a chunk whose matrices are in lanes
@@ -378,13 +388,19 @@ class TetrahedronForce final : public ElementTerm {
   // here).
   static void add_blocks(const LaneMatrices& K, std::size_t l, const Slots& slots,
                          double* values) {
-    for (std::size_t t = 0; t < 48; ++t) {
-      const int offset = slots[t];
-      if (offset < 0) continue;
-      double* to = values + offset;
+    const auto add = [&](std::size_t t) {
+      double* to = values + slots[t];
       to[0] += K[3 * t][l];
       to[1] += K[3 * t + 1][l];
       to[2] += K[3 * t + 2][l];
+    };
+    if (all_free(slots)) {
+#pragma GCC unroll 48
+      for (std::size_t t = 0; t < 48; ++t) add(t);
+    } else {
+      for (std::size_t t = 0; t < 48; ++t) {
+        if (slots[t] >= 0) add(t);
+      }
     }
   }
 
