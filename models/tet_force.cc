@@ -23,7 +23,6 @@
 #include <cmath>
 #include <bit>
 #include <cstdint>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -76,18 +75,16 @@ SPRINGLAB_LANES_INLINE void element_matrix(const Entry& B, const Add& add) {
 // k of element l's Tangent3): their matrices in lanes first, column s of
 // block (i, j) at K[3 (12 j + 3 i + s) ..][l], then added element by
 // element.
-using LaneMatrices = double[144][kLanes];
+using LaneMatrices = Lanes[144];
 SPRINGLAB_LANES_CLONES
-void element_matrices_in_lanes(const double (&B)[81][kLanes], LaneMatrices& K) {
-  Lanes b[81];
-  std::memcpy(b, B, sizeof b);
+void element_matrices_in_lanes(const Lanes (&B)[81], LaneMatrices& K) {
   element_matrix<Lanes>(
-      [&](int r, int c) -> const Lanes& { return b[r + 9 * c]; },
+      [&](int r, int c) -> const Lanes& { return B[r + 9 * c]; },
       [&](int i, int j, int s, const Lanes& u, const Lanes& v, const Lanes& w) {
-        double(*to)[kLanes] = &K[3 * (12 * j + 3 * i + s)];
-        std::memcpy(to[0], &u, sizeof u);
-        std::memcpy(to[1], &v, sizeof v);
-        std::memcpy(to[2], &w, sizeof w);
+        Lanes* to = &K[3 * (12 * j + 3 * i + s)];
+        to[0] = u;
+        to[1] = v;
+        to[2] = w;
       });
 }
 
@@ -183,8 +180,8 @@ class TetrahedronForce final : public ElementTerm {
     if (dfdx == nullptr) return;
     if (kept_.empty()) kept_.resize(tets_.size());  // keep from the first dF/dx on
     Chunk chunk;
-    alignas(64) double B[81][kLanes];
-    alignas(64) LaneMatrices K;
+    Lanes B[81];
+    LaneMatrices K;
     for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
       fill(c, first, chunk);
       if (blocks_in_lanes(chunk, B)) {
@@ -337,7 +334,7 @@ class TetrahedronForce final : public ElementTerm {
   // The same for every element of the chunk at once, in lanes (entry k of
   // element l's at K[k][l]), where its model computes them so
   // (MaterialModel::tangent_blocks3_derived_lanes); false where it does not.
-  bool blocks_in_lanes(const Chunk& chunk, double (&K)[81][kLanes]) const {
+  bool blocks_in_lanes(const Chunk& chunk, Lanes (&K)[81]) const {
     const MaterialModel* model = tets_[chunk.first].model;
     if (!chunk.one_model || model->tangent_blocks3_derived_lanes == nullptr) return false;
     const Eigen::Matrix3d* F[kLanes];

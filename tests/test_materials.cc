@@ -206,7 +206,7 @@ TEST_P(EveryMaterial, LanesAreTheOneElementFunctionsBitForBit) {
     std::array<Eigen::Matrix3d, kLanes> F, D;
     std::array<Lame, kLanes> lames;
     std::array<Derived3, kLanes> d;
-    alignas(64) double blocks[81][kLanes];
+    Lanes blocks[81];
     const Eigen::Matrix3d* F_in[kLanes];
     const Eigen::Matrix3d* D_in[kLanes];
     const Lame* m_in[kLanes];

@@ -6,7 +6,6 @@
 // rotation). An inverted solid keeps det R = 1, so its last sigma is
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
-#include <cstring>
 
 #include "models/materials/kinematics.h"
 #include "models/materials/lanes.h"
@@ -180,7 +179,7 @@ SPRINGLAB_LANES_CLONES
 void tangent_blocks3_derived_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
                                    const Derived3* const (&d)[kLanes],
                                    const Eigen::Matrix3d* const (&D)[kLanes],
-                                   const Lame* const (&m)[kLanes], double (&K)[81][kLanes]) {
+                                   const Lame* const (&m)[kLanes], Lanes (&K)[81]) {
   Lanes f[9], r[9], rows[9], mu, lambda;
   for (int l = 0; l < kLanes; ++l) {
     for (int k = 0; k < 9; ++k) {
@@ -192,7 +191,7 @@ void tangent_blocks3_derived_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
     lambda[l] = m[l]->lambda;
   }
   tangent_blocks(f, r, rows, mu, lambda,
-                 [&](int k, const Lanes& v) { std::memcpy(K[k], &v, sizeof v); });
+                 [&](int k, const Lanes& v) { K[k] = v; });
 }
 
 }  // namespace

@@ -90,14 +90,14 @@ struct MaterialModel {
   // check it). The tetrahedra call them kLanes elements at a time where a
   // model has them (a pointer may repeat, to fill the lanes). The blocks
   // stay in lanes: entry k of element l's 9 x 9 matrix (column-major, as
-  // in a Tangent3) is K[k][l].
+  // in a Tangent3) is lane l of K[k], K[k][l].
   void (*derive3_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
                         Derived3* const (&d)[kLanes]) = nullptr;
   void (*tangent_blocks3_derived_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
                                         const Derived3* const (&d)[kLanes],
                                         const Eigen::Matrix3d* const (&D)[kLanes],
                                         const Lame* const (&m)[kLanes],
-                                        double (&K)[81][kLanes]) = nullptr;
+                                        Lanes (&K)[81]) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
