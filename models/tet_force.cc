@@ -113,6 +113,7 @@ class TetrahedronForce final : public ElementTerm {
       t.lame = lame(m.young, m.poisson);
       tets_.push_back(t);
     }
+    arrange_lane_constants();
   }
 
   std::string_view name() const override { return name_; }
@@ -334,25 +335,42 @@ class TetrahedronForce final : public ElementTerm {
   // The same for every element of the chunk at once, in lanes (entry k of
   // element l's at K[k][l]), where its model computes them so
   // (MaterialModel::tangent_blocks3_derived_lanes); false where it does not.
+  // The rows of sqrt(W) D and the Lame parameters come in lanes, arranged
+  // once (lane_constants_).
   bool blocks_in_lanes(const Chunk& chunk, Lanes (&K)[81]) const {
     const MaterialModel* model = tets_[chunk.first].model;
     if (!chunk.one_model || model->tangent_blocks3_derived_lanes == nullptr) return false;
     const Eigen::Matrix3d* F[kLanes];
     const Derived3* d[kLanes];
-    const Eigen::Matrix3d* D[kLanes];
-    const Lame* m[kLanes];
-    std::array<Eigen::Matrix3d, kLanes> rows;  // sqrt(W) D
     for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
       const std::size_t e = l < chunk.size ? l : 0;
-      const Tet& t = tets_[chunk.first + e];
       F[l] = &chunk.F[e];
       d[l] = chunk.d[e];
-      rows[l] = Dw(t);
-      D[l] = &rows[l];
-      m[l] = &t.lame;
     }
-    model->tangent_blocks3_derived_lanes(F, d, D, m, K);
+    const LaneConstants& c = lane_constants_[chunk.first / kLanes];
+    model->tangent_blocks3_derived_lanes(F, d, c.Dw, c.mu, c.lambda, K);
     return true;
+  }
+
+  // Each chunk's rows of sqrt(W) D and Lame parameters in lanes, where some
+  // element's model gives its blocks in lanes (the lanes past the last
+  // element repeat the chunk's first, as blocks_in_lanes does).
+  void arrange_lane_constants() {
+    const bool any = std::any_of(tets_.begin(), tets_.end(), [](const Tet& t) {
+      return t.model->tangent_blocks3_derived_lanes != nullptr;
+    });
+    if (!any) return;
+    lane_constants_.resize((tets_.size() + kLanes - 1) / kLanes);
+    for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
+      LaneConstants& c = lane_constants_[first / kLanes];
+      for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
+        const Tet& t = tets_[first + (first + l < tets_.size() ? l : 0)];
+        const Eigen::Matrix3d rows = Dw(t);
+        for (int k = 0; k < 9; ++k) c.Dw[k][l] = rows(k / 3, k % 3);
+        c.mu[l] = t.lame.mu;
+        c.lambda[l] = t.lame.lambda;
+      }
+    }
   }
 
   // All four nodes free (each has its diagonal block, slot 15 k): no slot is
@@ -443,6 +461,11 @@ class TetrahedronForce final : public ElementTerm {
   int free_particles_;
   std::vector<Tet> tets_;
   std::vector<Slots> slots_;
+  struct LaneConstants {
+    Lanes Dw[9];  // sqrt(W) D, row-major
+    Lanes mu, lambda;
+  };
+  std::vector<LaneConstants> lane_constants_;  // per chunk (arrange_lane_constants)
   struct Kept {
     Eigen::Matrix3d F;
     Derived3 d;

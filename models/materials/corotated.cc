@@ -177,21 +177,16 @@ void derive3_lanes(const Eigen::Matrix3d* const (&F)[kLanes], Derived3* const (&
 }
 SPRINGLAB_LANES_CLONES
 void tangent_blocks3_derived_lanes(const Eigen::Matrix3d* const (&F)[kLanes],
-                                   const Derived3* const (&d)[kLanes],
-                                   const Eigen::Matrix3d* const (&D)[kLanes],
-                                   const Lame* const (&m)[kLanes], Lanes (&K)[81]) {
-  Lanes f[9], r[9], rows[9], mu, lambda;
+                                   const Derived3* const (&d)[kLanes], const Lanes (&D)[9],
+                                   const Lanes& mu, const Lanes& lambda, Lanes (&K)[81]) {
+  Lanes f[9], r[9];
   for (int l = 0; l < kLanes; ++l) {
     for (int k = 0; k < 9; ++k) {
       f[k][l] = (*F[l])(k / 3, k % 3);
       r[k][l] = d[l]->R(k / 3, k % 3);
-      rows[k][l] = (*D[l])(k / 3, k % 3);
     }
-    mu[l] = m[l]->mu;
-    lambda[l] = m[l]->lambda;
   }
-  tangent_blocks(f, r, rows, mu, lambda,
-                 [&](int k, const Lanes& v) { K[k] = v; });
+  tangent_blocks(f, r, D, mu, lambda, [&](int k, const Lanes& v) { K[k] = v; });
 }
 
 }  // namespace

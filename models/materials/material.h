@@ -93,11 +93,13 @@ struct MaterialModel {
   // in a Tangent3) is lane l of K[k], K[k][l].
   void (*derive3_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
                         Derived3* const (&d)[kLanes]) = nullptr;
+  // D and the Lame parameters come in lanes (D[3 r + c][l] is D(r, c) of
+  // element l): they are constants of the elements, which the tetrahedra
+  // arrange so once.
   void (*tangent_blocks3_derived_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
                                         const Derived3* const (&d)[kLanes],
-                                        const Eigen::Matrix3d* const (&D)[kLanes],
-                                        const Lame* const (&m)[kLanes],
-                                        Lanes (&K)[81]) = nullptr;
+                                        const Lanes (&D)[9], const Lanes& mu,
+                                        const Lanes& lambda, Lanes (&K)[81]) = nullptr;
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
