@@ -113,7 +113,6 @@ class TetrahedronForce final : public ElementTerm {
       t.lame = lame(m.young, m.poisson);
       tets_.push_back(t);
     }
-    arrange_lane_constants();
   }
 
   std::string_view name() const override { return name_; }
@@ -175,6 +174,7 @@ class TetrahedronForce final : public ElementTerm {
         }
       }
     }
+    arrange_lane_constants();  // only dF/dx reads them
   }
 
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
@@ -343,7 +343,7 @@ class TetrahedronForce final : public ElementTerm {
     const Eigen::Matrix3d* F[kLanes];
     const Derived3* d[kLanes];
     for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
-      const std::size_t e = l < chunk.size ? l : 0;
+      const std::size_t e = lane_element(chunk.first, l) - chunk.first;
       F[l] = &chunk.F[e];
       d[l] = chunk.d[e];
     }
@@ -352,9 +352,17 @@ class TetrahedronForce final : public ElementTerm {
     return true;
   }
 
+  // The element in lane l of the chunk that starts at `first`: element
+  // first + l, and past the last element the chunk's first again (its
+  // results there are not used).
+  std::size_t lane_element(std::size_t first, std::size_t l) const {
+    return first + (first + l < tets_.size() ? l : 0);
+  }
+
   // Each chunk's rows of sqrt(W) D and Lame parameters in lanes, where some
-  // element's model gives its blocks in lanes (the lanes past the last
-  // element repeat the chunk's first, as blocks_in_lanes does).
+  // element's model gives its blocks in lanes. Unlike the element records
+  // (Dw above), these keep sqrt(W) D: arranging them into lanes at every
+  // call cost more than reading them (benchmarks/README).
   void arrange_lane_constants() {
     const bool any = std::any_of(tets_.begin(), tets_.end(), [](const Tet& t) {
       return t.model->tangent_blocks3_derived_lanes != nullptr;
@@ -364,7 +372,7 @@ class TetrahedronForce final : public ElementTerm {
     for (std::size_t first = 0; first < tets_.size(); first += kLanes) {
       LaneConstants& c = lane_constants_[first / kLanes];
       for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
-        const Tet& t = tets_[first + (first + l < tets_.size() ? l : 0)];
+        const Tet& t = tets_[lane_element(first, l)];
         const Eigen::Matrix3d rows = Dw(t);
         for (int k = 0; k < 9; ++k) c.Dw[k][l] = rows(k / 3, k % 3);
         c.mu[l] = t.lame.mu;
