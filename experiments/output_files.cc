@@ -184,7 +184,7 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
   remove_stale_temporaries(dir, stem, host);
   std::string name = (dir == "/" ? "/" : dir + "/") + stem + std::to_string(::getpid()) + "." + host +
                      ".XXXXXX";
-  fd_ = ::mkostemp(name.data(), O_CLOEXEC);
+  fd_ = create_temporary_file(name);  // registered as a temporary (signals.h)
   if (fd_ < 0 && errno == EACCES && exists) {
     // A file we may write in a folder we may not: rewritten in place, from
     // a temporary in the temporary-files folder.
@@ -192,12 +192,11 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     name = std::string(tmp != nullptr && tmp[0] != '\0' ? tmp : "/tmp") + "/" + stem +
            std::to_string(::getpid()) + "." + host + ".XXXXXX";
     mode_ = Mode::kRewrite;
-    fd_ = ::mkostemp(name.data(), O_CLOEXEC);
+    fd_ = create_temporary_file(name);
     if (fd_ < 0) errno = EACCES;
   }
   if (fd_ < 0) fail("cannot write", errno);
   temp_path_ = name;
-  register_temporary(temp_path_);
   // mkstemp creates 0600: give the file the bits the target has, or the ones
   // any new file would get.
   mode_t bits = 0;

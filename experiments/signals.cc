@@ -1,10 +1,14 @@
 #include "experiments/signals.h"
 
+#include <fcntl.h>
 #include <limits.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstring>
+#include <random>
 
 namespace springlab {
 namespace {
@@ -123,6 +127,59 @@ void register_temporary_series(const std::string& dir, const std::string& stem,
 }
 
 void unregister_temporary_series() { series.ready.store(false, std::memory_order_release); }
+
+namespace {
+
+// Replaces the last six characters of `name` by random letters and digits.
+void randomize_suffix(std::string& name) {
+  static constexpr char kChars[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
+  thread_local std::mt19937_64 random{std::random_device{}()};
+  for (std::size_t k = name.size() - 6; k < name.size(); ++k) name[k] = kChars[random() % 62];
+}
+
+// Registers a path, then makes it with `make` (a new file or folder, failing
+// with EEXIST where the name is taken), with another name while it is taken.
+// A signal between the two finds nothing at the path, or what was made. (A
+// taken name holds this process's id and host, so it is no other running
+// program's file.)
+template <typename Register, typename Unregister, typename Make>
+bool make_registered(std::string& name, const Register& reg, const Unregister& unreg,
+                     const Make& make) {
+  if (name.size() < 6) {
+    errno = EINVAL;
+    return false;
+  }
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    randomize_suffix(name);
+    reg();
+    if (make()) return true;
+    const int error = errno;
+    unreg();
+    errno = error;
+    if (error != EEXIST) return false;
+  }
+  return false;
+}
+
+}  // namespace
+
+int create_temporary_file(std::string& name) {
+  int fd = -1;
+  make_registered(
+      name, [&] { register_temporary(name); }, [&] { unregister_temporary(name); },
+      [&] {
+        fd = ::open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        return fd >= 0;
+      });
+  return fd;
+}
+
+bool create_temporary_series(std::string& dir, const std::string& stem,
+                             const std::atomic<int>* frames) {
+  return make_registered(
+      dir, [&] { register_temporary_series(dir, stem, frames); },
+      [] { unregister_temporary_series(); }, [&] { return ::mkdir(dir.c_str(), 0700) == 0; });
+}
 
 StopOnSignals::StopOnSignals() {
   stop_requested.store(false);

@@ -30,6 +30,13 @@ void install_signal_handlers();
 void register_temporary(const std::string& path);
 void unregister_temporary(const std::string& path);
 
+// Creates a new file at `name`, its last six characters (XXXXXX) replaced by
+// random letters and digits as mkostemp does (O_CREAT | O_EXCL | O_CLOEXEC,
+// mode 0600), and returns its descriptor; -1 with errno where it cannot.
+// The path is registered as a temporary before the file exists, so that no
+// signal can come between the two and leave the file behind.
+int create_temporary_file(std::string& name);
+
 // A folder of numbered frames being written (--vtk): a signal removes
 // `<dir>/<stem>_NNNNNN.vtu` for N < *frames, `<dir>/<stem>.pvd` and the
 // folder itself. One series at a time; `frames` must outlive the
@@ -37,6 +44,11 @@ void unregister_temporary(const std::string& path);
 void register_temporary_series(const std::string& dir, const std::string& stem,
                                const std::atomic<int>* frames);
 void unregister_temporary_series();
+// The folder for such a series: as create_temporary_file, a new folder
+// (mkdtemp, mode 0700) registered before it exists; false with errno where
+// it cannot be made.
+bool create_temporary_series(std::string& dir, const std::string& stem,
+                             const std::atomic<int>* frames);
 
 // While alive, SIGINT, SIGTERM and SIGHUP set stop_requested() instead of
 // ending the process (a second one ends it, removing the temporaries).

@@ -66,9 +66,8 @@ VtkSeries::VtkSeries(const ElasticModel& model, const Scene& scene, std::string 
   }
   const std::string tag = ".springlab-tmp." + std::to_string(::getpid()) + "." + host_name() + ".XXXXXX";
   std::string name = dir_existed_ ? dir_ + "/" + tag : dir_ + tag;
-  if (::mkdtemp(name.data()) == nullptr) fail("cannot write", errno);
+  if (!create_temporary_series(name, stem_, &frames_)) fail("cannot write", errno);
   temp_dir_ = name;
-  register_temporary_series(temp_dir_, stem_, &frames_);
 
   for (const Particle& p : scene.particles) fixed_.push_back(p.fixed ? 1 : 0);
   // The cells: every element, then a vertex for each particle none joins.
