@@ -197,7 +197,7 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
   }
   if (fd_ < 0) fail("cannot write", errno);
   temp_path_ = name;
-  // mkstemp creates 0600: give the file the bits the target has, or the ones
+  // The temporary is created 0600: give it the bits the target has, or the ones
   // any new file would get.
   mode_t bits = 0;
   if (exists) {
