@@ -1,4 +1,4 @@
-// libFuzzer target over the scene loader (README "Scene files"): any input must either
+// libFuzzer target over the scene loader (docs/physics.md "Scene files"): any input must either
 // parse or be refused with a SceneError. Any other exception, a crash, a
 // sanitizer report, a hang or an out-of-memory is a bug. A scene that parses
 // must also pass validate_scene, print with scene_to_json and read back to

@@ -1,5 +1,5 @@
-// The built-in contact scene `slope` (README "Built-in scenes"): one particle on an
-// inclined plane, the closed forms of Coulomb friction (README "Contact with
+// The built-in contact scene `slope` (docs/scenes.md "Built-in scenes"): one particle on an
+// inclined plane, the closed forms of Coulomb friction (docs/physics.md "Contact with
 // planes"). The plane passes through the origin and descends along +x at
 // `angle` degrees:
 //   normal n = (sin theta, cos theta),  down-slope tangent s = (cos theta, -sin theta),
@@ -47,7 +47,7 @@ Scene build_slope(const Values& p) {
   scene.particles.push_back(particle);
   // The foot of the slope: a fixed particle joined to nothing (it exerts no
   // force) that gives the scene its size, the d of the divergence rule's
-  // E_s = ... + m |g| d (README "The command line"): a lone particle has d = 0, and
+  // E_s = ... + m |g| d (docs/command-line.md "The command line"): a lone particle has d = 0, and
   // a slide would be called a blow-up once its kinetic energy passed 1000
   // times the tiny contact energy.
   Particle foot;

@@ -1,5 +1,5 @@
-// Built-in scenes (README "Built-in scenes"): each is a generator from named parameters to a
-// Scene, checked afterwards by validate_scene like any scene file.
+// Built-in scenes (docs/scenes.md "Built-in scenes"): each is a generator from named parameters to
+// a Scene, checked afterwards by validate_scene like any scene file.
 #include "models/builtin_scenes.h"
 
 #include <algorithm>
@@ -194,7 +194,7 @@ Scene build_cloth(const Values& p) {
     for (int c = 0; c < n; ++c) join(index(r, c), index(r + 2, c), k_bend);
   if (p.at("ground") > 0.0) {
     // The ground: the plane y = -ground under the hanging cloth, which
-    // swings down onto it and folds there (README "Contact with planes").
+    // swings down onto it and folds there (docs/physics.md "Contact with planes").
     Plane plane;
     plane.point = {0.0, -p.at("ground"), 0.0};
     plane.friction = p.at("friction");

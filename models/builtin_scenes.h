@@ -1,5 +1,5 @@
-// Built-in scenes (README "Built-in scenes"): generators that return a Scene, parameterised by
-// `-p key=value`. Each is printable as a scene file (`springlab scene NAME`).
+// Built-in scenes (docs/scenes.md "Built-in scenes"): generators that return a Scene, parameterised
+// by `-p key=value`. Each is printable as a scene file (`springlab scene NAME`).
 #pragma once
 
 #include <string>

@@ -1,11 +1,11 @@
-// The built-in finite-element scenes (README "Finite elements"): beam, membrane, block. How
-// each mesh is split into elements:
+// The built-in finite-element scenes (docs/physics.md "Finite elements"): beam, membrane, block.
+// How each mesh is split into elements:
 //   - a grid cell (2-D) becomes two triangles split along a diagonal that
 //     alternates from cell to cell (so the mesh has no preferred direction);
 //   - a grid cube (3-D) becomes six tetrahedra around its main diagonal
 //     (Kuhn's subdivision: one per ordering of the three axes), which
 //     matches the neighbouring cubes face by face.
-// Masses are the lumped masses of the elements (README "Finite elements"), computed here.
+// Masses are the lumped masses of the elements (docs/physics.md "Finite elements"), computed here.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <map>
@@ -153,8 +153,8 @@ Scene build_membrane(const Values& p) {
 }
 
 // A box of side `size` in tetrahedra, its bottom `height` above the ground
-// plane y = 0 (README "Contact with planes": penalty or barrier contact), falling under gravity
-// and spinning about the vertical at `spin` rad/s, its starting pose turned by
+// plane y = 0 (docs/physics.md "Contact with planes": penalty or barrier contact), falling under
+// gravity and spinning about the vertical at `spin` rad/s, its starting pose turned by
 // `angle` degrees from its rest shape: rigid motions, which the
 // rotation-invariant models carry without strain and the linear model does
 // not (a finite rotation strains it; an infinitesimal one, the spin's

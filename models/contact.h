@@ -1,5 +1,5 @@
-// Contact in a scene (README "Contact with planes"): the blocks of scene data of the "contact"
-// kind (contact_kind.cc: how contact is modelled) and the "plane" kind
+// Contact in a scene (docs/physics.md "Contact with planes"): the blocks of scene data of the
+// "contact" kind (contact_kind.cc: how contact is modelled) and the "plane" kind
 // (planes.cc: the half-spaces free particles must not enter, and their
 // force; friction_force.cc: Coulomb friction along them).
 #pragma once
@@ -15,7 +15,8 @@ namespace springlab {
 struct Plane {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
-  double friction = 0.0;  // Coulomb mu >= 0 (README "Contact with planes"; friction_force.cc)
+  // Coulomb mu >= 0 (docs/physics.md "Contact with planes"; friction_force.cc).
+  double friction = 0.0;
 };
 using Planes = std::vector<Plane>;
 

@@ -1,5 +1,5 @@
-// The "contact" kind: a scene's "contact" settings (README "Contact with planes"), how its planes
-// push back: the penalty k_c/2 min(d, 0)^2 (default, stiffness 1e4 N/m) or
+// The "contact" kind: a scene's "contact" settings (docs/physics.md "Contact with planes"), how its
+// planes push back: the penalty k_c/2 min(d, 0)^2 (default, stiffness 1e4 N/m) or
 // the IPC log-barrier kappa b(d) (Li et al. 2020; stiffness 1e3 N/m,
 // distance 0.01 m). Data only: the force is the planes' (planes.cc).
 #include "models/contact.h"

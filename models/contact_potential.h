@@ -1,5 +1,5 @@
 // The contact potential phi(d) of a particle at gap d = n.(x - point) from
-// a plane (README "Contact with planes"), with its first two derivatives:
+// a plane (docs/physics.md "Contact with planes"), with its first two derivatives:
 //   penalty:  phi(d) = k_c/2 min(d, 0)^2                      (any d)
 //   barrier:  phi(d) = kappa b(d), b(d) = -(d - dhat)^2 ln(d / dhat)
 //             for 0 < d < dhat, 0 beyond, +infinity for d <= 0

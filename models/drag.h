@@ -1,5 +1,5 @@
-// Drag in a scene (README "The physics", "Scene files" key "drag"): the block of scene data of the
-// "drag" element kind (drag_force.cc).
+// Drag in a scene (docs/physics.md "The physics", "Scene files" key "drag"): the block of scene
+// data of the "drag" element kind (drag_force.cc).
 #pragma once
 
 namespace springlab {

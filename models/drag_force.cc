@@ -1,5 +1,5 @@
-// The "drag" element kind: the scene key "drag" (README "Scene files") and the course's
-// F^dp = -gamma v on every free particle (README "The physics").
+// The "drag" element kind: the scene key "drag" (docs/physics.md "Scene files") and the course's
+// F^dp = -gamma v on every free particle (docs/physics.md "The physics").
 // dF/dv = -gamma I (diagonal), dF/dx = 0. Dissipates power gamma |v|^2.
 // Derives from the dissipation potential W(v) = gamma |v|^2 / 2.
 #include <memory>

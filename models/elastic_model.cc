@@ -106,8 +106,8 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     }
   }
 
-  // README "The command line": E_s = T(0) + U_spring(0) + sum_free m_i (|g| d + |w_max|^2 / 2),
-  // d the diameter of the initial positions' bounding box; each kind gives
+  // docs/command-line.md "The command line": E_s = T(0) + U_spring(0) + sum_free m_i (|g| d +
+  // |w_max|^2 / 2), d the diameter of the initial positions' bounding box; each kind gives
   // its term per unit of free mass (gravity |g| d, wind |w_max|^2 / 2).
   double diameter2 = 0.0;
   for (int r = 0; r < dim; ++r) {

@@ -1,4 +1,4 @@
-// The elastic model: the mechanical system of README "The physics" (springs today, finite
+// The elastic model: the mechanical system of docs/physics.md "The physics" (springs today, finite
 // elements and contact as they are registered) assembled from a Scene: the state holds
 // only free particles, forces come from the terms of the registered element
 // kinds (element_kind.h) the scene has, and both Jacobians share one sparsity
@@ -76,8 +76,8 @@ class ElasticModel final : public MechanicalSystem {
   // The same into `out` (made by energies() once), without allocating.
   void energies(const Vector& x, const Vector& v, Energies& out) const;
 
-  // README "The command line"'s energy scale E_s = T(0) + U_spring(0) + sum_free m (|g| d + |w_max|^2/2)
-  // (U_spring: every potential that counts with the spring energy).
+  // docs/command-line.md "The command line"'s energy scale E_s = T(0) + U_spring(0) + sum_free m
+  // (|g| d + |w_max|^2/2) (U_spring: every potential that counts with the spring energy).
   double energy_scale() const { return energy_scale_; }
 
   // Positions/velocities of all particles in scene order, one row each

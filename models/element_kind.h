@@ -91,8 +91,8 @@ struct ElementKind {
   ForceFactory make = nullptr;
   // Where its potential energy is reported; an empty name: it stores none.
   EnergyColumn energy = {};
-  // Its term of README "The command line"'s energy scale E_s per unit of free mass, given the
-  // diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
+  // Its term of docs/command-line.md "The command line"'s energy scale E_s per unit of free mass,
+  // given the diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
   double (*energy_scale_per_mass)(const Scene& scene, double diameter) = nullptr;
 
   // Appends the cells of the kind's elements, in file order. nullptr: the

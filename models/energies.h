@@ -1,7 +1,7 @@
-// Energies as named columns (README "The command line"-§8): the `--energy` CSV, the energy
-// experiment's table and the settings JSON ("energy_columns") all take their
-// columns from here, so an element kind that stores energy (element_kind.h)
-// adds its column by registering it, and every writer reports it.
+// Energies as named columns (docs/physics.md "Energies", docs/command-line.md "The command line"):
+// the `--energy` CSV, the energy experiment's table and the settings JSON ("energy_columns") all
+// take their columns from here, so an element kind that stores energy (element_kind.h) adds its
+// column by registering it, and every writer reports it.
 //
 // The columns are, in this order: kinetic; the potentials every scene
 // reports (spring, gravity); total (kinetic plus every potential); then the
@@ -22,11 +22,13 @@ class Scene;
 // The column an element kind's potential energy is reported in.
 struct EnergyColumn {
   std::string_view name;  // empty: the kind stores no energy (drag, wind, damping)
-  // Reported by every scene, 0 when it has nothing of this kind (README "The command line":
-  // spring, gravity); otherwise only by scenes that have elements of it.
+  // Reported by every scene, 0 when it has nothing of this kind
+  // (docs/command-line.md "The command line": spring, gravity); otherwise only by scenes that have
+  // elements of it.
   bool always = false;
-  // Counts with the spring energy in README "The command line"'s divergence rule and in its
-  // energy scale E_s (spring; README "Finite elements", "Contact with planes": elastic, contact); gravity does not.
+  // Counts with the spring energy in docs/command-line.md "The command line"'s divergence rule and
+  // in its energy scale E_s (spring; docs/physics.md "Finite elements", "Contact with planes":
+  // elastic, contact); gravity does not.
   bool counts_with_spring = false;
 };
 
@@ -36,7 +38,8 @@ struct EnergyLayout {
   std::size_t kinetic = 0;
   std::size_t total = 0;
   std::vector<std::size_t> potentials;          // positions of the potential columns
-  std::vector<std::size_t> counts_with_spring;  // the subset of README "The command line"'s rule
+  // The subset of docs/command-line.md "The command line"'s rule.
+  std::vector<std::size_t> counts_with_spring;
   // Position of `column`, or columns.size() when the layout has none.
   std::size_t find(std::string_view column) const;
 };
@@ -58,7 +61,7 @@ class Energies {
   double kinetic() const { return values_[layout_->kinetic]; }
   double total() const { return values_[layout_->total]; }
   // Kinetic energy plus the potentials that count with the spring energy:
-  // what README "The command line"'s divergence rule compares with blowup x E_s.
+  // what docs/command-line.md "The command line"'s divergence rule compares with blowup x E_s.
   double kinetic_and_spring() const;
   // The value of a named column; throws std::out_of_range for a column the
   // layout does not have.

@@ -1,4 +1,4 @@
-// Finite elements in a scene (README "Finite elements"): the blocks of scene data of the
+// Finite elements in a scene (docs/physics.md "Finite elements"): the blocks of scene data of the
 // "material" kind (materials_kind.cc), the "triangle" kind (triangles.cc)
 // and the "tetrahedron" kind (tetrahedra.cc). Their force, W Psi(F) per
 // element with F = Ds Dm^-1, is fem_force.cc.
@@ -19,7 +19,8 @@ struct MaterialSpec {
   std::string model;   // "neo-hookean", ...
   double young = 0.0;  // E > 0 [Pa]
   double poisson = 0.0;  // -1 < nu < 0.5
-  std::optional<double> density;  // rho > 0 [kg/m^3]: lumped masses (README "Finite elements")
+  // rho > 0 [kg/m^3]: lumped masses (docs/physics.md "Finite elements").
+  std::optional<double> density;
   std::optional<double> thickness;  // t > 0 [m], triangles only; absent: 1
   double thickness_or_one() const { return thickness.value_or(1.0); }
 };

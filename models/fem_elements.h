@@ -1,6 +1,6 @@
 // What the two finite-element kinds (triangles.cc, tetrahedra.cc) share:
 // reading and checking an element's nodes and material, its rest shape
-// (Dm, W; README "Finite elements"), the lumped masses, and the force term (fem_force.cc).
+// (Dm, W; docs/physics.md "Finite elements"), the lumped masses, and the force term (fem_force.cc).
 #pragma once
 
 #include <Eigen/Core>
@@ -45,8 +45,8 @@ void check_rest_shape(const Reporter& r, const std::string& where, const RestSha
 
 // Particles without a "mass" in `document` that belong to an element whose
 // material has a density get the lumped mass sum_e rho W_e / (nodes of e)
-// over the scene's triangles and tetrahedra (README "Finite elements"). Each element kind's
-// reader calls it once its elements are in; it recomputes from all of them.
+// over the scene's triangles and tetrahedra (docs/physics.md "Finite elements"). Each element
+// kind's reader calls it once its elements are in; it recomputes from all of them.
 void lump_masses(const Json& document, const Reporter& r, Scene& scene);
 // sum_e rho W_e / (nodes of e) per particle (0 where no element with a
 // density touches it): what lump_masses gives, for scenes built in code.
@@ -74,7 +74,7 @@ struct ElementBlock {
 //     (Bouaziz et al. 2014's strain constraint, exactly), and for lambda > 0
 //     Bouaziz's volume constraint in place of lambda/2 (J - 1)^2 (not a
 //     squared distance to a set): w = k lambda W, projected on J = 1, the
-//     same stiffness at rest (README "Fast solvers"); every other material
+//     same stiffness at rest (docs/integrators.md "Fast solvers"); every other material
 //     has none, and the form says which to use instead;
 //   - Laplacian (quasi-Newton's initial Hessian), every material: weight
 //     (lambda + 2 mu) W, the constrained (P-wave) modulus, the stiffness of
@@ -116,7 +116,7 @@ std::unique_ptr<ForceTerm> make_tetrahedron_element_force(const Scene& scene,
                                                           const ParticleOrder& order,
                                                           const ElementBlock& block);
 
-// The definite part of an element's stiffness K = dF/dx (README "Finite
+// The definite part of an element's stiffness K = dF/dx (docs/physics.md "Finite
 // elements"): the element's Hessian -K with its negative eigenvalues set to
 // zero (Teran et al. 2005 do this per singular value; per element is
 // simpler and also definite). K is left as it is where it already is

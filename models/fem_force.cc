@@ -1,4 +1,4 @@
-// The force of finite elements (README "Finite elements"; the lecture's "generalized
+// The force of finite elements (docs/physics.md "Finite elements"; the lecture's "generalized
 // springs"): element e stores E_e = W Psi(F), F = Ds Dm^-1 = sum_j x_j g_j^T
 // (fem_elements.h: the rows g_j of G), so with P = dPsi/dF
 //   f_i = -dE_e/dx_i = -W P g_i,

@@ -1,4 +1,4 @@
-// The "friction" element kind: Coulomb friction of the planes (README
+// The "friction" element kind: Coulomb friction of the planes (docs/physics.md
 // "Contact with planes"). It has no scene key of its own: it reads each
 // plane's "friction" mu (planes.cc) and the contact's "smoothing" eps_v
 // (contact_kind.cc).

@@ -1,5 +1,5 @@
-// Gravity in a scene (README "The physics", "Scene files" key "gravity"): the block of scene data of
-// the "gravity" element kind (gravity_force.cc).
+// Gravity in a scene (docs/physics.md "The physics", "Scene files" key "gravity"): the block of
+// scene data of the "gravity" element kind (gravity_force.cc).
 #pragma once
 
 #include <Eigen/Core>

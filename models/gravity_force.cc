@@ -1,6 +1,6 @@
-// The "gravity" element kind: the scene key "gravity" (README "Scene files") and the
+// The "gravity" element kind: the scene key "gravity" (docs/physics.md "Scene files") and the
 // force F_i = m_i g on every free particle, potential V = -sum m_i g.x_i
-// (README "The physics": a fixed particle neither moves nor stores energy). Constant, so
+// (docs/physics.md "The physics": a fixed particle neither moves nor stores energy). Constant, so
 // both Jacobians are zero and it declares no blocks.
 #include <algorithm>
 #include <memory>
@@ -63,7 +63,8 @@ void write_gravity(const Scene& scene, std::vector<std::pair<std::string, std::s
                                               std::clamp(scene.dimension, 0, 3)));
 }
 
-// README "The command line": a particle can fall the diameter d of the scene, gaining |g| d per kg.
+// docs/command-line.md "The command line": a particle can fall the diameter d of the scene, gaining
+// |g| d per kg.
 double gravity_energy_scale(const Scene& scene, double diameter) {
   return scene.get<Gravity>().acceleration.norm() * diameter;
 }

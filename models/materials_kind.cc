@@ -1,4 +1,4 @@
-// The "material" kind: a scene's "materials" (README "Finite elements"), named sets of a
+// The "material" kind: a scene's "materials" (docs/physics.md "Finite elements"), named sets of a
 // material model (models/materials/) and its parameters, which triangles and
 // tetrahedra refer to. It holds data only: no force of its own.
 #include <cmath>

@@ -34,8 +34,8 @@ enum class VelocityDependence {
 enum class ForcePart { kAll, kStiff, kNonstiff };
 
 // A distance constraint |x_a - x_b| = length of stiffness k (compliance
-// 1/k): what the fast solvers of README "Fast solvers" (projective dynamics, XPBD) see of
-// a stiff conservative force that has this form. a is a free particle (its
+// 1/k): what the fast solvers of docs/integrators.md "Fast solvers" (projective dynamics, XPBD) see
+// of a stiff conservative force that has this form. a is a free particle (its
 // unknowns at a * dim); b a free particle, or -1 with `anchor` the fixed
 // position it is tied to.
 struct DistanceConstraint {
@@ -47,7 +47,7 @@ struct DistanceConstraint {
 };
 
 // A half-space n.x >= offset that free particles must not enter, as the
-// fast solvers see a contact plane (README "Fast solvers", "Contact with
+// fast solvers see a contact plane (docs/integrators.md "Fast solvers", "Contact with
 // planes"): with the penalty, a constraint of compliance 1/stiffness active
 // where the gap is negative; the barrier has stiffness 0 (xpbd refuses it).
 // `friction` is the plane's Coulomb mu.
@@ -60,7 +60,7 @@ struct PlaneConstraint {
 
 // An element energy of projective form (Bouaziz et al., "Projective
 // dynamics: fusing constraint projections for fast simulation", ACM TOG
-// 2014, sec. 4-5), as projective dynamics sees it (README "Fast solvers"):
+// 2014, sec. 4-5), as projective dynamics sees it (docs/integrators.md "Fast solvers"):
 //   E = w/2 |F - project(F)|^2,  F = sum_j x_j g_j^T (dim x k),
 // project(F) a nearest point of F on a constraint set (the rotations: the
 // as-rigid-as-possible strain energy; the matrices of J = 1: the volume
@@ -158,7 +158,7 @@ class MechanicalSystem {
     return std::numeric_limits<double>::infinity();
   }
 
-  // The fast solvers' view (README "Fast solvers"): the stiff conservative
+  // The fast solvers' view (docs/integrators.md "Fast solvers"): the stiff conservative
   // forces as distance constraints and projective elements (above), and F
   // minus their forces and every element's (external_force: gravity, drag,
   // wind, spring damping, treated explicitly). False, with `why` (one
@@ -169,7 +169,7 @@ class MechanicalSystem {
     why = "this system has no projective form; use implicit-euler";
     return false;
   }
-  // Quasi-Newton's initial Hessian (README "Fast solvers"): the distance
+  // Quasi-Newton's initial Hessian (docs/integrators.md "Fast solvers"): the distance
   // constraints and, for elements of any material, the Laplacian part of a
   // projective element (no projection): weight w = (lambda + 2 mu) W.
   // False when some stiff conservative force has neither form.
@@ -177,7 +177,7 @@ class MechanicalSystem {
                               std::vector<ProjectiveElement>& /*elements*/) const {
     return false;
   }
-  // Lagged normal forces (README "Contact with planes"): with x_lag, Coulomb
+  // Lagged normal forces (docs/physics.md "Contact with planes"): with x_lag, Coulomb
   // friction takes its normal force f_n from x_lag instead of from the
   // evaluated state, which makes it the gradient of a dissipation potential
   // of v (IPC's lagging, Li et al. 2020); nullptr: from the evaluated state

@@ -1,5 +1,5 @@
-// The "plane" kind: a scene's "planes" (README "Contact with planes"), half-spaces the free
-// particles must not enter, and the contact force that keeps them out. With
+// The "plane" kind: a scene's "planes" (docs/physics.md "Contact with planes"), half-spaces the
+// free particles must not enter, and the contact force that keeps them out. With
 // d = n.(x_i - point) the gap of particle i to a plane, each pair stores
 // the penalty or barrier potential phi(d) of contact_potential.h (with the
 // barrier, an implicit solver's line search on the incremental potential

@@ -1,4 +1,4 @@
-// Scene files (README "Scene files"): the document, the particles, and the order in which
+// Scene files (docs/physics.md "Scene files"): the document, the particles, and the order in which
 // the element kinds (element_kind.h) read, check and write their own keys.
 //
 // parse_scene reads a document element by element and reports the first
@@ -207,7 +207,7 @@ Json parse_document(const std::string& text, const Reporter& r) {
   return document;
 }
 
-// ---- Particles (README "Scene files"). ----
+// ---- Particles (docs/physics.md "Scene files"). ----
 
 Particle read_particle(const Reporter& r, const std::string& where, const Json& j, int dimension) {
   require_object(r, where, j);

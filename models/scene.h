@@ -1,5 +1,5 @@
-// The scene: what a scene file (README "Scene files") or a built-in scene (README "Built-in scenes")
-// describes, before any physics is assembled from it. Plain data; the model
+// The scene: what a scene file (docs/physics.md "Scene files") or a built-in scene (docs/scenes.md
+// "Built-in scenes") describes, before any physics is assembled from it. Plain data; the model
 // (elastic_model.h) turns it into forces and a state.
 //
 // A scene is its particles plus one block of data per element kind it holds
@@ -33,8 +33,8 @@ struct Particle {
   Eigen::Vector3d v = Eigen::Vector3d::Zero();
   double mass = 1.0;
   bool fixed = false;
-  // The rest (material) position X (README "Finite elements"): where the particle sits in the
-  // undeformed object. Absent: x. Springs take their default rest length
+  // The rest (material) position X (docs/physics.md "Finite elements"): where the particle sits in
+  // the undeformed object. Absent: x. Springs take their default rest length
   // from it, elements their rest shape.
   std::optional<Eigen::Vector3d> X = std::nullopt;
   const Eigen::Vector3d& rest_position() const { return X ? *X : x; }
@@ -93,7 +93,7 @@ class Scene {
   std::deque<std::any> blocks_;
 };
 
-// Resource caps (README, "Reliability"): a scene larger than this is refused
+// Resource caps (docs/reliability.md, "Reliability"): a scene larger than this is refused
 // before it is built, so a typo like n=100000 is a message, not an
 // out-of-memory kill. The largest scene they allow (a 578 x 578 cloth, or a
 // chain of 1e6 particles) needs about 2 GB with an explicit method. Each
@@ -109,8 +109,8 @@ inline constexpr std::size_t kMaxSceneJsonValues = 32'000'000;
 // its messages: a long run of whitespace would cost its length in memory.
 inline constexpr std::size_t kMaxJsonWhitespaceRun = std::size_t{1} << 20;  // 1 MiB
 
-// Parses and validates a scene (README "Scene files"). `source` names the file in messages.
-// Throws SceneError on any violation; never returns a half-valid scene.
+// Parses and validates a scene (docs/physics.md "Scene files"). `source` names the file in
+// messages. Throws SceneError on any violation; never returns a half-valid scene.
 Scene parse_scene(const std::string& json_text, const std::string& source);
 // `source` names the file in messages (default: the path). A FIFO or a
 // pipe (/dev/stdin) is read like a file, within the same size cap.
@@ -129,7 +129,8 @@ std::optional<std::string> json_text_problem(const std::string& text);
 // length ("aaaa... (1048576 bytes)").
 std::string printable(const std::string& text);
 
-// Runs every README "Scene files" check on an already-built scene (used for built-ins too).
+// Runs every docs/physics.md "Scene files" check on an already-built scene (used for built-ins
+// too).
 void validate_scene(const Scene& scene, const std::string& source);
 
 }  // namespace springlab

@@ -1,4 +1,4 @@
-// The toolbox for reading, checking and writing scene files (README "Scene files"), shared
+// The toolbox for reading, checking and writing scene files (docs/physics.md "Scene files"), shared
 // by scene.cc (the document, the particles) and every element kind's file
 // (springs.cc, gravity_force.cc, ...): one wording for every message, so a
 // problem reads the same whichever part of the scene it is in.

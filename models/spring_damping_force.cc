@@ -1,5 +1,5 @@
 // The "spring-damping" element kind: damping along a spring (internal
-// friction), README "The physics". It has no scene key of its own: it reads each spring's
+// friction), docs/physics.md "The physics". It has no scene key of its own: it reads each spring's
 // "damping" (springs.h, read and checked by springs.cc).
 //   d = x_i - x_j, l = |d|, u = d / l, w = v_i - v_j
 //   F_i = -c (w.u) u,  F_j = -F_i            (dissipates: F_i.v_i + F_j.v_j = -c (w.u)^2)

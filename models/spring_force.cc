@@ -1,4 +1,4 @@
-// Hooke springs (README "The physics"), the course's F^int:
+// Hooke springs (docs/physics.md "The physics"), the course's F^int:
 //   d = x_i - x_j, l = |d|, u = d / l
 //   F_i = -k (l - L) u,  F_j = -F_i,  V = k (l - L)^2 / 2
 // Stiffness block (dF_i/dx_i = -K, dF_i/dx_j = +K):

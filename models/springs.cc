@@ -1,4 +1,4 @@
-// The "spring" element kind: the "springs" key of a scene file (README "Scene files") --
+// The "spring" element kind: the "springs" key of a scene file (docs/physics.md "Scene files") --
 // reading, checks, writing -- and its registration. The force itself, Hooke's
 // law with its SIMD kernel, is spring_force.cc; spring damping, read here
 // from each spring's "damping", is its own kind (spring_damping_force.cc).
@@ -23,9 +23,9 @@ void check_not_self(const Reporter& r, const std::string& where, const Spring& s
 }
 
 // Coinciding ends (at x) have no spring direction; only a zero-rest-length
-// spring (a linear force, README "The physics") is defined there. Returns the distance of
-// the ends' rest positions X (README "Finite elements"; X = x when not given): the rest length
-// of a spring that gives none.
+// spring (a linear force, docs/physics.md "The physics") is defined there. Returns the distance of
+// the ends' rest positions X (docs/physics.md "Finite elements"; X = x when not given): the rest
+// length of a spring that gives none.
 double check_spring_ends(const Reporter& r, const std::string& where, const Spring& s,
                          const std::vector<Particle>& particles, bool rest_given) {
   const double distance = (particles[s.i].x - particles[s.j].x).norm();

@@ -1,5 +1,5 @@
-// Springs in a scene (README "The physics", "Scene files"): the block of scene data of the "spring"
-// element kind (springs.cc), whose force is spring_force.cc and whose
+// Springs in a scene (docs/physics.md "The physics", "Scene files"): the block of scene data of the
+// "spring" element kind (springs.cc), whose force is spring_force.cc and whose
 // `damping` the "spring-damping" kind (spring_damping_force.cc) reads.
 #pragma once
 
@@ -20,7 +20,7 @@ struct Spring {
 // The scene's springs, in file order: `scene.block<Springs>()`.
 using Springs = std::vector<Spring>;
 
-// At most this many springs per scene (README, "Reliability").
+// At most this many springs per scene (docs/reliability.md, "Reliability").
 inline constexpr std::size_t kMaxSceneSprings = 2'000'000;
 
 }  // namespace springlab

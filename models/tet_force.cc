@@ -1,4 +1,4 @@
-// The force of tetrahedra, fixed size (README "Finite elements"): the same
+// The force of tetrahedra, fixed size (docs/physics.md "Finite elements"): the same
 // element force as fem_force.cc, whose plain version for every shape is the
 // reference the tests compare this one with, written for 3 x 3 F and four
 // nodes so that an implicit method's force + dF/dx stays cheap.

@@ -1,6 +1,6 @@
 // The "tetrahedron" element kind: the "tetrahedra" key of a 3-D scene
-// (README "Finite elements"), solids with F 3 x 3. Its force is fem_force.cc; its energy, W Psi(F)
-// with W the rest volume, is in the "elastic" column with the triangles'.
+// (docs/physics.md "Finite elements"), solids with F 3 x 3. Its force is fem_force.cc; its energy,
+// W Psi(F) with W the rest volume, is in the "elastic" column with the triangles'.
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
-// The "triangle" element kind: the "triangles" key of a scene (README "Finite elements"). In a
-// 2-D scene a triangle is a plane-strain solid (F 2 x 2); in a 3-D scene a
+// The "triangle" element kind: the "triangles" key of a scene (docs/physics.md "Finite elements").
+// In a 2-D scene a triangle is a plane-strain solid (F 2 x 2); in a 3-D scene a
 // membrane (F 3 x 2: in-plane stretch and shear, no bending), where the
 // linear model is refused. Its force is fem_force.cc; its energy, W Psi(F)
 // with W the rest area x the material's thickness, is in the "elastic"

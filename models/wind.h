@@ -1,5 +1,5 @@
-// Wind in a scene (README "The physics", "Scene files" key "wind"): the block of scene data of the
-// "wind" element kind (wind_force.cc).
+// Wind in a scene (docs/physics.md "The physics", "Scene files" key "wind"): the block of scene
+// data of the "wind" element kind (wind_force.cc).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
-// The "wind" element kind: the scene key "wind" (README "Scene files") and wind with
-// gusts (README "The physics"): F_i = c_w (w(t) - v_i) on every free particle,
+// The "wind" element kind: the scene key "wind" (docs/physics.md "Scene files") and wind with
+// gusts (docs/physics.md "The physics"): F_i = c_w (w(t) - v_i) on every free particle,
 //   w(t) = w0 (1 + gust sin(2 pi f t)).
 // It depends on t (so integrators must evaluate it at their stage times) and
 // relaxes each particle's velocity toward the wind: dF/dv = -c_w I, dF/dx = 0.
@@ -114,7 +114,7 @@ void write_wind(const Scene& scene, std::vector<std::pair<std::string, std::stri
                                    ", \"frequency\": " + json_number(w->frequency) + "}");
 }
 
-// README "The command line": the wind can bring a particle to its largest speed
+// docs/command-line.md "The command line": the wind can bring a particle to its largest speed
 // |w_max| = |w0| (1 + gust), a kinetic energy of |w_max|^2 / 2 per kg.
 double wind_energy_scale(const Scene& scene, double) {
   const Wind* wind = scene.find<Wind>();

@@ -1,5 +1,5 @@
 // The Python module `springlab` (pybind11): scenes, runs and experiments
-// from a notebook, results as NumPy arrays (README "Python").
+// from a notebook, results as NumPy arrays (docs/python.md "Python").
 //
 //   import springlab
 //   scene = springlab.load_scene("cloth", n=8)       # a built-in, a file, or a dict

@@ -2,8 +2,8 @@
 //   Psi = mu eps:eps + lambda/2 (tr eps)^2,  P = 2 mu eps + lambda tr(eps) I.
 // Not invariant under rotation: a rotated element stores energy (the
 // lecture's reason for corotated models). Square F only: refused for
-// membranes (README "Finite elements"). Sifakis and Barbic, "FEM simulation of 3D deformable
-// solids", SIGGRAPH course 2012, §3.
+// membranes (docs/physics.md "Finite elements"). Sifakis and Barbic, "FEM simulation of 3D
+// deformable solids", SIGGRAPH course 2012, §3.
 #include "models/materials/material.h"
 #include "models/materials/tangent3.h"
 

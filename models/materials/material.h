@@ -1,5 +1,5 @@
-// Hyperelastic materials (README "Finite elements"; the lecture's "generalized springs"): an
-// energy density Psi(F) of the deformation gradient F = Ds Dm^-1, its first
+// Hyperelastic materials (docs/physics.md "Finite elements"; the lecture's "generalized springs"):
+// an energy density Psi(F) of the deformation gradient F = Ds Dm^-1, its first
 // Piola-Kirchhoff stress P = dPsi/dF, and the derivative of P.
 //
 // F is d x k: square for solids (2 x 2 plane strain, 3 x 3 tetrahedra) and
@@ -32,8 +32,8 @@ using Tangent = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
 // The same for a 3 x 3 F (a tetrahedron), fixed size.
 using Tangent3 = Eigen::Matrix<double, 9, 9>;
 
-// Lame parameters from Young's modulus E and Poisson's ratio nu (README "Finite elements"):
-// mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
+// Lame parameters from Young's modulus E and Poisson's ratio nu
+// (docs/physics.md "Finite elements"): mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
 struct Lame {
   double mu = 0.0;
   double lambda = 0.0;
@@ -44,8 +44,8 @@ struct Derived3;  // what a model derives from a 3 x 3 F first (kinematics.h)
 
 struct MaterialModel {
   std::string_view name;  // "neo-hookean": the "model" of a scene's material
-  std::string_view formula;  // Psi, for `springlab list` and the README
-  bool membranes = true;  // defined for 3 x 2 F (linear: not, README "Finite elements")
+  std::string_view formula;  // Psi, for `springlab list` and docs/physics.md
+  bool membranes = true;  // defined for 3 x 2 F (linear: not, docs/physics.md "Finite elements")
   bool finite_everywhere = true;  // false: Psi = +infinity somewhere (neo-Hookean, J <= 0)
   // Psi(F); +infinity where the model has no energy (neo-Hookean, J <= 0).
   double (*Psi)(const Mat& F, const Lame& m) = nullptr;

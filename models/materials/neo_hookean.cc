@@ -4,7 +4,7 @@
 //   Psi = mu/2 (I_C - d) - mu ln J + lambda/2 (ln J)^2,
 //   P = mu F + (lambda ln J - mu) (dJ/dF) / J.
 // J <= 0 (an inverted or flattened element) has no energy: Psi = +infinity
-// and P is not a number there (README "Finite elements": the run ends as diverged; the
+// and P is not a number there (docs/physics.md "Finite elements": the run ends as diverged; the
 // implicit solvers' line search keeps J > 0 because the incremental
 // potential is +infinity beyond it).
 #include <cmath>
