@@ -1,4 +1,4 @@
-// What the two fast solvers of README "Fast solvers" share (projective_dynamics.cc,
+// What the two fast solvers of docs/integrators.md "Fast solvers" share (projective_dynamics.cc,
 // xpbd.cc): the system's stiff forces as distance constraints and
 // projective elements (MechanicalSystem::projective_form), the other forces
 // applied explicitly, the contact planes (MechanicalSystem::

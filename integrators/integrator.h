@@ -20,7 +20,8 @@
 
 namespace springlab {
 
-// One vocabulary for every method (README "The integrators"), exported with these names.
+// One vocabulary for every method (docs/integrators.md "The integrators"), exported with these
+// names.
 struct IntegratorStats {
   long steps = 0;               // accepted steps
   long rejected_steps = 0;      // error-test failures (adaptive) or failed attempts
@@ -43,7 +44,7 @@ bool parse_stiffness(const std::string& name, Stiffness& stiffness);
 const char* to_string(Stiffness stiffness);
 
 // Every knob any method reads; each method uses only the ones it needs.
-// How implicit-euler solves its step (README "Fast solvers"): Newton, or
+// How implicit-euler solves its step (docs/integrators.md "Fast solvers"): Newton, or
 // L-BFGS with the local/global matrix as its initial Hessian.
 enum class Solver { kNewton, kQuasiNewton };
 bool parse_solver(const std::string& name, Solver& solver);
@@ -103,7 +104,7 @@ struct IntegratorInfo {
   bool implicit = false;
   bool iterates_to_tolerance = false;  // solves its nonlinear system to --newton-tol
   // Approximates implicit Euler's step with a fixed number of iterations
-  // and no Jacobian (projective dynamics, XPBD: README "Fast solvers").
+  // and no Jacobian (projective dynamics, XPBD: docs/integrators.md "Fast solvers").
   bool jacobian_free = false;
   bool symplectic = false;   // for forces that depend on x only
   StabilityKind stability = StabilityKind::kUnknown;

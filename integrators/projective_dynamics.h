@@ -23,7 +23,7 @@
 // before the last, x^(k+1) = w_(k+1) (xh - x^(k-1)) + x^(k-1), with
 // w_1 = 1, w_2 = 2 / (2 - rho^2), w_(k+1) = 4 / (4 - rho^2 w_k); rho is the
 // plain iteration's spectral radius (its error shrinks by rho per
-// iteration), estimated by the user (README "Fast solvers": watch the
+// iteration), estimated by the user (docs/integrators.md "Fast solvers": watch the
 // solver error fall with --iterations). Too large a rho makes the iterates
 // overshoot; 0 (the default) turns it off.
 //

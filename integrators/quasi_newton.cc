@@ -1,4 +1,4 @@
-// implicit-euler --solver quasi-newton (README "Fast solvers"): the step's
+// implicit-euler --solver quasi-newton (docs/integrators.md "Fast solvers"): the step's
 // incremental potential Phi(v) (newton_velocity_solver.h) minimized by
 // L-BFGS instead of Newton (Liu, Bouaziz and Kavan, "Quasi-Newton methods
 // for real-time simulation of hyperelastic materials", ACM TOG 2017).

@@ -1,4 +1,4 @@
-// Integrators chosen by name (README "The integrators"), from one sorted registry.
+// Integrators chosen by name (docs/integrators.md "The integrators"), from one sorted registry.
 // Adding a method: one new file pair plus one line in registry.cc; every
 // shared test suite (tests/test_integrators*.cc) then covers it.
 #pragma once

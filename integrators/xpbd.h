@@ -27,7 +27,7 @@
 // Exact Coulomb friction, without the smoothing: a particle sticks exactly.
 // Projective elements (MechanicalSystem::projective_form: corotated's
 // as-rigid-as-possible energy w/2 |F - R|^2 and, for poisson > 0,
-// Bouaziz's volume constraint; README "Fast solvers") are the constraint
+// Bouaziz's volume constraint; docs/integrators.md "Fast solvers") are the constraint
 // C = |F - P(F)|, the distance of F to the set it is projected on, with
 // compliance 1/w, so that C^2 / (2 alpha) is
 // the element's energy (XPBD's energy form, Macklin et al. 2016, eq. 2-4).
