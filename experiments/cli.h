@@ -1,4 +1,4 @@
-// The `springlab` command line (README "The command line"). Kept out of main() so the
+// The `springlab` command line (docs/command-line.md "The command line"). Kept out of main() so the
 // commands' pieces can be reused by later tools (experiments, bindings).
 #pragma once
 
@@ -35,7 +35,7 @@ RunSettings run_settings_for(const ElasticModel& model, const std::string& integ
 // The statistics every integrator reports, by the names of `run --json`.
 nlohmann::ordered_json stats_json(const IntegratorStats& s);
 
-// Rows one output of a run may hold (README "Reliability"): about 1 GB of CSV.
+// Rows one output of a run may hold (docs/reliability.md "Reliability"): about 1 GB of CSV.
 inline constexpr double kMaxOutputRows = 10'000'000;
 
 }  // namespace springlab

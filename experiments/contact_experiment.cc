@@ -1,5 +1,5 @@
 // contact: every integrator against the closed forms of contact and
-// friction (README "Contact with planes"), over the cases' steps. One task
+// friction (docs/physics.md "Contact with planes"), over the cases' steps. One task
 // per (case, integrator), one row per run: how deep any particle went past
 // any plane, the energy change, the cost, and -- where the scene is one free
 // particle on one plane under gravity -- the quantity a closed form predicts,

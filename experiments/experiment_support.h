@@ -52,7 +52,7 @@ class TimedCasesExperiment : public Experiment {
   std::vector<TimedCase> cases_;
 };
 
-// Resource caps of an experiment definition (README, "Reliability"), checked
+// Resource caps of an experiment definition (docs/reliability.md, "Reliability"), checked
 // while the definition is read, before any task runs: the tasks it makes, the
 // output rows it holds in memory until they are written in task order, and
 // the scenes it holds, all together (at most what one scene may have:

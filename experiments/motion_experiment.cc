@@ -1,4 +1,4 @@
-// motion: the runs the report's player shows moving (README "The report's
+// motion: the runs the report's player shows moving (docs/experiments-and-report.md "The report's
 // player"). Every integrator runs every case; each output frame records
 // every particle's position and the total energy. A run that diverges also
 // records, from a rerun that only a non-finite state stops, its first frames

@@ -1,5 +1,5 @@
 // rotation: linear elasticity's failure under large rotation, against the
-// rotation-invariant models (README "Finite elements"). Every registered
+// rotation-invariant models (docs/physics.md "Finite elements"). Every registered
 // material model runs every scenario of one built-in scene with a `model`
 // parameter (the shipped definition: the block, without gravity):
 //   - spinning: the rigid velocity field v = w x X. Linear elasticity

@@ -77,8 +77,8 @@ std::vector<double> time_grid(double dt, double t_end) {
 
 namespace {
 
-// README "The command line"'s divergence rule, checked after every step at the cost of one
-// pass over the state instead of an energy evaluation (a pass over every
+// docs/command-line.md "The command line"'s divergence rule, checked after every step at the cost
+// of one pass over the state instead of an energy evaluation (a pass over every
 // spring with a square root each, as much as the force).
 //
 // The certificate. For a spring of stiffness k and rest length L between

@@ -1,6 +1,6 @@
 // The run driver: scene -> model -> integrator -> observer. It owns the
-// output time grid and divergence detection (README "The command line"); integrators only step,
-// observers only record. No step reaches back.
+// output time grid and divergence detection (docs/command-line.md "The command line"); integrators
+// only step, observers only record. No step reaches back.
 #pragma once
 
 #include <optional>
@@ -47,8 +47,8 @@ struct RunResult {
   bool diverged() const { return status != RunStatus::kCompleted; }
 };
 
-// The grid of README "The command line": round(T/dt) steps when T/dt is within 1e-9 of a whole
-// number, otherwise the last step is shortened to end exactly at T.
+// The grid of docs/command-line.md "The command line": round(T/dt) steps when T/dt is within 1e-9
+// of a whole number, otherwise the last step is shortened to end exactly at T.
 // Step k ends at t_k = k dt, and t_N = T exactly (no accumulated drift).
 // t_k is k times dt *as written*: with dt's shortest decimal d x 10^e, t_k
 // is the double nearest to (k d) x 10^e, one correctly rounded operation on

@@ -1,7 +1,7 @@
 // solver-error: how far each way of solving implicit Euler's step is from
 // the step it approximates (its solver error), next to how far that step is
 // from the true motion (implicit Euler's own discretization error), against
-// what the step costs -- the frame-rate comparison of README "Fast solvers".
+// what the step costs -- the frame-rate comparison of docs/integrators.md "Fast solvers".
 //
 // Steps are compared from the same state, never by where runs end after
 // seconds of folding (two correct solvers of the same step can pick

@@ -1,6 +1,6 @@
 // `springlab stability`: the largest step at which a run of length t_end
-// does not diverge (README "The command line" divergence rule), by bisection on log(dt).
-// It assumes stability is monotone in dt (true for the course's linear
+// does not diverge (docs/command-line.md "The command line" divergence rule), by bisection on
+// log(dt). It assumes stability is monotone in dt (true for the course's linear
 // analysis; near a limit a nonlinear scene may not be).
 //
 // The bisection ends when hi / lo <= 1 + rel_tol, or when lo and hi are

@@ -1,6 +1,6 @@
 // stability: the largest stable step of each fixed-step method against
-// stiffness k, found by bisection on log dt (README "The command line" divergence rule), next
-// to the theoretical limit from w_max = sqrt(largest eigenvalue of M^-1 K)
+// stiffness k, found by bisection on log dt (docs/command-line.md "The command line" divergence
+// rule), next to the theoretical limit from w_max = sqrt(largest eigenvalue of M^-1 K)
 // at the initial state:
 //   - a finite limit (w h)* on the undamped oscillator: dt* = (w h)* / w_max
 //     (2 for symplectic Euler and Verlet, 2 sqrt 2 for RK4);

@@ -1,4 +1,4 @@
-// --vtk DIR: the run's output frames for ParaView (README "Output files").
+// --vtk DIR: the run's output frames for ParaView (docs/command-line.md, "ParaView").
 //
 // One VTK XML UnstructuredGrid file per output time, `DIR/<stem>_NNNNNN.vtu`
 // (points with their velocity and a `fixed` flag; springs as lines,
