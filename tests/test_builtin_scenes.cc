@@ -1,5 +1,5 @@
-// Built-in scenes (README "Built-in scenes"): each builds a valid scene that round-trips as a
-// file, its parameters do what they say, and bad -p values are refused with
+// Built-in scenes (docs/scenes.md "Built-in scenes"): each builds a valid scene that round-trips as
+// a file, its parameters do what they say, and bad -p values are refused with
 // an exact message.
 #include <gtest/gtest.h>
 
@@ -120,7 +120,7 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
   EXPECT_EQ(parameter_names("oscillator"), (Names{"k", "mass", "rest", "amplitude"}));
   EXPECT_EQ(parameter_names("chain"),
             (Names{"n", "k", "mass", "length", "drag", "g", "horizontal", "stretch"}));
-  // The spec's parameters first, then the ground's (README "Built-in scenes").
+  // The spec's parameters first, then the ground's (docs/scenes.md "Built-in scenes").
   EXPECT_EQ(parameter_names("cloth"),
             (Names{"n", "k", "k_shear", "k_bend", "mass", "size", "drag", "wind", "ground",
                    "friction", "contact", "contact_stiffness"}));

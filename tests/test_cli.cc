@@ -1,5 +1,5 @@
-// The command line of README "The command line", run as the real executable: each test works in
-// a fresh temporary directory, captures stdout, stderr and the exit status,
+// The command line of docs/command-line.md "The command line", run as the real executable: each
+// test works in a fresh temporary directory, captures stdout, stderr and the exit status,
 // and checks the values in the JSON and CSV outputs.
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -123,7 +123,7 @@ bool contains(const std::string& text, const std::string& fragment) {
 const std::vector<std::string> kStatisticsKeys = {"steps",          "rejected_steps",   "force_evals",
                                                   "jacobian_evals", "linear_solves",    "newton_iterations"};
 
-// The keys README "The command line" promises for `run --json`, with their types.
+// The keys docs/command-line.md "The command line" promises for `run --json`, with their types.
 void expect_run_json_shape(Json j, std::size_t particles, int dimension) {
   for (const char* key : {"integrator", "dt", "t_end", "steps", "rejected_steps", "force_evals",
                           "jacobian_evals", "linear_solves", "newton_iterations", "wall_seconds",
@@ -278,7 +278,7 @@ TEST_F(CliRun, EveryKthStepAndTheLast) {
   EXPECT_EQ(column(csv, 0), expected);
 }
 
-// ------------------------------------------------- 3. the grid of README "The command line"
+// ------------------- 3. the grid of docs/command-line.md "The command line"
 
 TEST_F(CliRun, LastStepShortenedToEndAtT) {
   Json j = run_json({"run", "spring", "--integrator", "verlet", "--dt", "0.3", "--t-end", "1",

@@ -1,5 +1,5 @@
-// Contact with planes (README "Contact with planes"), checked against closed forms: the penalty's
-// resting gap, the explicit methods' stability limit with the contact
+// Contact with planes (docs/physics.md "Contact with planes"), checked against closed forms: the
+// penalty's resting gap, the explicit methods' stability limit with the contact
 // stiffness, energy through a bounce, the barrier's positive gaps, and
 // Coulomb friction on the `slope` scene under every integrator (stick,
 // slide, stopping distance, the work it dissipates).
@@ -74,8 +74,9 @@ TEST(Contact, PenaltyRestingGapIsWeightOverStiffness) {
 // dominates E_s, and the motion is linear only while the particle stays
 // inside both planes, so a divergence must be recognized after a small
 // growth; RK4's energy falls below its limit, where symplectic Euler's and
-// Verlet's oscillate by a factor up to 1 / (1 - (w h / 2)^2) (README,
-// "symplectic near the limit") and would be flagged by so small a factor.
+// Verlet's oscillate by a factor up to 1 / (1 - (w h / 2)^2) (docs/command-line.md,
+// "Divergence": a stable symplectic method near its limit) and would be flagged by so small a
+// factor.
 TEST(Contact, ExplicitStabilityLimitIsTheContactFrequency) {
   const double m = 1.0, k = 1e4, depth = 1e-3;
   Scene s = drop(m, 0.5 * depth, 0.0, ContactModel::kPenalty, k);
@@ -320,7 +321,7 @@ class SpeedAt final : public Observer {
 // weight's slope component m g sin(theta) = mu m g cos(theta) f1(y) at the
 // creep speed y with f1(y) = tan(theta) / mu, so
 //   y = eps_v (1 - sqrt(1 - tan(theta) / mu)) < eps_v:
-// it creeps at most eps_v t (README "Contact with planes"), and at this
+// it creeps at most eps_v t (docs/physics.md "Contact with planes"), and at this
 // speed within 1 %.
 TEST_P(Friction, SticksWhenTheSlopeIsBelowTheFrictionAngle) {
   const double theta = radians(20.0), mu = 0.5, t = 2.0;

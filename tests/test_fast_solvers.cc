@@ -1,4 +1,4 @@
-// The fast solvers of README "Fast solvers" against the implicit Euler step they
+// The fast solvers of docs/integrators.md "Fast solvers" against the implicit Euler step they
 // approximate: exact on linear springs, converging on nonlinear ones, and
 // XPBD's compliance giving the right static extension.
 #include <gtest/gtest.h>
@@ -46,7 +46,7 @@ double distance(const RunResult& a, const RunResult& b) {
   return (a.x_final - b.x_final).norm() + (a.v_final - b.v_final).norm();
 }
 
-// README "Fast solvers": on a linear spring of rest length 0, one iteration of
+// docs/integrators.md "Fast solvers": on a linear spring of rest length 0, one iteration of
 // projective-dynamics, and one substep with one iteration of xpbd, give
 // implicit Euler's step to round-off.
 TEST(FastSolvers, OneIterationIsImplicitEulerOnALinearSpring) {
@@ -180,7 +180,7 @@ double projective_energy(const std::vector<ProjectiveElement>& elements, int dim
   return sum;
 }
 
-// README "Fast solvers": with poisson > 0 the fast solvers take Bouaziz's
+// docs/integrators.md "Fast solvers": with poisson > 0 the fast solvers take Bouaziz's
 // volume constraint (weight k lambda W, projected on J = 1) in place of
 // corotated's lambda/2 (J - 1)^2. Near rest the two agree to second order:
 // the second differences of the projective energy and of the elastic energy
@@ -364,7 +364,7 @@ TEST(FastSolvers, XpbdHangingMassSettlesAtWeightOverStiffness) {
   }
 }
 
-// implicit-euler --solver quasi-newton (README "Fast solvers") minimizes the
+// implicit-euler --solver quasi-newton (docs/integrators.md "Fast solvers") minimizes the
 // same potential as Newton: one step of the folding cloth from the same
 // state, both to 1e-12 m/s, agree to 1e-10 (L-BFGS converges linearly, so
 // its error estimate is rougher than Newton's); at the

@@ -1,5 +1,5 @@
-// Finite elements as a whole (README "Finite elements"): the patch test, the lumped masses,
-// a cantilever against beam theory, the built-in scenes, and every
+// Finite elements as a whole (docs/physics.md "Finite elements"): the patch test, the lumped
+// masses, a cantilever against beam theory, the built-in scenes, and every
 // integrator on an element scene. (The element kinds' derivatives are in
 // test_element_kinds.cc, the materials' in test_materials.cc.)
 #include <gtest/gtest.h>
@@ -110,7 +110,7 @@ TEST(FiniteElements, PatchTestUniformStrainHasNoInteriorForce) {
   }
 }
 
-// README "Finite elements": without a given mass, a particle gets sum rho W / nodes of its
+// docs/physics.md "Finite elements": without a given mass, a particle gets sum rho W / nodes of its
 // elements; a given mass wins; the total is rho x the rest measure.
 // The tetrahedra's fixed-size force (tet_force.cc: the closed-form tangent
 // blocks, node 0 from the others' sums, slots per tetrahedron) is the
@@ -403,7 +403,7 @@ TEST(FiniteElements, TetrahedralCantileverModeAndSagApproachBeamTheory) {
   }
 }
 
-// README "Finite elements": a neo-Hookean element has no energy once inverted, so an
+// docs/physics.md "Finite elements": a neo-Hookean element has no energy once inverted, so an
 // explicit method whose step inverts one ends the run as diverged (not a
 // crash, not "completed"); implicit Euler's line search keeps J > 0 at the
 // same step and completes.

@@ -1,4 +1,4 @@
-// Finite elements at static equilibrium (README "Finite elements", issue 12's "tests that
+// Finite elements at static equilibrium (docs/physics.md "Finite elements", issue 12's "tests that
 // must hold"), solved by Newton on f(x) = 0 over the unknowns that are not
 // prescribed (solve_static below), on meshes written as scene files:
 //   - the patch test: the boundary of a mesh with an irregular interior is

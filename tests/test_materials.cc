@@ -1,7 +1,7 @@
 // Every registered material model (models/materials/), on every shape of F it
 // is defined for (2 x 2 plane strain, 3 x 3 solid, 3 x 2 membrane): the
-// properties README "Finite elements" states and the derivatives the solvers rely on, checked
-// against closed forms and central differences.
+// properties docs/physics.md "Finite elements" states and the derivatives the solvers rely on,
+// checked against closed forms and central differences.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>

@@ -1,6 +1,6 @@
 // The model assembled from the element kinds: what it adds to the kinds'
 // own terms (whose derivatives tests/test_element_kinds.cc checks for every
-// kind): free/fixed particles, the energy report's columns and the README's
+// kind): free/fixed particles, the energy report's columns and docs/physics.md's
 // formulas, symmetry and velocity dependence, the spring's definite part,
 // and the stiff / non-stiff split.
 #include <gtest/gtest.h>
@@ -115,13 +115,14 @@ TEST(Model, EnergiesFollowSpecFormulas) {
   EXPECT_DOUBLE_EQ(e["spring"], 0.5 * 100.0 * 1.0);
   EXPECT_DOUBLE_EQ(e["gravity"], -2.0 * (-10.0) * (-3.0));  // fixed particle stores nothing
   EXPECT_EQ(e.total(), (e.kinetic() + e["spring"]) + e["gravity"]);
-  EXPECT_EQ(e.kinetic_and_spring(), e.kinetic() + e["spring"]);  // README "The command line"'s blow-up measure
+  // docs/command-line.md "The command line"'s blow-up measure:
+  EXPECT_EQ(e.kinetic_and_spring(), e.kinetic() + e["spring"]);
   // E_s = T + U + m_free (|g| d + 0): d = 3 (bounding-box diagonal)
   EXPECT_DOUBLE_EQ(model.energy_scale(), 4.0 + 50.0 + 2.0 * 10.0 * 3.0);
 }
 
-// README "The command line": t,kinetic,spring,gravity,total for every spring scene, the
-// potentials 0 where the scene has none; the values in column order.
+// docs/command-line.md "The command line": t,kinetic,spring,gravity,total for every spring scene,
+// the potentials 0 where the scene has none; the values in column order.
 TEST(Model, EnergyColumnsAreTheSpecsAndAbsentPotentialsAreZero) {
   const std::vector<std::string> spec = {"kinetic", "spring", "gravity", "total"};
   Scene s = hanging_spring();

@@ -1,4 +1,4 @@
-// Scene files (README "Scene files"): every refusal gives its exact one-line message, the
+// Scene files (docs/physics.md "Scene files"): every refusal gives its exact one-line message, the
 // defaults are the documented ones, and scene_to_json round-trips exactly.
 #include <gtest/gtest.h>
 
@@ -260,7 +260,7 @@ TEST(SceneTest, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(scene.get<Springs>()[0].damping, 0.0);
 }
 
-// README "Finite elements": a particle's rest position X defaults to x; a spring without
+// docs/physics.md "Finite elements": a particle's rest position X defaults to x; a spring without
 // "rest" takes the distance of its ends' rest positions.
 TEST(SceneTest, RestPositionsDefaultToXAndGiveTheSpringsRestLength) {
   const Scene scene = parse_scene(
@@ -501,7 +501,7 @@ TEST(SceneTest, LoadsAFileAndNamesItInMessages) {
 
 #ifdef SPRINGLAB_TEST_DATA
 TEST(SceneTest, SpecExampleFileLoads) {
-  // The example printed in README "Scene files", stored verbatim.
+  // The small example docs/physics.md "Scene files" points to, stored verbatim.
   const Scene scene =
       load_scene_file(std::string(SPRINGLAB_TEST_DATA) + "/scenes/spec_example.json");
   EXPECT_EQ(scene.name, "single-spring");

@@ -1,7 +1,7 @@
 // The run driver (experiments/simulation.h) and the stability search
-// (experiments/stability.h) in-process: the output time grid of README "The command line", the
-// observer protocol, the divergence rule (the E_s threshold) and the
-// bisection on dt, each checked against a value worked out by hand.
+// (experiments/stability.h) in-process: the output time grid of
+// docs/command-line.md "The command line", the observer protocol, the divergence rule (the E_s
+// threshold) and the bisection on dt, each checked against a value worked out by hand.
 #include <gtest/gtest.h>
 
 #include <atomic>
