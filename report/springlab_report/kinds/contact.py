@@ -1,5 +1,5 @@
 """contact: every integrator against the closed forms of contact and friction
-over a sweep of steps (README "Contact with planes"). One panel per case: the
+over a sweep of steps (docs/physics.md "Contact with planes"). One panel per case: the
 relative error of the measured quantity (creep speed, sliding acceleration,
 stopping distance, deepest bounce) against the step; then, on the soft and
 the stiff bounce, the energy each method keeps and the work it does. The sentences under the

@@ -1,4 +1,4 @@
-"""mode: what each integrator does to one vibration mode (README "mode"):
+"""mode: what each integrator does to one vibration mode (experiments/README.md "mode"):
 the period error and the amplitude kept per period of the beam's first
 bending mode, against the steps per period, measured on the beam and
 predicted from the method's step map on one oscillator of the mode's

@@ -1,5 +1,5 @@
 """rotation: linear elasticity under large rotation against the
-rotation-invariant models (README "rotation"). One row of panels per
+rotation-invariant models (experiments/README.md "rotation"). One row of panels per
 (scenario, integrator): the radius of gyration about the centre of mass
 relative to its start (1 for a rigid motion) and the elastic energy, a line
 per material model. The sentences under the figure are computed from the

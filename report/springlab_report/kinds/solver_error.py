@@ -1,5 +1,5 @@
 """solver-error: the ways of solving implicit Euler's step at frame rate,
-each from the same states of a tightly solved implicit Euler run (README
+each from the same states of a tightly solved implicit Euler run (experiments/README.md
 "solver-error"): its distance to that step (solver error) and to the true
 motion over the step (total error), against its cost per step, next to
 implicit Euler's own discretization error. The sentences are computed from
