@@ -28,6 +28,7 @@ from springlab_report.integrators import Integrators  # noqa: E402
 from springlab_report.kinds import KINDS  # noqa: E402
 from springlab_report.kinds.convergence import _coinciding  # noqa: E402
 from springlab_report.kinds.energy import classify  # noqa: E402
+from springlab_report.kinds import spectral  # noqa: E402
 
 INTEGRATORS = {"integrators": [
     {"name": "symplectic-euler", "family": "symplectic", "order": 1, "adaptive": False,
@@ -492,6 +493,147 @@ class MotionCases(unittest.TestCase):
         self.assertEqual(ys, [-1.0, -2.0])
         ee = {p["name"]: p for p in players[1]["panels"]}["explicit-euler"]
         self.assertEqual((ee["status"], ee["failure"]), ("failed", "no way"))
+
+
+class SpectralTheory(unittest.TestCase):
+    """The closed-form amplification matrices the spectral figure draws as
+    theory, against the textbook's formulas (Hughes 1987, sec. 9.1;
+    Chung and Hulbert 1993)."""
+
+    wh = np.logspace(-2, 3, 51)
+
+    def test_average_acceleration_is_undamped_with_the_trapezoid_period(self):
+        rho, xi, period = spectral.theory(spectral.newmark_parameters("newmark"), self.wh)
+        np.testing.assert_allclose(rho, 1.0, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(xi, 0.0, rtol=0, atol=1e-12)
+        # wh / arg - 1 cancels at small w h: round-off of arg, absolute.
+        np.testing.assert_allclose(period, self.wh / (2 * np.arctan(self.wh / 2)) - 1,
+                                   rtol=1e-9, atol=1e-10)
+
+    def test_generalized_alpha_reaches_its_rho_inf(self):
+        for rho_inf in (0.0, 0.5, 1.0):
+            params = spectral.generalized_alpha_parameters(rho_inf)
+            self.assertEqual(spectral.newmark_parameters("generalized-alpha",
+                                                         {"rho_inf": rho_inf}), params)
+            rho, _, _ = spectral.theory(params, [1e6])
+            self.assertAlmostEqual(float(rho[0]), rho_inf, delta=1e-3, msg=rho_inf)
+            # Second order, barely damped where resolved.
+            rho, xi, _ = spectral.theory(params, [0.01])
+            self.assertLess(abs(float(rho[0]) - 1.0), 1e-5)
+        # The default (rho_inf 0.5) and HHT's default alpha = -0.1: (1 + a) / (1 - a).
+        rho, _, _ = spectral.theory(spectral.newmark_parameters("generalized-alpha"), [1e6])
+        self.assertAlmostEqual(float(rho[0]), 0.5, delta=1e-3)
+        rho, _, _ = spectral.theory(spectral.newmark_parameters("hht-alpha"), [1e6])
+        self.assertAlmostEqual(float(rho[0]), 0.9 / 1.1, delta=1e-3)
+
+    def test_central_difference_limit_is_two(self):
+        params = spectral.newmark_parameters("central-difference")
+        self.assertEqual(params, (0.0, 0.0, 0.0, 0.5))
+        rho, xi, period = spectral.theory(params, [1.999, 2.001])
+        self.assertAlmostEqual(float(rho[0]), 1.0, delta=1e-12)
+        self.assertGreater(float(rho[1]), 1.0 + 1e-3)
+        # Below the limit: undamped, the period shortened (theta = 2 asin(w h / 2));
+        # above it the roots are real: no damping ratio, no period.
+        self.assertAlmostEqual(float(xi[0]), 0.0, delta=1e-12)
+        self.assertAlmostEqual(float(period[0]), 1.999 / (2 * math.asin(1.999 / 2)) - 1, 12)
+        self.assertTrue(math.isnan(xi[1]) and math.isnan(period[1]))
+        # Fox-Goodwin's period error is O((w h)^4); outside the family there is no theory.
+        _, _, period = spectral.theory(spectral.newmark_parameters("fox-goodwin"), [0.01])
+        self.assertLess(abs(float(period[0])), 1e-9)
+        self.assertIsNone(spectral.newmark_parameters("rk4"))
+
+
+def spectral_data(scratch, implicit_euler_power=0.5, newmark_bump=0.0):
+    """A spectral experiment on a grid of 5 points per decade: newmark and
+    generalized-alpha rho_inf=0 exactly as theory, implicit Euler with
+    rho = (1 + (w h)^2)^-power (1/2 is the method's), symplectic Euler with
+    the central difference's roots. newmark_bump is added to newmark's
+    measured rho at w h = 1."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "method", "integrator", "wh", "spectral_radius", "damping_ratio",
+            "period_error", "degree"]
+    methods = [{"label": "newmark", "integrator": "newmark"},
+               {"label": "generalized-alpha rho_inf=0", "integrator": "generalized-alpha",
+                "rho_inf": 0.0},
+               {"label": "implicit-euler", "integrator": "implicit-euler"},
+               {"label": "symplectic-euler", "integrator": "symplectic-euler"}]
+    scratch.json("spectral.json", {"name": "spectral", "experiment": "spectral",
+                                   "title": "Spectral", "methods": methods, "wh_min": 0.01,
+                                   "wh_max": 1000, "points_per_decade": 5,
+                                   "tables": [{"file": "spectral.csv", "suffix": "",
+                                               "columns": cols}]})
+    rows = [",".join(cols)]
+
+    def f(v):
+        return repr(float(v)) if math.isfinite(v) else ""
+
+    for task, m in enumerate(methods):
+        for k in range(26):
+            wh = 0.01 * 10 ** (k / 5)
+            if m["integrator"] == "implicit-euler":
+                rho = (1 + wh * wh) ** -implicit_euler_power
+                xi = -math.log(rho) / math.atan(wh)
+                period = wh / math.atan(wh) - 1
+            elif m["integrator"] == "symplectic-euler":
+                if wh < 2:
+                    rho, xi, period = 1.0, 0.0, wh / (2 * math.asin(wh / 2)) - 1
+                else:
+                    b = abs(2 - wh * wh)
+                    rho, xi, period = (b + math.sqrt(b * b - 4)) / 2, math.nan, math.nan
+            else:
+                params = spectral.newmark_parameters(m["integrator"], m)
+                rho, xi, period = (float(a[0]) for a in spectral.theory(params, [wh]))
+                if m["integrator"] == "newmark" and k == 10:
+                    rho += newmark_bump
+            rows.append("%d,%s,%s,%r,%s,%s,%s,2" % (task, m["label"], m["integrator"], wh,
+                                                    f(rho), f(xi), f(period)))
+    scratch.write("spectral.csv", "\n".join(rows) + "\n")
+
+
+class SpectralKind(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def facts(self):
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        self.assertNotIn("&amp;#", page)  # escaped once, never twice
+        return [html.unescape(f) for f in re.findall(r"<li>([^<]*)</li>", page)]
+
+    def test_sentences_follow_the_data(self):
+        spectral_data(self.s)
+        facts = self.facts()
+        self.assertTrue((self.s.dir / "out" / "spectral.png").is_file())
+        self.assertIn("Stable at every w h and damping the unresolved modes, ρ at w h = 1000 "
+                      "(the smaller, the more of a stiff mode one step removes): implicit-euler "
+                      "0.001, generalized-alpha rho_inf=0 0.01.", facts)
+        self.assertIn("No numerical damping (ρ within 1e-06 of 1) at every w h up to 1000: "
+                      "newmark; up to their last stable w h: symplectic-euler (1.585).", facts)
+        self.assertIn("Conditionally stable: the stability limit lies between the last w h "
+                      "with ρ ≤ 1 and the first with ρ > 1 on the grid: symplectic-euler "
+                      "(1.585, 2.512] (stated 2).", facts)
+        theory = [f for f in facts if f.startswith("Measured against the closed-form")]
+        self.assertEqual(len(theory), 1)
+        self.assertTrue(theory[0].endswith("every one within 1e-06."), theory[0])
+        self.assertTrue(any(f.startswith("At w h = 0.1 the relative period error is 0.000833 "
+                                         "for newmark (theory (w h)²/12 = 0.000833)")
+                            for f in facts), facts)
+
+    def test_changed_data_changes_the_sentences(self):
+        # Implicit Euler damps less than generalized-alpha rho_inf=0 at 1000, and
+        # newmark's measured rho leaves theory by 1e-3 at w h = 1.
+        spectral_data(self.s, implicit_euler_power=0.25, newmark_bump=1e-3)
+        facts = self.facts()
+        self.assertIn("Stable at every w h and damping the unresolved modes, ρ at w h = 1000 "
+                      "(the smaller, the more of a stiff mode one step removes): "
+                      "generalized-alpha rho_inf=0 0.01, implicit-euler 0.032.", facts)
+        theory = [f for f in facts if f.startswith("Measured against the closed-form")][0]
+        self.assertIn("differs by at most 0.001 (newmark at w h = 1;", theory)
+        self.assertTrue(theory.endswith("beyond 1e-06: newmark."), theory)
+        self.assertNotIn("newmark;", [f for f in facts if f.startswith("No numerical")][0])
 
 
 class Reading(unittest.TestCase):

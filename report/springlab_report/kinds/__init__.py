@@ -4,14 +4,15 @@ look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
 from . import (cloth_showcase, contact, convergence, damping_budget, energy, mode, motion,
-               rotation, solver_error, stability, stability_region, step_energy,
-               work_precision)
+               rotation, solver_error, spectral, stability, stability_region,
+               step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
     motion,
     energy,
     stability,
     stability_region,
+    spectral,
     convergence,
     work_precision,
     solver_error,
