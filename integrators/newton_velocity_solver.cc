@@ -62,6 +62,7 @@ StepResult ImplicitIntegrator::do_initialize() {
 
 void ImplicitIntegrator::stage(double h, const VelocityImplicitScheme& s, const Vector& v) {
   xs_ = x_ + h * (s.a * v_ + s.b * v);
+  if (s.x_offset != nullptr) xs_ += *s.x_offset;
   vs_ = (1.0 - s.c) * v_ + s.c * v;
 }
 
@@ -70,7 +71,8 @@ void ImplicitIntegrator::residual(double h, const VelocityImplicitScheme& s, con
   stage(h, s, v);
   const double t = t_ + s.t_eval_offset * h;
   eval_force(t, xs_, vs_, f_);
-  r = system().mass().cwiseProduct(v - v_) - h * f_;
+  const Vector& v_c = s.inertia != nullptr ? *s.inertia : v_;
+  r = system().mass().cwiseProduct(v - v_c) - (h * s.weight) * f_;
   if (!s.discrete_gradient) return;
   // Gonzalez (1996): grad V(x*) becomes
   //   grad V(x*) + (V(y) - V(x_n) - grad V(x*).Delta) / |Delta|^2 Delta,
@@ -94,9 +96,10 @@ double ImplicitIntegrator::potential(double h, const VelocityImplicitScheme& s, 
                                      double& magnitude) const {
   // xs_ and vs_ are those of the last residual(), at this v.
   const double t = t_ + s.t_eval_offset * h;
-  const double inertia = 0.5 * (v - v_).cwiseAbs2().dot(system().mass());
-  const double stored = system().position_potential(t, xs_) / s.b;
-  const double dissipated = h / s.c * system().velocity_potential(t, vs_);
+  const Vector& v_c = s.inertia != nullptr ? *s.inertia : v_;
+  const double inertia = 0.5 * (v - v_c).cwiseAbs2().dot(system().mass());
+  const double stored = s.weight * system().position_potential(t, xs_) / s.b;
+  const double dissipated = (h * s.weight) / s.c * system().velocity_potential(t, vs_);
   // The discrete gradient's correction with its coefficient frozen,
   // h c D = d/dv (c |D|^2).
   const double corrected = s.discrete_gradient ? frozen_c_ * delta_.squaredNorm() : 0.0;
@@ -312,6 +315,8 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     return StepResult::failure(message.str());
   };
   const double t = t_ + s.t_eval_offset * h;
+  // The Newton matrix's coefficients of dF/dx (h^2 w b) and dF/dv (h w c).
+  const double wb = s.weight * s.b, wc = s.weight * s.c;
   const double tol = options().newton_tol;
   const bool symmetric = system().jacobian_symmetric();
   const bool forbidden_states = system().has_forbidden_states();
@@ -372,7 +377,7 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       frozen_c_ = correction_;
     }
     stage(h, s, v);
-    assemble(t, xs_, vs_, h, s.b, s.c, definite, jacobian_);
+    assemble(t, xs_, vs_, h, wb, wc, definite, jacobian_);
     const double r_norm = r_.norm();
     const double eta =
         careful ? kAccurateForcing
@@ -399,12 +404,12 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     if (first) start = begin_step();
     started = true;
     const LinearSolve ls =
-        solve_linear(t, xs_, vs_, h, s.b, s.c, definite, r_try_, eta, atol, minimize, dv_, error,
+        solve_linear(t, xs_, vs_, h, wb, wc, definite, r_try_, eta, atol, minimize, dv_, error,
                      first ? kCgSoftLimit : kCgHardLimit);
     if (first) end_first_solve(start);
     if (!ls.ok) return fail(error);
     if (rank_one) {
-      const LinearSolve lq = solve_linear(t, xs_, vs_, h, s.b, s.c, definite, delta_, eta, 0.0,
+      const LinearSolve lq = solve_linear(t, xs_, vs_, h, wb, wc, definite, delta_, eta, 0.0,
                                           /*truncate=*/false, q_, error);
       if (!lq.ok) return fail(error);
       // Near zero the rank-one term makes the matrix nearly singular: there
@@ -441,6 +446,7 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     // closes; MechanicalSystem::admissible_fraction).
     auto gap_fraction = [&] {
       x_cap_ = x_ + h * (s.a * v_ + s.b * v);
+      if (s.x_offset != nullptr) x_cap_ += *s.x_offset;
       dx_cap_ = (h * s.b) * dv_;
       double fraction = system().admissible_fraction(x_cap_, dx_cap_);
       if (s.end != 1.0) {

@@ -86,6 +86,18 @@ struct VelocityImplicitScheme {
   // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
   // are evaluated at the end (implicit Euler), 2 at the midpoint.
   double end = 1.0;
+  // The second-order and multistep methods (newmark_family.h, bdf2.h,
+  // tr_bdf2.h) solve the more general
+  //   r(v) = M (v - v_c) - h w F(t*, x*(v), v*(v)),
+  //   x*(v) = x_n + x_o + h (a v_n + b v),
+  // with a force weight w, an inertial centre v_c and a position offset x_o
+  // fixed within the step (their predictors: a_n, x_{n-1}, a stage's
+  // state). The incremental potential is then
+  //   Phi(v) = |v - v_c|^2_M / 2 + (w / b) V(x*(v)) + (h w / c) W(t*, v*(v)),
+  // and the Newton matrix J = M - h w c dF/dv - h^2 w b dF/dx.
+  double weight = 1.0;               // w
+  const Vector* inertia = nullptr;   // v_c; nullptr: v_n
+  const Vector* x_offset = nullptr;  // x_o; nullptr: zero
 };
 
 class ImplicitIntegrator : public Integrator {
