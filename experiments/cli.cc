@@ -123,7 +123,7 @@ const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol"
                                       "max-newton", "max-steps",    "max-order",
                                       "linear-solver", "dq-jacobian", "stald",
                                       "stiffness", "iterations", "substeps", "solver",
-                                      "chebyshev"};
+                                      "chebyshev", "beta", "gamma", "alpha", "rho-inf"};
 
 // Options shared by `run` and `stability`.
 struct CommonOptions {
@@ -164,6 +164,15 @@ struct CommonOptions {
                    "of the plain iteration, in (0, 1) (Wang 2015); 0: off");
     cmd.add_option("--substeps", run.options.substeps, "xpbd: substeps per --dt")
         ->default_str("10");
+    cmd.add_option("--beta", run.options.beta, "newmark: beta in [0, 1/2]")->default_str("1/4");
+    cmd.add_option("--gamma", run.options.gamma,
+                   "newmark: gamma in [1/2, 1] (above 1/2 damps every mode)")
+        ->default_str("1/2");
+    cmd.add_option("--alpha", run.options.alpha, "hht-alpha: alpha in [-1/3, 0]")
+        ->default_str("-0.1");
+    cmd.add_option("--rho-inf", run.options.rho_inf,
+                   "generalized-alpha: spectral radius at infinity in [0, 1]")
+        ->default_str("0.5");
     cmd.add_option("--max-steps", run.options.max_steps,
                    "adaptive methods: internal steps per output interval before failing "
                    "(default: 5e6 / unknowns, between 500 and 100000)")

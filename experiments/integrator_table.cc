@@ -31,6 +31,16 @@ const std::map<std::string, IntegratorStyle>& style_table() {
       {"arkode-erk", {"#843c39", "*"}},
       {"arkode-dirk", {"#393b79", "d"}},
       {"arkode-imex", {"#637939", "H"}},
+      {"central-difference", {"#98df8a", "+"}},
+      {"yoshida4", {"#1b9e77", "$4$"}},
+      {"yoshida6", {"#0b5345", "$6$"}},
+      {"newmark", {"#c5b0d5", "x"}},
+      {"linear-acceleration", {"#f7b6d2", "2"}},
+      {"fox-goodwin", {"#ad494a", "3"}},
+      {"hht-alpha", {"#7b4173", "4"}},
+      {"generalized-alpha", {"#ce6dbd", "$\\alpha$"}},
+      {"bdf2", {"#5254a3", "$2$"}},
+      {"tr-bdf2", {"#a55194", "$T$"}},
   };
   return table;
 }
@@ -83,6 +93,8 @@ nlohmann::ordered_json integrator_table_json() {
     stability["limit_wh"] = number_or_null(info.stability_limit);
     stability["alpha_degrees"] = number_or_null(info.stability_alpha);
     stability["note"] = info.stability_note;
+    // The spectral radius as w h -> infinity, where the method states it.
+    stability["rho_inf"] = number_or_null(info.spectral_radius_infinity);
     Json entry;
     entry["name"] = name;
     entry["family"] = integrator_family(info);

@@ -43,6 +43,10 @@ std::string stability_text(const IntegratorInfo& info) {
       text = "L-stable";
       break;
   }
+  if (std::isfinite(info.spectral_radius_infinity)) {
+    std::snprintf(number, sizeof number, "%.3g", info.spectral_radius_infinity);
+    text += std::string(", rho_inf = ") + number;
+  }
   if (!info.stability_note.empty()) text += " (" + info.stability_note + ")";
   return text;
 }

@@ -68,6 +68,11 @@ struct IntegratorOptions {
   // A stop request (Ctrl-C in a sweep): when set and true, a method that
   // takes many internal steps in one advance_to() fails at the next one.
   const std::atomic<bool>* stop = nullptr;
+  // The Newmark family (newmark_family.h); NaN: the method's own value.
+  double beta = std::numeric_limits<double>::quiet_NaN();     // newmark: --beta
+  double gamma = std::numeric_limits<double>::quiet_NaN();    // newmark: --gamma
+  double alpha = std::numeric_limits<double>::quiet_NaN();    // hht-alpha: --alpha
+  double rho_inf = std::numeric_limits<double>::quiet_NaN();  // generalized-alpha: --rho-inf
 };
 
 struct StepResult {
@@ -122,6 +127,11 @@ struct IntegratorInfo {
   // (so the oscillator's energy changes by |R(i w h)|^2 each step). Empty for
   // partitioned methods (symplectic Euler, Verlet) and adaptive ones.
   std::function<std::complex<double>(std::complex<double>)> stability_function = {};
+  // The spectral radius of the step's amplification matrix as w h -> infinity
+  // on the undamped oscillator, where the method declares it (the Newmark
+  // family, BDF2, TR-BDF2): 1 keeps a stiff mode's amplitude, 0 removes it
+  // in one step. NaN: not stated.
+  double spectral_radius_infinity = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The property in words, e.g. "L-stable", "A(51.8 deg)-stable",

@@ -6,18 +6,23 @@
 
 #include "integrators/arkode_ark.h"
 #include "integrators/arkode_erk.h"
+#include "integrators/bdf2.h"
 #include "integrators/cvode_integrator.h"
 #include "integrators/discrete_gradient.h"
 #include "integrators/explicit_euler.h"
+#include "integrators/generalized_alpha.h"
 #include "integrators/ida_integrator.h"
 #include "integrators/implicit_euler.h"
 #include "integrators/implicit_midpoint.h"
 #include "integrators/linear_implicit_euler.h"
+#include "integrators/newmark.h"
 #include "integrators/projective_dynamics.h"
 #include "integrators/rk4.h"
 #include "integrators/symplectic_euler.h"
+#include "integrators/tr_bdf2.h"
 #include "integrators/verlet.h"
 #include "integrators/xpbd.h"
+#include "integrators/yoshida.h"
 
 namespace springlab {
 namespace {
@@ -39,19 +44,29 @@ const std::vector<Entry>& registry() {
       entry<ArkodeDirk>(),
       entry<ArkodeErk>(),
       entry<ArkodeImex>(),
+      entry<Bdf2>(),
+      entry<CentralDifference>(),
       entry<CvodeAdams>(),
       entry<CvodeBdf>(),
       entry<DiscreteGradient>(),
       entry<ExplicitEuler>(),
+      entry<FoxGoodwin>(),
+      entry<GeneralizedAlpha>(),
+      entry<HhtAlpha>(),
       entry<IdaIntegrator>(),
       entry<ImplicitEuler>(),
       entry<ImplicitMidpoint>(),
+      entry<LinearAcceleration>(),
       entry<LinearImplicitEuler>(),
+      entry<Newmark>(),
       entry<ProjectiveDynamics>(),
       entry<RungeKutta4>(),
       entry<SymplecticEuler>(),
+      entry<TrBdf2>(),
       entry<VelocityVerlet>(),
       entry<Xpbd>(),
+      entry<Yoshida4>(),
+      entry<Yoshida6>(),
   };
   return entries;
 }

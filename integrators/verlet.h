@@ -26,11 +26,14 @@
 
 namespace springlab {
 
-class VelocityVerlet final : public Integrator {
+class VelocityVerlet : public Integrator {
  public:
   VelocityVerlet();
 
  protected:
+  // For the compositions of Verlet steps (yoshida.h).
+  explicit VelocityVerlet(IntegratorInfo info) : Integrator(std::move(info)) {}
+
   StepResult do_initialize() override;
   StepResult do_step(double h) override;
 
