@@ -16,6 +16,7 @@ std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_solver_error_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_spectral_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -32,6 +33,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"mode", &make_mode_experiment},
       {"rotation", &make_rotation_experiment},
       {"solver-error", &make_solver_error_experiment},
+      {"spectral", &make_spectral_experiment},
   };
   return kinds;
 }

@@ -17,13 +17,13 @@
 // The series table keeps q and q'/w1 at about 50 outputs per period (every
 // ceil(steps_per_period / 50)-th output).
 //
-// The prediction: on a linear model every linear one-step method treats
+// The prediction: on a linear model every linear fixed-step method treats
 // each mode on its own, as it treats one oscillator of that frequency. So
-// the same integrator is run for one step of h on the oscillator
-// m x'' = -m w1^2 x from (1, 0) and (1, w1), which gives its 2 x 2 step map
-// A; with eigenvalues rho e^(+-i theta), the mode's period is 2 pi h / theta
-// and its amplitude per period rho^(2 pi / theta). Adaptive methods change
-// their step as they go and have none.
+// the same integrator's amplification matrix on the oscillator
+// x'' = -w1^2 x is measured from its own steps (experiments/spectral.h);
+// with principal eigenvalues rho e^(+-i theta), the mode's period is
+// 2 pi h / theta and its amplitude per period rho^(2 pi / theta). Adaptive
+// methods change their step as they go and have none.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -35,6 +35,7 @@
 #include "experiments/experiment.h"
 #include "experiments/experiment_support.h"
 #include "experiments/output_files.h"
+#include "experiments/spectral.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
 #include "models/gravity.h"
@@ -54,31 +55,15 @@ struct StepMapPrediction {
 
 StepMapPrediction predict(const std::string& integrator, double w, double h,
                           const IntegratorOptions& options) {
-  // m = 1, k = w^2, rest length 0: a linear force in every direction.
-  Scene oscillator = make_builtin_scene(
-      "oscillator", {{"k", format_number(w * w)}, {"mass", "1"}, {"rest", "0"}, {"amplitude", "1"}});
-  auto step = [&](double v0) {
-    oscillator.particles[1].v = Eigen::Vector3d(v0, 0.0, 0.0);
-    const ElasticModel model(oscillator);
-    RunSettings run;
-    run.integrator = integrator;
-    run.dt = h;
-    run.t_end = h;
-    run.options = options;
-    const RunResult r = simulate(model, run);
-    return Eigen::Vector2d(r.x_final[0], r.v_final[0]);
-  };
-  const Eigen::Vector2d from_x = step(0.0);
-  Eigen::Matrix2d A;
-  A.col(0) = from_x;                   // A (1, 0)
-  A.col(1) = (step(w) - from_x) / w;   // A (0, 1) = (A (1, w) - A (1, 0)) / w
-  const Eigen::EigenSolver<Eigen::Matrix2d> eig(A);
-  const std::complex<double> lambda = eig.eigenvalues()[0];
+  // The eigenvalues of the method's own step on x'' = -w^2 x (spectral.h:
+  // also for methods that carry more than (x, v), the Newmark family's a_n
+  // and BDF2's previous step): lambda = exp(w h / (1 + e) (-xi +- i)), with
+  // e the relative period error and xi the damping ratio.
+  const StepSpectrum s = step_spectrum(integrator, options, w * h);
   StepMapPrediction p;
-  const double theta = std::abs(std::arg(lambda));
-  if (!(theta > 0.0) || !std::isfinite(theta)) return p;  // no rotation: no period
-  p.period = 2.0 * std::numbers::pi * h / theta;
-  p.amplitude_per_period = std::pow(std::abs(lambda), 2.0 * std::numbers::pi / theta);
+  if (!std::isfinite(s.period_error) || !std::isfinite(s.damping_ratio)) return p;  // no period
+  p.period = 2.0 * std::numbers::pi / w * (1.0 + s.period_error);
+  p.amplitude_per_period = std::exp(-2.0 * std::numbers::pi * s.damping_ratio);
   return p;
 }
 

@@ -32,6 +32,7 @@
 #include "experiments/experiment.h"
 #include "experiments/experiment_runner.h"
 #include "experiments/simulation.h"
+#include "integrators/registry.h"
 #include "models/builtin_scenes.h"
 #include "models/elastic_model.h"
 #include "models/springs.h"
@@ -302,7 +303,8 @@ TEST(ExperimentKinds, TablesStartWithSceneAndIntegrator) {
        {"scene", "cloth"},
        {"parameters", {{"n", 3}}},
        {"dt", 0.01},
-       {"frames", {0.1}}}};
+       {"frames", {0.1}}},
+      {{"experiment", "spectral"}, {"integrators", {"newmark"}}}};
   for (const Json& d : definitions) {
     const LoadedExperiment loaded = parse(d);
     for (const TableSpec& spec : loaded.experiment->tables()) {
@@ -312,6 +314,43 @@ TEST(ExperimentKinds, TablesStartWithSceneAndIntegrator) {
       EXPECT_EQ(std::count(spec.columns.begin(), spec.columns.end(), "task"), 0);
     }
   }
+}
+
+// The spectral experiment's rows are the measured spectrum: RK4's spectral
+// radius is |R(i w h)| of its stability function, at every w h of the grid;
+// a variant's parameters reach the method (generalized-alpha's rho_inf).
+TEST(ExperimentKinds, SpectralRowsAreTheMeasuredSpectrum) {
+  const LoadedExperiment loaded = parse(
+      {{"experiment", "spectral"},
+       {"integrators", {"rk4"}},
+       {"variants", {{{"integrator", "generalized-alpha"}, {"label", "ga0"}, {"rho_inf", 0.0}}}},
+       {"wh_min", 0.1},
+       {"wh_max", 1000},
+       {"points_per_decade", 2}});
+  ASSERT_EQ(loaded.experiment->task_count(), 2u);
+  const auto rk4 = run_task(loaded, 0);
+  ASSERT_EQ(rk4[0].size(), 9u);  // 0.1 .. 1000, two per decade
+  const IntegratorInfo info = make_integrator("rk4")->info();
+  for (const Record& row : rk4[0]) {
+    const double wh = number(row.at("wh"));
+    const double expected = std::abs(info.stability_function(std::complex<double>(0.0, wh)));
+    EXPECT_TRUE(close(number(row.at("spectral_radius")), expected, 1e-6)) << "w h " << wh;
+    EXPECT_EQ(row.at("method"), "rk4");
+  }
+  const auto ga = run_task(loaded, 1);
+  EXPECT_EQ(ga[0].back().at("method"), "ga0");
+  EXPECT_EQ(ga[0].back().at("integrator"), "generalized-alpha");
+  // rho_inf = 0 at w h = 1000: 0.0100665 by the closed form (test_second_order.cc).
+  EXPECT_NEAR(number(ga[0].back().at("spectral_radius")), 0.0100665, 1e-6);
+}
+
+// A variant with a parameter out of the method's range is refused.
+TEST(ExperimentDefinition, SpectralVariantOutOfRangeIsRefused) {
+  const Json d = {{"experiment", "spectral"},
+                  {"integrators", {"rk4"}},
+                  {"variants", {{{"integrator", "generalized-alpha"}, {"label", "x"}, {"rho_inf", 2}}}}};
+  EXPECT_NE(definition_error(d).find("--rho-inf: must be in [0, 1]"), std::string::npos)
+      << definition_error(d);
 }
 
 // Explicit Euler on x'' = -w^2 x: E_{n+1} = (1 + w^2 dt^2) E_n exactly; at
