@@ -429,6 +429,45 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   return 0;
 }
 
+// The stability search's progress on a terminal: one line on stderr,
+// overwritten in place (nothing in the first second), naming the trial, its
+// step, the bracket so far and how far the trial has run.
+class StabilityProgress final : public Observer {
+ public:
+  explicit StabilityProgress(std::string integrator)
+      : integrator_(std::move(integrator)), start_(Clock::now()), last_(start_) {}
+  ~StabilityProgress() override {
+    if (shown_) std::fprintf(stderr, "\r\033[K");
+  }
+  void trial(const StabilityTrial& t) {
+    trial_ = t;
+    show(0.0, true);
+  }
+  void observe(double t, const Vector&, const Vector&) override { show(t, false); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void show(double t, bool force) {
+    const auto now = Clock::now();
+    if (now - start_ < std::chrono::seconds(1)) return;
+    if (!force && now - last_ < std::chrono::milliseconds(200)) return;
+    last_ = now;
+    shown_ = true;
+    char bracket[64] = "";
+    if (trial_.lo > 0.0 || trial_.hi > 0.0) {
+      std::snprintf(bracket, sizeof bracket, ", bracket [%.4g, %.4g]", trial_.lo, trial_.hi);
+    }
+    std::fprintf(stderr, "\r\033[K[stability %s] run %d: dt %.4g%s, t = %.4g of %.4g s, %.0f s",
+                 integrator_.c_str(), trial_.run, trial_.dt, bracket, t, trial_.t_end,
+                 std::chrono::duration<double>(now - start_).count());
+    std::fflush(stderr);
+  }
+  std::string integrator_;
+  StabilityTrial trial_;
+  Clock::time_point start_, last_;
+  bool shown_ = false;
+};
+
 int command_stability(CommonOptions& common, StabilitySettings& s) {
   common.validate();
   require_positive("--dt-min", s.dt_min);
@@ -449,10 +488,21 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
   s.run = common.run;
-  const StabilityResult r = find_max_stable_dt(model, s);
-  const double w = max_angular_frequency(model);
-  const TheoryLimit theory =
-      theoretical_max_dt(make_integrator(r.integrator)->info(), w, s.run.t_end, s.run.blowup);
+  std::unique_ptr<StabilityProgress> progress;
+  if (::isatty(2)) {
+    progress = std::make_unique<StabilityProgress>(s.run.integrator);
+    s.on_trial = [p = progress.get()](const StabilityTrial& t) { p->trial(t); };
+    s.observer = progress.get();
+  }
+  StabilityResult r;
+  try {
+    r = find_max_stable_dt(model, s);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());  // a trial longer than t_end with no valid grid
+  }
+  progress.reset();  // clears its line
+  const double w = r.mode.w;
+  const TheoryLimit& theory = r.theory;
   std::ostringstream out;
   if (common.json) {
     static const char* outcomes[] = {"bracketed", "stable up to dt_max", "unstable at dt_min"};
@@ -464,27 +514,44 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     j["bracket"] = Json::array({r.lo, r.hi});
     j["outcome"] = outcomes[static_cast<int>(r.outcome)];
     j["runs"] = r.runs;
+    j["min_steps"] = s.min_steps;
+    j["min_periods"] = s.min_periods;
+    j["trial_t_end"] = r.lo_run_time > 0.0 ? Json(r.lo_run_time) : Json(nullptr);
     j["w_max"] = w;
+    j["damping"] = r.mode.damping;
     j["theory_dt"] = theory.dt ? Json(*theory.dt) : Json(nullptr);
     j["theory"] = theory.rule;
+    if (theory.dt) j["ratio"] = r.max_stable_dt / *theory.dt;
     out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
   } else {
+    const char* runs = r.runs == 1 ? " run" : " runs";
     out << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end << ": ";
     switch (r.outcome) {
       case StabilityOutcome::kBracketed:
         out << "largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi
-            << "], " << r.runs << " runs)\n";
+            << "], " << r.runs << runs << ")\n";
         break;
       case StabilityOutcome::kStableUpToDtMax:
-        out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << " run)\n";
+        out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << runs << ")\n";
         break;
       case StabilityOutcome::kUnstableAtDtMin:
-        out << "diverged even at --dt-min " << s.dt_min << " (" << r.runs << " runs)\n";
+        out << "diverged even at --dt-min " << s.dt_min << " (" << r.runs << runs << ")\n";
         break;
     }
-    out << "w_max " << w << " rad/s; theory: ";
+    if (r.lo_run_time > s.run.t_end) {
+      out << "the trial at " << r.lo << " ran " << r.lo_run_time
+          << " s, past --t-end: every trial runs at least " << s.min_steps << " steps and "
+          << s.min_periods << " periods of the fastest mode\n";
+    }
+    out << "w_max " << w << " rad/s";
+    if (r.mode.damping > 0.0) out << ", damping " << r.mode.damping << " 1/s";
+    out << "; theory: ";
     if (theory.dt) {
-      out << "dt* = " << *theory.dt << " (" << theory.rule << ")\n";
+      out << "dt* = " << *theory.dt << " (" << theory.rule << ")";
+      if (r.outcome == StabilityOutcome::kBracketed) {
+        out << ", measured / theory " << r.max_stable_dt / *theory.dt;
+      }
+      out << '\n';
     } else {
       out << theory.rule << '\n';
     }

@@ -5,11 +5,16 @@
 //   - a finite limit (w h)* on the undamped oscillator: dt* = (w h)* / w_max
 //     (2 for symplectic Euler and Verlet, 2 sqrt 2 for RK4);
 //   - none (empty) for A-stable methods;
-//   - for a method unstable at every step (explicit Euler, |R(i w h)| > 1),
-//     the step at which the top mode's energy grows by the blow-up factor B
-//     within the simulated time T: (T / h) ln |R(i w h)|^2 = ln B. That
-//     limit shrinks as T grows. (Exact for the oscillator, where all the
-//     energy is in that mode; an estimate for multi-mode scenes.)
+//   - on a damped fastest mode (drag), for a method with a scalar stability
+//     function R: the largest h with |R(h lambda)| <= 1 for the mode's
+//     eigenvalues (explicit Euler: c / w_max^2 for damping c < 2 w_max);
+//   - for a method unstable at every step on an undamped mode (explicit
+//     Euler, |R(i w h)| > 1), the step at which the top mode's energy grows by
+//     the blow-up factor B within the simulated time T: (T / h) ln |R(i w h)|^2
+//     = ln B. That limit shrinks as T grows. (Exact for the oscillator, where
+//     all the energy is in that mode; an estimate for multi-mode scenes.)
+// theoretical_max_dt (stability.h) gives it; find_max_stable_dt starts its
+// bracket there, and runs each trial at least 100 steps (T is extended).
 // The simulated time is `periods` periods of the fastest mode, so every k
 // is tested for the same number of oscillations.
 // Plus a map: final / initial energy on a (dt, k) grid for a few methods.
@@ -32,6 +37,9 @@ struct StiffnessCase {
   std::string stiffness_parameter;
   std::vector<double> k;
   std::vector<Scene> scenes;  // one per k
+  std::vector<std::string> integrators;  // the case's own list, else the experiment's
+  std::optional<double> periods;        // the case's own, else the experiment's
+  std::optional<double> blowup;         // the case's own, else the experiment's
 };
 
 struct LimitTask {
@@ -79,13 +87,25 @@ class StabilityExperiment final : public Experiment {
                             " steps (periods x 2 pi / dt_min_factor), over the cap of 1e9");
     }
     for (const DefinitionObject& c : d.objects("cases")) {
-      c.allow_only({"scene", "parameters", "stiffness", "k"});
+      c.allow_only({"scene", "parameters", "stiffness", "k", "integrators", "periods", "blowup"});
       cases_.push_back(read_sweep(c));
+      StiffnessCase& added = cases_.back();
+      if (c.has("integrators")) added.integrators = fixed_step_integrators(c);
+      if (c.has("blowup")) added.blowup = c.positive("blowup");
+      if (c.has("periods")) {
+        added.periods = c.positive("periods");
+        if (*added.periods * 2.0 * std::numbers::pi / dt_min_factor_ > 1e9) {
+          c.fail("periods", "a run at dt_min would take over 1e9 steps (periods x 2 pi / "
+                            "dt_min_factor)");
+        }
+      }
+      const std::vector<std::string>& names =
+          added.integrators.empty() ? integrators_ : added.integrators;
       check_task_count(c, "k",
                        static_cast<double>(limit_tasks_.size()) +
-                           static_cast<double>(cases_.back().k.size() * integrators_.size()));
-      for (std::size_t ki = 0; ki < cases_.back().k.size(); ++ki) {
-        for (const std::string& name : integrators_) {
+                           static_cast<double>(added.k.size() * names.size()));
+      for (std::size_t ki = 0; ki < added.k.size(); ++ki) {
+        for (const std::string& name : names) {
           limit_tasks_.push_back({cases_.size() - 1, ki, name});
         }
       }
@@ -135,8 +155,12 @@ class StabilityExperiment final : public Experiment {
   nlohmann::json settings() const override {
     nlohmann::json cases = nlohmann::json::array();
     for (const StiffnessCase& c : cases_) {
-      cases.push_back({{"stiffness", c.stiffness_parameter}, {"k", c.k},
-                       {"scene", scene_as_json(c.scenes.front())}});
+      nlohmann::json one = {{"stiffness", c.stiffness_parameter}, {"k", c.k},
+                            {"scene", scene_as_json(c.scenes.front())}};
+      if (!c.integrators.empty()) one["integrators"] = c.integrators;
+      if (c.periods) one["periods"] = *c.periods;
+      if (c.blowup) one["blowup"] = *c.blowup;
+      cases.push_back(std::move(one));
     }
     nlohmann::json s = {{"integrators", integrators_}, {"cases", cases},
                         {"periods", periods_}, {"blowup", blowup_},
@@ -165,18 +189,17 @@ class StabilityExperiment final : public Experiment {
     const Scene& scene = c.scenes[task.k_index];
     const ElasticModel model(scene);
     const double w = max_angular_frequency(model);
-    const double t_end = periods_ * 2.0 * std::numbers::pi / std::max(w, 1e-300);
+    const double t_end = c.periods.value_or(periods_) * 2.0 * std::numbers::pi / std::max(w, 1e-300);
     StabilitySettings s;
     s.run.integrator = task.integrator;
     s.run.t_end = t_end;
-    s.run.blowup = blowup_;
+    s.run.blowup = c.blowup.value_or(blowup_);
     s.run.options = options_;
     s.dt_min = dt_min_factor_ / w;
     s.dt_max = dt_max_factor_ / w;
     s.rel_tol = rel_tol_;
     const StabilityResult r = find_max_stable_dt(model, s);
-    const IntegratorInfo info = make_integrator(task.integrator)->info();
-    const std::optional<double> theory = theoretical_max_dt(info, w, t_end, blowup_).dt;
+    const std::optional<double> theory = r.theory.dt;
     Row row;
     row.add(scene.name).add(task.integrator).add(c.k[task.k_index]).add(w).add(t_end)
         .add(r.max_stable_dt).add(r.lo).add(r.hi);

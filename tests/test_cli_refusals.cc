@@ -246,6 +246,8 @@ TEST(CliStabilityBounds, NothingDivergingIsSaidSo) {
   ASSERT_TRUE(r.exited && r.status == 0) << describe(args, r);
   EXPECT_EQ(r.out,
             "implicit-euler on oscillator for t_end 10: no step diverged up to --dt-max 1 (1 run)\n"
+            "the trial at 1 ran 100 s, past --t-end: every trial runs at least 100 steps and 20 "
+            "periods of the fastest mode\n"
             "w_max 10 rad/s; theory: none: L-stable\n");
 }
 
