@@ -8,7 +8,8 @@
 // against log dt (fixed-step) or log rtol (adaptive) over the completed points
 // whose error is above kErrorFloor (below it round-off, not the method, sets
 // the error). theoretical_order is the method's global order for fixed-step
-// methods; for adaptive ones it is 1: a tolerance-proportional error control
+// methods (its position_order where that is higher and F depends on x
+// alone: fox-goodwin's positions are Numerov's, order 4); for adaptive ones it is 1: a tolerance-proportional error control
 // makes the error proportional to rtol whatever the method's order.
 //
 // The sweeps, the reference and the error are accuracy_sweep.h's, shared
@@ -100,8 +101,12 @@ class ConvergenceExperiment final : public Experiment {
     int points = 0;
     for (const double e : errors) points += std::isfinite(e) && e > kErrorFloor ? 1 : 0;
     const std::optional<double> fitted = log_log_slope(m.values, errors, kErrorFloor);
+    // The error is of the positions: where F depends on x alone, a method
+    // whose positions converge faster is held to that order.
+    const bool positions_faster = m.info.position_order > m.info.order &&
+                                  model.velocity_dependence() == VelocityDependence::kNone;
     Row orders;
-    orders.raw(prefix).add(adaptive ? 1 : m.info.order);
+    orders.raw(prefix).add(adaptive ? 1 : (positions_faster ? m.info.position_order : m.info.order));
     if (fitted) {
       orders.add(*fitted);
     } else {

@@ -105,6 +105,10 @@ struct IntegratorInfo {
   std::string name;
   std::string scheme;        // one line: the update formula
   int order = 1;             // global order of accuracy
+  // Where the positions alone converge faster when F depends on x only: the
+  // order of x then (fox-goodwin's positions are Numerov's method: 4). 0:
+  // the same as `order`.
+  int position_order = 0;
   bool adaptive = false;
   bool implicit = false;
   bool iterates_to_tolerance = false;  // solves its nonlinear system to --newton-tol

@@ -45,7 +45,7 @@ std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) con
 }
 
 CentralDifference::CentralDifference()
-    : NewmarkFamily({.name = "central-difference",
+    : VelocityVerlet({.name = "central-difference",
                      .scheme = "x' = x + h v + h^2/2 a,  v' = v + h/2 (a + a'),  M a' = F(x', v')",
                      .order = 2,
                      .symplectic = true,
@@ -65,6 +65,7 @@ FoxGoodwin::FoxGoodwin()
     : NewmarkFamily({.name = "fox-goodwin",
                      .scheme = "x' = x + h v + h^2 (5a/12 + a'/12),  v' = v + h/2 (a + a'),  M a' = F(x', v')",
                      .order = 2,
+                     .position_order = 4,
                      .implicit = true,
                      .iterates_to_tolerance = true,
                      .stability = StabilityKind::kConditional,

@@ -8,15 +8,19 @@
 //   newmark              beta 1/4, average acceleration = the trapezoidal
 //                        rule: A-stable, conserves a linear system's energy;
 //                        --beta and --gamma select any other member;
-//   central-difference   beta 0: explicit, velocity Verlet's step, w h <= 2;
+//   central-difference   beta 0: explicit, velocity Verlet's step, w h <= 2
+//                        (Verlet's code under this name: see below);
 //   linear-acceleration  beta 1/6: w h <= 2 sqrt(3) = 3.464;
 //   fox-goodwin          beta 1/12: w h <= sqrt(6) = 2.449, the smallest
-//                        period error of the family, O((w h)^4).
+//                        period error of the family, O((w h)^4); where F
+//                        depends on x alone its positions are Numerov's
+//                        method, of order 4 (its velocities of order 2).
 // With gamma = 1/2 the limit is w h <= 1 / sqrt(1/4 - beta) (Hughes 9.1.2).
 // gamma > 1/2 damps every mode (and the method is first order).
 #pragma once
 
 #include "integrators/newmark_family.h"
+#include "integrators/verlet.h"
 
 namespace springlab {
 
@@ -30,12 +34,13 @@ class Newmark final : public NewmarkFamily {
   std::vector<std::string> parameter_options() const override { return {"beta", "gamma"}; }
 };
 
-class CentralDifference final : public NewmarkFamily {
+// beta = 0: x' = x + h v + h^2/2 a is explicit and the step is exactly
+// velocity Verlet's (kick h/2, drift h, kick h/2, the closing kick solved
+// for v' where F depends on v), so it is Verlet's code under this name;
+// `newmark --beta 0` takes the family's own path to the same step.
+class CentralDifference final : public VelocityVerlet {
  public:
   CentralDifference();
-  NewmarkParameters parameters(const IntegratorOptions&) const override {
-    return {.beta = 0.0, .gamma = 0.5};
-  }
 };
 
 class LinearAcceleration final : public NewmarkFamily {
