@@ -14,6 +14,7 @@
 //   BM_Run/<integrator>/cloth/<n>, BM_NewtonAccuracy/...         bench_newton.cc
 //   BM_ElementForce[Jacobian]/<material>/block/<n>              bench_elements.cc
 //     (long: only with SPRINGLAB_BENCH_LONG=1)
+//   BM_VtkSeries/<frames>                                        bench_vtk.cc
 // `cmake --build --preset bench` runs it all and writes
 // build/release/report-data/benchmarks.json, which report/make_report.py reads.
 #include <benchmark/benchmark.h>
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   sb::register_run_benchmarks();
   sb::register_newton_benchmarks();
   sb::register_element_benchmarks();
+  sb::register_vtk_benchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

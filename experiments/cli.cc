@@ -20,6 +20,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 
 #include "experiments/experiment_runner.h"
 #include "experiments/integrator_table.h"
@@ -125,6 +126,9 @@ const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol"
                                       "stiffness", "iterations", "substeps", "solver",
                                       "chebyshev", "beta", "gamma", "alpha", "rho-inf"};
 
+// Iterations or substeps per step at most (as experiment definitions cap them).
+constexpr int kMaxInnerCount = 100000;
+
 // Options shared by `run` and `stability`.
 struct CommonOptions {
   std::string scene;
@@ -206,10 +210,17 @@ struct CommonOptions {
     require_positive("--newton-tol", run.options.newton_tol);
     require_positive("--blowup", run.blowup);
     if (run.options.max_newton < 1) throw UsageError("--max-newton: must be >= 1");
-    if (given("iterations") && run.options.iterations < 1) {
-      throw UsageError("--iterations: must be >= 1");
+    // The caps of experiment definitions (solver_error's substeps and
+    // iterations): more would only spin (--substeps 2147483647 is 2e10
+    // projections a step).
+    if (given("iterations") && (run.options.iterations < 1 || run.options.iterations > kMaxInnerCount)) {
+      throw UsageError("--iterations: must be between 1 and " + std::to_string(kMaxInnerCount) +
+                       " (got " + std::to_string(run.options.iterations) + ")");
     }
-    if (given("substeps") && run.options.substeps < 1) throw UsageError("--substeps: must be >= 1");
+    if (given("substeps") && (run.options.substeps < 1 || run.options.substeps > kMaxInnerCount)) {
+      throw UsageError("--substeps: must be between 1 and " + std::to_string(kMaxInnerCount) +
+                       " (got " + std::to_string(run.options.substeps) + ")");
+    }
     if (!(run.options.chebyshev >= 0.0 && run.options.chebyshev < 1.0)) {
       throw UsageError("--chebyshev: must be in [0, 1) (0: off)");
     }
@@ -255,6 +266,44 @@ void check_initial_energy(const ElasticModel& model, const std::string& scene_ar
     throw SceneError(printable(scene_arg) +
                      ": the initial energy is not finite (positions, velocities or stiffnesses "
                      "too large for double precision)");
+  }
+}
+
+// A pairing the method refuses before its first step (xpbd and a
+// neo-Hookean block, projective dynamics and the barrier) is a usage error:
+// one line naming the fix, before any output is opened (issue 38.6).
+std::unique_ptr<Integrator> prepare_or_refuse(const ElasticModel& model, const RunSettings& run,
+                                              const std::string& scene_arg) {
+  try {
+    return prepare_integrator(model, run);
+  } catch (const RunRefused& e) {
+    std::string why = e.what();
+    const std::string own = run.integrator + ": ";
+    if (why.rfind(own, 0) == 0) why.erase(0, own.size());
+    // A built-in scene: the parameter that makes the pairing work.
+    const BuiltinScene* builtin = nullptr;
+    struct stat st {};
+    if (scene_arg != "-" && ::stat(scene_arg.c_str(), &st) != 0) {
+      for (const BuiltinScene& s : builtin_scenes()) {
+        if (!scene_arg.empty() && s.name == scene_arg) builtin = &s;
+      }
+    }
+    auto has = [&](const char* parameter) {
+      if (builtin == nullptr) return false;
+      for (const SceneParameter& p : builtin->parameters) {
+        if (p.name == parameter) return true;
+      }
+      return false;
+    };
+    std::string fix;
+    if (why.find("no projective form") != std::string::npos && has("model")) {
+      fix = why.find("(corotated, poisson -") != std::string::npos ? "-p poisson=0.3"
+                                                                   : "-p model=1 (corotated)";
+    } else if (why.find("is the barrier") != std::string::npos && has("contact")) {
+      fix = "-p contact=0 (penalty)";
+    }
+    if (!fix.empty()) why += " (for this scene: " + fix + ")";
+    throw UsageError("--integrator " + run.integrator + ": " + why);
   }
 }
 
@@ -343,6 +392,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
+  std::unique_ptr<Integrator> integrator = prepare_or_refuse(model, common.run, common.scene);
 
   // Files are opened (regular files as temporaries) before any step runs.
   std::unique_ptr<OutputFile> energy_file, trajectory_file;
@@ -368,7 +418,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     observers.push_back(progress.get());
   }
 
-  const RunResult r = simulate(model, common.run, observers);
+  const RunResult r = simulate(model, common.run, observers, std::move(integrator));
   progress.reset();  // clears its line
   for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
     if (f != nullptr) f->finish();
@@ -487,6 +537,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   const ElasticModel model(scene);
   check_initial_energy(model, common.scene);
   common.check_against_method(model);
+  prepare_or_refuse(model, common.run, common.scene);  // a refusal is not "diverged even at --dt-min"
   s.run = common.run;
   std::unique_ptr<StabilityProgress> progress;
   if (::isatty(2)) {
@@ -738,6 +789,11 @@ RunSettings run_settings_for(const ElasticModel& model, const std::string& integ
   return common.run;
 }
 
+std::unique_ptr<Integrator> prepare_run(const ElasticModel& model, const RunSettings& settings,
+                                        const std::string& scene_arg) {
+  return prepare_or_refuse(model, settings, scene_arg);
+}
+
 Json stats_json(const IntegratorStats& s) {
   return Json{{"steps", s.steps},
               {"rejected_steps", s.rejected_steps},
@@ -820,7 +876,17 @@ int run_cli(int argc, char** argv) {
   }
 
   try {
-    if (*run) return command_run(run_options, energy_path, trajectory_path, vtk_dir);
+    if (*run) {
+      // An empty name is a mistake (an unset shell variable), not "no file".
+      for (const auto& [option, value, what] :
+           {std::tuple{"--energy", &energy_path, "file"}, std::tuple{"--trajectory", &trajectory_path, "file"},
+            std::tuple{"--vtk", &vtk_dir, "folder"}}) {
+        if (run->count(option) > 0 && value->empty()) {
+          throw UsageError(std::string(option) + ": the " + what + " name is empty");
+        }
+      }
+      return command_run(run_options, energy_path, trajectory_path, vtk_dir);
+    }
     if (*stability) return command_stability(stability_options, stability_settings);
     if (*scene) {
       if (!is_builtin_scene(scene_name)) {

@@ -2,6 +2,7 @@
 // commands' pieces can be reused by later tools (experiments, bindings).
 #pragma once
 
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -31,6 +32,14 @@ RunSettings run_settings_for(const ElasticModel& model, const std::string& integ
                              double t_end, int every,
                              const std::vector<std::pair<std::string, std::string>>& options,
                              std::string* notes = nullptr);
+
+// simulate()'s integrator for `run`, bound to the model's initial state
+// before any output is opened (prepare_integrator): a pairing the method
+// refuses throws std::runtime_error with `run`'s one line ("--integrator
+// xpbd: ..."; for a built-in scene named by `scene_arg`, the -p value that
+// fixes it; "" for none).
+std::unique_ptr<Integrator> prepare_run(const ElasticModel& model, const RunSettings& settings,
+                                        const std::string& scene_arg);
 
 // The statistics every integrator reports, by the names of `run --json`.
 nlohmann::ordered_json stats_json(const IntegratorStats& s);

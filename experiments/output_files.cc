@@ -90,6 +90,21 @@ std::string temporary_stem(const std::string& base, const std::string& host) {
   return base.substr(0, keep) + tag;
 }
 
+// True when `name` is `<stem><pid>.<host>.XXXXXX` of this machine and its
+// process is gone: a temporary that a killed run left behind.
+bool is_stale_temporary(const std::string& name, const std::string& stem, const std::string& host) {
+  if (name.compare(0, stem.size(), stem) != 0) return false;
+  std::size_t at = stem.size(), digits = 0;
+  while (at + digits < name.size() && std::isdigit(static_cast<unsigned char>(name[at + digits]))) ++digits;
+  if (digits == 0 || digits > 9) return false;
+  const std::string rest = name.substr(at + digits);
+  if (rest.size() != 1 + host.size() + 1 + 6 || rest.compare(0, host.size() + 2, "." + host + ".") != 0) {
+    return false;
+  }
+  const pid_t pid = static_cast<pid_t>(std::stol(name.substr(at, digits)));
+  return pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH;  // alive, or not ours to know
+}
+
 // Removes temporaries of this file that a killed run of this user on this
 // machine left behind (`<stem><pid>.<host>.XXXXXX` whose process is gone).
 void remove_stale_temporaries(const std::string& dir, const std::string& stem,
@@ -98,16 +113,7 @@ void remove_stale_temporaries(const std::string& dir, const std::string& stem,
   if (d == nullptr) return;
   while (const dirent* entry = ::readdir(d)) {
     const std::string name = entry->d_name;
-    if (name.compare(0, stem.size(), stem) != 0) continue;
-    std::size_t at = stem.size(), digits = 0;
-    while (at + digits < name.size() && std::isdigit(static_cast<unsigned char>(name[at + digits]))) ++digits;
-    if (digits == 0 || digits > 9) continue;
-    const std::string rest = name.substr(at + digits);
-    if (rest.size() != 1 + host.size() + 1 + 6 || rest.compare(0, host.size() + 2, "." + host + ".") != 0) {
-      continue;
-    }
-    const pid_t pid = static_cast<pid_t>(std::stol(name.substr(at, digits)));
-    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to know
+    if (!is_stale_temporary(name, stem, host)) continue;
     const std::string full = dir + "/" + name;
     struct stat st {};
     if (::lstat(full.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid()) {
@@ -116,6 +122,51 @@ void remove_stale_temporaries(const std::string& dir, const std::string& stem,
   }
   ::closedir(d);
 }
+
+// Removes the regular files directly in `folder`, then the folder (if it
+// is then empty).
+void remove_flat_folder(const std::string& folder) {
+  if (DIR* d = ::opendir(folder.c_str())) {
+    while (const dirent* entry = ::readdir(d)) {
+      const std::string full = folder + "/" + entry->d_name;
+      struct stat st {};
+      if (::lstat(full.c_str(), &st) == 0 && S_ISREG(st.st_mode)) ::unlink(full.c_str());
+    }
+    ::closedir(d);
+  }
+  ::rmdir(folder.c_str());
+}
+
+}  // namespace
+
+void remove_stale_temporary_folders(const std::string& dir, const std::string& stem) {
+  const std::string host = host_name();
+  DIR* d = ::opendir(dir.c_str());
+  if (d == nullptr) return;
+  while (const dirent* entry = ::readdir(d)) {
+    const std::string name = entry->d_name;
+    if (!is_stale_temporary(name, stem, host)) continue;
+    const std::string full = dir + "/" + name;
+    struct stat st {};
+    if (::lstat(full.c_str(), &st) != 0 || !S_ISDIR(st.st_mode) || st.st_uid != ::geteuid()) continue;
+    // The frames and .pvd, and the old series a publish had moved aside
+    // (vtk_series.h): flat folders, one level deep.
+    if (DIR* inner = ::opendir(full.c_str())) {
+      while (const dirent* e = ::readdir(inner)) {
+        const std::string sub = full + "/" + e->d_name;
+        struct stat sst {};
+        if (e->d_name[0] != '.' && ::lstat(sub.c_str(), &sst) == 0 && S_ISDIR(sst.st_mode)) {
+          remove_flat_folder(sub);
+        }
+      }
+      ::closedir(inner);
+    }
+    remove_flat_folder(full);
+  }
+  ::closedir(d);
+}
+
+namespace {
 
 bool same_inode(int fd, const struct stat& st) {
   struct stat other {};

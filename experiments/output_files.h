@@ -69,6 +69,12 @@ class OutputFile {
 // and links). Two character devices (/dev/null twice) do not count.
 bool same_file(const std::string& a, const std::string& b);
 
+// Removes the temporary folders (`<dir>/<stem><pid>.<host>.XXXXXX`, as
+// --vtk makes them: vtk_series.h) that a killed run of this user on this
+// machine left behind, once its process is gone: their regular files, those
+// of the folders directly in them, and the folders.
+void remove_stale_temporary_folders(const std::string& dir, const std::string& stem);
+
 // This machine's name as temporaries carry it ('/' and control characters
 // made '_'; "localhost" when it has none).
 std::string host_name();

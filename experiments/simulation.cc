@@ -180,11 +180,39 @@ class DivergenceCheck {
 
 }  // namespace
 
+namespace {
+
+// The options a run's integrator gets: a thread's stop request (StopScope)
+// where the settings carry none.
+IntegratorOptions run_options(const RunSettings& settings) {
+  IntegratorOptions options = settings.options;
+  if (options.stop == nullptr) options.stop = thread_stop;
+  return options;
+}
+
+}  // namespace
+
+std::unique_ptr<Integrator> prepare_integrator(const ElasticModel& model,
+                                               const RunSettings& settings) {
+  auto integrator = make_integrator(settings.integrator);
+  const StepResult step = integrator->initialize(model, 0.0, model.initial_positions(),
+                                                 model.initial_velocities(), run_options(settings));
+  if (!step.ok) throw RunRefused(step.message);
+  return integrator;
+}
+
 RunResult simulate(const ElasticModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers) {
+  return simulate(model, settings, observers, nullptr);
+}
+
+RunResult simulate(const ElasticModel& model, const RunSettings& settings,
+                   const std::vector<Observer*>& observers, std::unique_ptr<Integrator> prepared) {
   if (settings.every < 1) throw std::invalid_argument("every must be >= 1");
   const TimeGrid grid = make_time_grid(settings.dt, settings.t_end);
-  auto integrator = make_integrator(settings.integrator);
+  const bool initialized = prepared != nullptr;
+  std::unique_ptr<Integrator> integrator =
+      initialized ? std::move(prepared) : make_integrator(settings.integrator);
 
   RunResult result;
   result.integrator = settings.integrator;
@@ -202,8 +230,7 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
   };
   notify(0.0, x0, v0);
 
-  IntegratorOptions options = settings.options;
-  if (options.stop == nullptr) options.stop = thread_stop;
+  const IntegratorOptions options = run_options(settings);
   auto stop_requested = [&] {
     return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
   };
@@ -214,6 +241,8 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
     result.status = RunStatus::kDiverged;
     result.failure = "the initial energy is not finite";
     result.diverged_at = 0.0;
+  } else if (initialized) {
+    // Bound to (x0, v0) by prepare_integrator.
   } else if (step = integrator->initialize(model, 0.0, x0, v0, options); !step.ok) {
     result.status = RunStatus::kFailed;
     result.failure = step.message;

@@ -3,6 +3,7 @@
 // only step, observers only record. No step reaches back.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -86,6 +87,26 @@ std::vector<double> time_grid(double dt, double t_end);
 // set and becomes true, simulate throws StopRequested at the next step.
 RunResult simulate(const ElasticModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers = {});
+
+// A pairing the method refuses before its first step (a material it has no
+// form for, the barrier with a projection method): prepare_integrator's
+// error. what() is the method's one line ("xpbd: ... use ...").
+class RunRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What simulate() does before its first step: the settings' integrator,
+// bound to the model's initial state. Throws RunRefused where the method
+// refuses the model (simulate() would report that as a run failed at
+// t = 0). The command line and the Python module call it before opening any
+// output, so that a refused pairing is an error with nothing written; the
+// integrator it returns then runs the run:
+RunResult simulate(const ElasticModel& model, const RunSettings& settings,
+                   const std::vector<Observer*>& observers,
+                   std::unique_ptr<Integrator> prepared);
+std::unique_ptr<Integrator> prepare_integrator(const ElasticModel& model,
+                                               const RunSettings& settings);
 
 class StopRequested : public std::runtime_error {
  public:

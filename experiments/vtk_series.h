@@ -10,10 +10,17 @@
 // Written whole or not at all, like every output file (output_files.h): the
 // frames go to a temporary folder (`DIR.springlab-tmp.<pid>.<host>.XXXXXX`
 // beside DIR when DIR does not exist yet, `DIR/.springlab-tmp...` when it
-// does), which publish() renames to DIR, or whose files it moves into DIR
-// (the .pvd last; frames of an earlier, longer series of the same stem are
-// removed). A run that ends without publish(), or by a signal, leaves DIR as
-// it was.
+// does), which publish() renames to DIR (mode 0777 minus the umask), or
+// whose files it moves into DIR: the old series of the same stem (frames
+// and .pvd) is first moved aside into the temporary folder, the new frames
+// and then the .pvd moved in, and the old series removed last; a rename that
+// fails puts everything back. What could make that fail (DIR not writable,
+// a folder where the .pvd or a frame goes, another user's old file in a
+// sticky folder) is refused before the run. A run that ends without
+// publish(), by a signal, or by a failed publish leaves DIR as it was.
+// Signals wait while publish() moves files. A temporary folder left by a
+// killed run (kill -9) is removed by the next --vtk run beside it, once its
+// process is gone (output_files.h).
 #pragma once
 
 #include <atomic>
@@ -40,6 +47,11 @@ class VtkSeries final : public Observer {
 
  private:
   std::string frame_name(int k) const;
+  // The files of this stem's series in DIR (frames and .pvd), sorted.
+  std::vector<std::string> old_series() const;
+  // Throws, naming the file, when one of `old` could not be replaced: a
+  // folder in its place, or another user's file in a sticky folder.
+  void check_replaceable(const std::vector<std::string>& old) const;
   void remove_temporary();
   [[noreturn]] void fail(const std::string& what, int error) const;
 

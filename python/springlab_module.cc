@@ -200,11 +200,15 @@ PYBIND11_MODULE(springlab, m) {
                                    std::to_string(scene.particles.size()) +
                                    " particles, over the cap of 10000000 rows: keep every K-th step with every=K");
         }
+        // A pairing the method refuses (xpbd and a neo-Hookean material, the
+        // barrier with a projection method) raises springlab.Error, as the
+        // command line refuses it; a failure during the run is a result.
+        std::unique_ptr<Integrator> prepared = prepare_run(model, settings, "");
         Recorder recorder(model);
         RunResult r;
         {
           py::gil_scoped_release release;
-          r = simulate(model, settings, {&recorder});
+          r = simulate(model, settings, {&recorder}, std::move(prepared));
         }
         return run_result(model, r, recorder);
       },
@@ -213,7 +217,8 @@ PYBIND11_MODULE(springlab, m) {
       "(newton_tol=1e-6 is --newton-tol 1e-6, stald=True is --stald). Returns a dict: t (frames,),\n"
       "x and v (frames, particles, dimension), energies (column -> (frames,)), stats (the\n"
       "statistics every integrator reports), status, diverged, diverged_at, failure, t_final,\n"
-      "energy_scale, wall_seconds. A divergence or a solver failure is a result, not an error.");
+      "energy_scale, wall_seconds. A divergence or a solver failure is a result, not an error;\n"
+      "a pairing the method refuses before its first step raises springlab.Error.");
 
   m.def("integrators", [] { return from_json_text(integrator_table_json()["integrators"].dump()); },
         "every registered integrator as `springlab list --json` lists it: name, order, family,\n"

@@ -140,6 +140,30 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
 
 // Options a method does not read are named on stderr, and the run goes on.
+// Issue 38.8: counts past the experiment definitions' cap of 100000 (a
+// --substeps of 2147483647 spun for ever) and empty output names (an unset
+// shell variable: they were silently no output at all).
+INSTANTIATE_TEST_SUITE_P(
+    Limits, CliRefusal,
+    ::testing::Values(
+        Refusal{"SubstepsOverTheCap", run_args("xpbd", {"--substeps", "2147483647"}),
+                "--substeps: must be between 1 and 100000 (got 2147483647)"},
+        Refusal{"SubstepsJustOverTheCap", run_args("xpbd", {"--substeps", "100001"}),
+                "--substeps: must be between 1 and 100000 (got 100001)"},
+        Refusal{"IterationsOverTheCap", run_args("projective-dynamics", {"--iterations", "1000000000"}),
+                "--iterations: must be between 1 and 100000 (got 1000000000)"},
+        Refusal{"StabilityIterationsOverTheCap",
+                {"stability", "oscillator", "--integrator", "xpbd", "--t-end", "1", "--iterations",
+                 "2147483647"},
+                "--iterations: must be between 1 and 100000 (got 2147483647)"},
+        Refusal{"EmptyEnergyName",
+                {"run", "oscillator", "--integrator", "rk4", "--dt", "0.1", "--t-end", "1", "--energy", ""},
+                "--energy: the file name is empty"},
+        Refusal{"EmptyTrajectoryName", run_args("rk4", {"--trajectory", ""}),
+                "--trajectory: the file name is empty"},
+        Refusal{"EmptyVtkName", run_args("rk4", {"--vtk", ""}), "--vtk: the folder name is empty"}),
+    [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
+
 TEST(CliNotes, OptionsTheMethodIgnoresAreNamed) {
   TempDir temp("cli-notes");
   fs::create_directories(temp.path() / "io");

@@ -112,6 +112,30 @@ class Errors(unittest.TestCase):
         self.assert_same_error(lambda: springlab.run(scene, "implicit-euler", dt=0.1, t_end=1, newton_tol="x"),
                                *base, "implicit-euler", "--dt", "0.1", "--t-end", "1", "--newton-tol", "x")
 
+    def test_a_refused_pairing_raises_instead_of_a_failed_result(self):
+        # issue 38.6: xpbd has no form for the block's neo-Hookean material;
+        # it used to return status "failed" at t = 0.
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "block.json")
+            with open(path, "w") as f:
+                f.write(cli("scene", "block", "-p", "n=2").stdout)
+            scene = springlab.load_scene(path)
+            self.assert_same_error(lambda: springlab.run(scene, "xpbd", dt=0.01, t_end=0.05),
+                                   "run", path, "--integrator", "xpbd", "--dt", "0.01", "--t-end", "0.05")
+        with self.assertRaises(springlab.Error) as caught:
+            springlab.run(springlab.load_scene("cloth", n=4, ground=0.5, contact=1),
+                          "projective-dynamics", dt=0.01, t_end=0.05)
+        self.assertIn("--integrator projective-dynamics: this scene's contact is the barrier",
+                      str(caught.exception))
+
+    def test_counts_over_the_cap(self):
+        scene = springlab.load_scene("oscillator")
+        base = ["run", "oscillator", "--integrator"]
+        self.assert_same_error(lambda: springlab.run(scene, "xpbd", dt=0.1, t_end=1, substeps=2147483647),
+                               *base, "xpbd", "--dt", "0.1", "--t-end", "1", "--substeps", "2147483647")
+        self.assert_same_error(lambda: springlab.run(scene, "xpbd", dt=0.1, t_end=1, iterations=100001),
+                               *base, "xpbd", "--dt", "0.1", "--t-end", "1", "--iterations", "100001")
+
     def test_scene_errors(self):
         self.assert_same_error(lambda: springlab.load_scene("cloth", n=1), "run", "cloth", "-p", "n=1",
                                "--integrator", "rk4", "--dt", "0.1", "--t-end", "1")
