@@ -13,6 +13,7 @@
 //   BM_RunPair/<symplectic-euler|rk4>/<scene>/<n>               bench_run.cc
 //   BM_Run/<integrator>/cloth/<n>, BM_NewtonAccuracy/...         bench_newton.cc
 //   BM_ElementForce[Jacobian]/<material>/block/<n>              bench_elements.cc
+//   BM_XpbdVsReference/cloth/<n>                                bench_fast_reference.cc
 //     (long: only with SPRINGLAB_BENCH_LONG=1)
 //   BM_VtkSeries/<frames>                                        bench_vtk.cc
 // `cmake --build --preset bench` runs it all and writes
@@ -31,6 +32,7 @@ int main(int argc, char** argv) {
   sb::register_newton_benchmarks();
   sb::register_element_benchmarks();
   sb::register_vtk_benchmarks();
+  sb::register_fast_reference_benchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -69,5 +69,6 @@ void register_run_benchmarks();
 void register_newton_benchmarks();
 void register_element_benchmarks();
 void register_vtk_benchmarks();
+void register_fast_reference_benchmarks();
 
 }  // namespace springlab::bench

@@ -30,6 +30,7 @@
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
 #include "integrators/registry.h"
+#include "integrators/xpbd.h"
 #include "models/builtin_scenes.h"
 #include "models/element_kind.h"
 #include "models/elastic_model.h"
@@ -442,6 +443,10 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["status"] = to_string(r.status);
     const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
     for (const auto& [key, value] : stats.items()) j[key] = value;
+    if (r.integrator == "xpbd") {  // docs/command-line.md: xpbd adds its substeps per step
+      j["substeps"] = common.run.options.substeps > 0 ? common.run.options.substeps
+                                                      : Xpbd::kDefaultSubsteps;
+    }
     j["wall_seconds"] = r.wall_seconds;
     j["diverged"] = r.diverged();
     j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);

@@ -7,7 +7,9 @@
 //   predicts    v += h_s M^-1 F_ext(t, x, v),  x_prev = x,  x += h_s v
 //               (F_ext: gravity, drag, wind, spring damping, explicitly),
 //   projects    N times (--iterations, default 1), constraint by constraint
-//               (Gauss-Seidel), with lambda_c = 0 at the substep's start:
+//               (Gauss-Seidel) in the scene's order of its springs (the
+//               file's; sorted by particle the pass diverged on cloth 128,
+//               issue 37), with lambda_c = 0 at the substep's start:
 //               a~ = alpha / h_s^2,
 //               dlambda = (-C - a~ lambda_c) / (w_a + w_b + a~),
 //               x_a += w_a dlambda n,  x_b -= w_b dlambda n,  lambda_c += dlambda
@@ -54,9 +56,17 @@ class Xpbd final : public FastSolver {
   static constexpr int kDefaultIterations = 1;
 
  protected:
+  StepResult do_initialize() override;
   StepResult do_step(double h) override;
 
  private:
+  // One Gauss-Seidel pass over the distance constraints in order_ (D: the
+  // dimension), lambda_ accumulating.
+  template <int D>
+  void project_constraints();
+  // The substep's prediction v += h_s M^-1 f_, x_prev = x, x += h_s v.
+  void predict(double hs);
+
   // Projects the plane constraints once (lambda_planes_ accumulates).
   void project_planes(double hs);
   // Coulomb friction on v after the substep.
@@ -64,6 +74,20 @@ class Xpbd final : public FastSolver {
 
   // Projects the projective elements once (lambda_elements_ accumulates).
   void project_elements(double hs);
+  // The distance constraints as the projection loop reads them, in the
+  // order they are projected (the scene's order of its springs, see
+  // do_initialize): offsets a * dim and b * dim into x (b < 0: anchored),
+  // inverse masses, rest length, anchor, and the compliance a~ = 1/(k h_s^2)
+  // of the current substep length.
+  struct Projection {
+    int a, b;
+    double wa, wb, length;
+    double compliance;
+    double anchor[3];
+  };
+  std::vector<Projection> projections_;
+  std::vector<double> stiffness_;  // k per projection (compliance's source)
+  double compliance_hs_ = 0.0;     // the h_s the compliances are for
   Vector f_, x_prev_, lambda_, lambda_elements_;
   Vector lambda_planes_;  // per (plane, free particle)
 };

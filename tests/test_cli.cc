@@ -280,6 +280,21 @@ TEST_F(CliRun, EveryKthStepAndTheLast) {
 
 // ------------------- 3. the grid of docs/command-line.md "The command line"
 
+// The --json of xpbd adds its substeps per --dt (given, or the default 10);
+// other methods have no such key.
+TEST_F(CliRun, XpbdJsonCarriesSubsteps) {
+  Json j = run_json({"run", "chain", "-p", "n=4", "--integrator", "xpbd", "--dt", "0.01",
+                     "--t-end", "0.02", "--substeps", "3", "--json"});
+  EXPECT_EQ(j["substeps"], 3);
+  EXPECT_EQ(j["newton_iterations"], 6);  // 2 steps x 3 substeps x 1 iteration
+  j = run_json({"run", "chain", "-p", "n=4", "--integrator", "xpbd", "--dt", "0.01", "--t-end",
+                "0.02", "--json"});
+  EXPECT_EQ(j["substeps"], 10);
+  j = run_json({"run", "chain", "-p", "n=4", "--integrator", "verlet", "--dt", "0.01", "--t-end",
+                "0.02", "--json"});
+  EXPECT_FALSE(j.contains("substeps"));
+}
+
 TEST_F(CliRun, LastStepShortenedToEndAtT) {
   Json j = run_json({"run", "spring", "--integrator", "verlet", "--dt", "0.3", "--t-end", "1",
                            "--energy", "e.csv", "--json"});
