@@ -5,8 +5,6 @@
 #include <utility>
 #include <vector>
 
-#include "models/elastic_model.h"
-#include "models/springs.h"
 
 namespace springlab {
 
@@ -29,67 +27,12 @@ Xpbd::Xpbd()
                                     "nonlinear springs can gain energy; damping, drag and wind "
                                     "are explicit"}) {}
 
-namespace {
-
-// The scene's springs as distance constraints in the scene's (the file's)
-// order, with the model's internal particle numbers (free particles first,
-// each group in scene order; a fixed end is an anchor; a spring between two
-// fixed particles moves nothing; a pure damper, k = 0, is no constraint),
-// as ElasticModel::projective_form builds them. The spring term hands its
-// springs over sorted by particle, the order its force loop wants for
-// locality; as the order of a Gauss-Seidel pass that order is unstable
-// (issue 37: cloth 128 at 10 substeps x 1 iteration diverges at t = 0.2 s,
-// and so does a plain reference XPBD run in that order, while in the file's
-// order both stay bounded). False when the scene is not read this way.
-bool springs_in_scene_order(const ElasticModel& model, std::vector<DistanceConstraint>& out) {
-  const Scene& scene = model.scene();
-  const int n = static_cast<int>(scene.particles.size());
-  const int dim = model.dimension();
-  std::vector<int> internal(static_cast<std::size_t>(n), -1);
-  int next = 0;
-  for (int pass = 0; pass < 2; ++pass) {
-    for (int p = 0; p < n; ++p) {
-      if (scene.particles[static_cast<std::size_t>(p)].fixed == (pass == 1)) {
-        internal[static_cast<std::size_t>(p)] = next++;
-      }
-    }
-    if (pass == 0 && next != model.free_particle_count()) return false;
-  }
-  const int free = model.free_particle_count();
-  out.clear();
-  for (const Spring& s : scene.get<Springs>()) {
-    if (s.k == 0.0) continue;
-    if (s.i < 0 || s.j < 0 || s.i >= n || s.j >= n) return false;
-    DistanceConstraint c{.a = internal[static_cast<std::size_t>(s.i)],
-                         .b = internal[static_cast<std::size_t>(s.j)],
-                         .stiffness = s.k,
-                         .length = s.rest};
-    if (c.a >= free) std::swap(c.a, c.b);
-    if (c.a >= free) continue;
-    if (c.b >= free) {
-      const int scene_b = internal[static_cast<std::size_t>(s.i)] == c.b ? s.i : s.j;
-      for (int r = 0; r < dim; ++r) c.anchor[r] = scene.particles[static_cast<std::size_t>(scene_b)].x[r];
-      c.b = -1;
-    }
-    out.push_back(c);
-  }
-  return true;
-}
-
-}  // namespace
 
 StepResult Xpbd::do_initialize() {
   StepResult result = FastSolver::do_initialize();
   if (!result.ok) return result;
-  // Project the springs in the scene's order where the system is a scene's
-  // model and every distance constraint is one of its springs.
-  if (const auto* model = dynamic_cast<const ElasticModel*>(&system())) {
-    std::vector<DistanceConstraint> ordered;
-    if (springs_in_scene_order(*model, ordered) &&
-        ordered.size() == constraints_.size()) {
-      constraints_ = std::move(ordered);
-    }
-  }
+  // The constraints come in the model's order (the scene's, for springs):
+  // the Gauss-Seidel pass projects them so.
   projections_.clear();
   stiffness_.clear();
   for (const DistanceConstraint& c : constraints_) {

@@ -60,8 +60,8 @@ class Xpbd final : public FastSolver {
   StepResult do_step(double h) override;
 
  private:
-  // One Gauss-Seidel pass over the distance constraints in order_ (D: the
-  // dimension), lambda_ accumulating.
+  // One Gauss-Seidel pass over the distance constraints in projections_'
+  // order (D: the dimension), lambda_ accumulating.
   template <int D>
   void project_constraints();
   // The substep's prediction v += h_s M^-1 f_, x_prev = x, x += h_s v.
@@ -75,8 +75,8 @@ class Xpbd final : public FastSolver {
   // Projects the projective elements once (lambda_elements_ accumulates).
   void project_elements(double hs);
   // The distance constraints as the projection loop reads them, in the
-  // order they are projected (the scene's order of its springs, see
-  // do_initialize): offsets a * dim and b * dim into x (b < 0: anchored),
+  // order they are projected (MechanicalSystem::projective_form's: the
+  // scene's order of its springs): offsets a * dim and b * dim into x (b < 0: anchored),
   // inverse masses, rest length, anchor, and the compliance a~ = 1/(k h_s^2)
   // of the current substep length.
   struct Projection {

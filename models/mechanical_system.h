@@ -162,7 +162,9 @@ class MechanicalSystem {
   // forces as distance constraints and projective elements (above), and F
   // minus their forces and every element's (external_force: gravity, drag,
   // wind, spring damping, treated explicitly). False, with `why` (one
-  // sentence for the user), when some stiff force has neither form.
+  // sentence for the user), when some stiff force has neither form. The
+  // distance constraints come in the scene's order of its springs: XPBD's
+  // Gauss-Seidel pass projects them in this order.
   virtual bool projective_form(std::vector<DistanceConstraint>& /*constraints*/,
                                std::vector<ProjectiveElement>& /*elements*/,
                                std::string& why) const {
