@@ -22,6 +22,7 @@
 #include <thread>
 #include <tuple>
 
+#include "experiments/body_output.h"
 #include "experiments/experiment_runner.h"
 #include "experiments/integrator_table.h"
 #include "experiments/output_files.h"
@@ -460,6 +461,9 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["energy_columns"] = model.energy_columns();  // of --energy, after t
     j["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
                             {"v", rows(model.scene_velocities(r.v_final))}};
+    if (Json bodies = bodies_json(model, r.x_final, r.v_final); !bodies.empty()) {
+      j["bodies"] = std::move(bodies);
+    }
     out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
   } else {
     out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles";

@@ -22,6 +22,10 @@ Scene build_membrane(const std::map<std::string, double>& p);
 Scene build_block(const std::map<std::string, double>& p);
 // builtin_contact.cc: the friction scene.
 Scene build_slope(const std::map<std::string, double>& p);
+// builtin_bodies.cc: the rigid body scenes.
+Scene build_tumbling_box(const std::map<std::string, double>& p);
+Scene build_box_on_slope(const std::map<std::string, double>& p);
+Scene build_box_pile(const std::map<std::string, double>& p);
 
 namespace {
 
@@ -372,6 +376,49 @@ const std::vector<Generator>& generators() {
           param("drag", 0.5, "drag coefficient [kg/s]", Range::kNonNegative),
           param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny)},
          build_spring},
+        // builtin_bodies.cc: rigid bodies (affine bodies).
+        {{"tumbling-box",
+          "a box with three distinct principal moments spun about its middle axis, no gravity: "
+          "it flips over and back (the Dzhanibekov effect)",
+          {}},
+         {param("size_x", 0.3, "side along x, the axis of least inertia [m]", Range::kPositive),
+          param("size_y", 0.2, "side along y, the middle axis, spun about [m]", Range::kPositive),
+          param("size_z", 0.1, "side along z, the axis of most inertia [m]", Range::kPositive),
+          param("spin", 6.283185307179586, "angular velocity about y [rad/s]", Range::kAny),
+          param("perturbation", 0.01, "angular velocity about x and z, as a fraction of spin",
+                Range::kAny),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa of kappa V |A^T A - I|^2 [Pa]", Range::kPositive)},
+         build_tumbling_box},
+        {{"box-on-slope",
+          "a cube resting on (or launched down) an inclined plane with Coulomb friction: sticks "
+          "when tan(angle) < friction, else slides at g (sin - friction cos)",
+          {}},
+         {param("angle", 20, "inclination of the plane [degrees], in [0, 90)", Range::kAny),
+          param("friction", 0.5, "Coulomb coefficient mu of the plane", Range::kNonNegative),
+          param("speed", 0, "initial speed down the slope [m/s]", Range::kAny),
+          param("size", 0.2, "side of the cube [m]", Range::kPositive),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
+                Range::kPositive),
+          param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
+         build_box_on_slope},
+        {{"box-pile",
+          "n boxes dropped at different heights and tilts onto the ground with friction (they "
+          "meet the ground, not each other: spaced apart along x)",
+          {}},
+         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+          param("size", 0.2, "longest side of each box (sides size, 0.75 size, 0.5 size) [m]",
+                Range::kPositive),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("friction", 0.5, "Coulomb coefficient mu of the ground", Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
+                Range::kPositive)},
+         build_box_pile},
     };
     for (Generator& g : list) {
       for (const ParameterSpec& spec : g.specs) g.info.parameters.push_back(spec.parameter);

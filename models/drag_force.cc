@@ -33,7 +33,11 @@ class DragForce final : public ForceTerm {
     return 0.5 * gamma_ * sum;
   }
 
-  void bind_jacobian(const SparseMatrix& pattern) override { diagonal_ = diagonal_slots(pattern); }
+  // The particles' diagonal only (rigid bodies' unknowns follow them).
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    diagonal_ = diagonal_slots(pattern);
+    diagonal_.resize(static_cast<std::size_t>(free_dofs_));
+  }
 
   void add_jacobians(const Configuration&, double*, double* dfdv) const override {
     if (dfdv == nullptr) return;

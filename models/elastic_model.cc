@@ -7,6 +7,7 @@
 
 #include <Eigen/SparseCore>
 
+#include "models/bodies.h"
 #include "models/element_kind.h"
 
 namespace springlab {
@@ -27,7 +28,13 @@ ParticleOrder make_order(const Scene& scene) {
           static_cast<int>(order.scene_of_internal.size());
       order.scene_of_internal.push_back(p);
     }
-    if (pass == 0) order.free_particles = static_cast<int>(order.scene_of_internal.size());
+    if (pass == 0) {
+      order.free_particles = static_cast<int>(order.scene_of_internal.size());
+      // The free bodies' unknowns follow the free particles (bodies.h).
+      order.body_particles = body_pseudo_particles(scene);
+      order.scene_of_internal.insert(order.scene_of_internal.end(),
+                                     static_cast<std::size_t>(order.body_particles), -1);
+    }
   }
   return order;
 }
@@ -40,8 +47,9 @@ bool in_part(const ForceTerm& term, ForcePart part) {
 
 ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   const int dim = order_.dim;
-  const int all = particle_count();
-  const Eigen::Index n = static_cast<Eigen::Index>(order_.free_particles) * dim;
+  const int all = static_cast<int>(order_.scene_of_internal.size());
+  const int unknown_particles = order_.free_particles + order_.body_particles;
+  const Eigen::Index n = static_cast<Eigen::Index>(unknown_particles) * dim;
 
   mass_.resize(n);
   x0_.resize(n);
@@ -49,7 +57,15 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
   x_all_.setZero(static_cast<Eigen::Index>(all) * dim);
   v_all_.setZero(x_all_.size());
   f_all_.setZero(x_all_.size());
+  const BodyLayout bodies = body_layout(scene_, order_.free_particles);
+  for (std::size_t b = 0; b < bodies.bodies.size(); ++b) {
+    if (bodies.first[b] < 0) continue;
+    const Eigen::Index at = static_cast<Eigen::Index>(bodies.first[b]) * dim;
+    body_initial_state(bodies.bodies[b], x0_.data() + at, v0_.data() + at, mass_.data() + at);
+    x_all_.segment(at, 12) = x0_.segment(at, 12);
+  }
   for (int p = 0; p < all; ++p) {
+    if (order_.scene_of_internal[p] < 0) continue;  // a body's unknowns (above)
     const Particle& particle = scene_.particles[static_cast<std::size_t>(order_.scene_of_internal[p])];
     for (int r = 0; r < dim; ++r) {
       x_all_[p * dim + r] = particle.x[r];
@@ -77,7 +93,7 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
   // One pattern for dF/dx and dF/dv: the full diagonal plus every block a
   // term declares. Values stay zero here; terms cache their slots in it.
   JacobianPatternBuilder builder(dim);
-  for (int p = 0; p < order_.free_particles; ++p) builder.add_block(p, p);
+  for (int p = 0; p < unknown_particles; ++p) builder.add_block(p, p);
   for (const auto& term : terms_) term->declare_jacobian_blocks(builder);
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(builder.blocks().size() * static_cast<std::size_t>(dim * dim));
@@ -118,7 +134,22 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     }
     diameter2 += (hi - lo) * (hi - lo);
   }
-  const double diameter = std::sqrt(diameter2);
+  double diameter = std::sqrt(diameter2);
+  if (!bodies.bodies.empty()) {
+    // The bodies' surface vertices count as points of the scene.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    for (const Particle& p : scene_.particles) {
+      lo = lo.cwiseMin(p.x);
+      hi = hi.cwiseMax(p.x);
+    }
+    for (const RigidBody& b : bodies.bodies) {
+      for (const Eigen::Vector3d& X : b.X) {
+        lo = lo.cwiseMin(b.p0 + b.A0 * X);
+        hi = hi.cwiseMax(b.p0 + b.A0 * X);
+      }
+    }
+    diameter = (hi - lo).norm();
+  }
   double per_mass = 0.0;
   for (const ElementKind* kind : element_kinds()) {
     if (kind->energy_scale_per_mass != nullptr) {
@@ -126,7 +157,10 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     }
   }
   const Energies e0 = energies(x0_, v0_);
-  const double free_mass = mass_.sum() / dim;
+  double free_mass = mass_.head(static_cast<Eigen::Index>(order_.free_particles) * dim).sum() / dim;
+  for (std::size_t b = 0; b < bodies.bodies.size(); ++b) {
+    if (bodies.first[b] >= 0) free_mass += bodies.bodies[b].mass.mass;
+  }
   energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
 }
 

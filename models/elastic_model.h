@@ -60,7 +60,7 @@ class ElasticModel final : public MechanicalSystem {
   int dimension_of_state() const override { return order_.dim; }
 
   int dimension() const { return order_.dim; }
-  int particle_count() const { return static_cast<int>(order_.scene_of_internal.size()); }
+  int particle_count() const { return static_cast<int>(order_.internal_of_scene.size()); }
   int free_particle_count() const { return order_.free_particles; }
   const Scene& scene() const { return scene_; }
 

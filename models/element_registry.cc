@@ -21,6 +21,10 @@ const ElementKind& tetrahedron_kind();     // tetrahedra.cc
 const ElementKind& contact_kind();         // contact_kind.cc
 const ElementKind& plane_kind();           // planes.cc
 const ElementKind& friction_kind();        // friction_force.cc
+const ElementKind& body_kind();            // bodies.cc
+const ElementKind& body_gravity_kind();    // body_forces.cc
+const ElementKind& body_contact_kind();    // body_forces.cc
+const ElementKind& body_friction_kind();   // body_forces.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -35,6 +39,10 @@ const std::vector<const ElementKind*>& element_kinds() {
       &contact_kind(),
       &plane_kind(),
       &friction_kind(),
+      &body_kind(),
+      &body_gravity_kind(),
+      &body_contact_kind(),
+      &body_friction_kind(),
   };
   return kinds;
 }

@@ -28,7 +28,11 @@ struct ParticleOrder {
   int dim = 2;
   int free_particles = 0;
   std::vector<int> internal_of_scene;  // scene index -> internal index
-  std::vector<int> scene_of_internal;  // internal index -> scene index
+  std::vector<int> scene_of_internal;  // internal index -> scene index (-1: a body's unknowns)
+  // The free rigid bodies' unknowns (bodies.h), 4 "pseudo-particles" per
+  // body, at internal indices [free_particles, free_particles +
+  // body_particles): after the free particles, before the fixed ones.
+  int body_particles = 0;
 };
 
 // A read-only view of the configuration at which forces are evaluated.

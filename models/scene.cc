@@ -14,6 +14,7 @@
 #include <unordered_set>
 #include <utility>
 
+#include "models/bodies.h"
 #include "models/element_kind.h"
 #include "models/scene_io.h"
 
@@ -26,10 +27,13 @@ int check_dimension(const Reporter& r, double value) {
   return static_cast<int>(value);
 }
 
-void check_has_free_particle(const Reporter& r, const std::vector<Particle>& particles) {
+// A scene with rigid bodies may have no free particle: the "body" kind
+// (bodies.cc) then checks that some body is free.
+void check_has_free_particle(const Reporter& r, const std::vector<Particle>& particles,
+                             bool has_bodies) {
   const bool any_free =
       std::any_of(particles.begin(), particles.end(), [](const Particle& p) { return !p.fixed; });
-  if (!any_free) r.fail("particles", "scene has no free particle");
+  if (!any_free && !has_bodies) r.fail("particles", "scene has no free particle");
 }
 
 // The kinds read before "particles" (scene-wide: gravity, drag, wind) or
@@ -321,7 +325,9 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
     scene.particles.push_back(
         read_particle(r, element("particles", p), particles[p], scene.dimension));
   }
-  check_has_free_particle(r, scene.particles);
+  check_has_free_particle(r, scene.particles, doc.contains("bodies") &&
+                                                 doc.at("bodies").is_array() &&
+                                                 !doc.at("bodies").empty());
 
   for (const ElementKind* kind : kinds_in_phase(true)) {
     if (kind->read != nullptr) kind->read(doc, r, scene);
@@ -350,7 +356,7 @@ void validate_scene(const Scene& scene, const std::string& source) {
   for (std::size_t p = 0; p < scene.particles.size(); ++p) {
     check_particle(r, element("particles", p), scene.particles[p], dimension);
   }
-  check_has_free_particle(r, scene.particles);
+  check_has_free_particle(r, scene.particles, !scene.get<Bodies>().empty());
   for (const ElementKind* kind : kinds_in_phase(true)) {
     if (kind->validate != nullptr) kind->validate(scene, r);
   }

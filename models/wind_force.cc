@@ -52,7 +52,11 @@ class WindForce final : public ForceTerm {
     return 0.5 * wind_.coefficient * sum;
   }
 
-  void bind_jacobian(const SparseMatrix& pattern) override { diagonal_ = diagonal_slots(pattern); }
+  // The particles' diagonal only (rigid bodies' unknowns follow them).
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    diagonal_ = diagonal_slots(pattern);
+    diagonal_.resize(static_cast<std::size_t>(free_particles_ * dim_));
+  }
 
   void add_jacobians(const Configuration&, double*, double* dfdv) const override {
     if (dfdv == nullptr) return;

@@ -13,6 +13,7 @@
 #include "models/contact.h"
 #include "models/drag.h"
 #include "models/gravity.h"
+#include "models/bodies.h"
 #include "models/elastic_model.h"
 #include "models/springs.h"
 #include "models/wind.h"
@@ -89,8 +90,10 @@ INSTANTIATE_TEST_SUITE_P(Dimensions, ModelDimensions, ::testing::Values(2, 3),
 TEST(Model, FixedParticlesAreNotUnknownsAndStayPut) {
   Scene s = random_scene(3, 11);
   const ElasticModel model(s);
-  EXPECT_EQ(model.dofs(), 5 * 3);  // 6 particles, one fixed
-  EXPECT_EQ(model.jacobian_pattern().rows(), 15);
+  // 6 particles, one fixed; and 12 unknowns per free rigid body after them.
+  const Eigen::Index bodies = 3 * body_pseudo_particles(s);
+  EXPECT_EQ(model.dofs(), 5 * 3 + bodies);
+  EXPECT_EQ(model.jacobian_pattern().rows(), 15 + bodies);
   Vector x = model.initial_positions();
   x.setConstant(42.0);
   const Eigen::MatrixXd all = model.scene_positions(x);
@@ -187,7 +190,11 @@ TEST(Model, StiffAndNonstiffPartsAddUpToTheWhole) {
   const Eigen::MatrixXd wind = Eigen::MatrixXd(dv_all) - Eigen::MatrixXd(dv_stiff);
   const double cw = s.get<Wind>().coefficient;
   ASSERT_GT(cw, 0.0);
-  EXPECT_LT((wind + cw * Eigen::MatrixXd::Identity(wind.rows(), wind.cols())).norm(), 1e-12);
+  // (on the particles only: wind does not blow on rigid bodies)
+  Eigen::MatrixXd particles = Eigen::MatrixXd::Zero(wind.rows(), wind.cols());
+  const Eigen::Index particle_dofs = 3 * model.free_particle_count();
+  particles.topLeftCorner(particle_dofs, particle_dofs).setIdentity();
+  EXPECT_LT((wind + cw * particles).norm(), 1e-12);
 }
 
 }  // namespace

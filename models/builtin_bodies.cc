@@ -1,0 +1,122 @@
+// The built-in rigid body scenes (docs/scenes.md "Built-in scenes",
+// docs/physics.md "Rigid bodies (affine bodies)"):
+//   tumbling-box: a box with three distinct principal moments, no gravity,
+//     spun about its middle axis with a small perturbation about the other
+//     two: the rotation about the intermediate axis is unstable, and the box
+//     flips over and back (the Dzhanibekov or tennis-racket effect) while
+//     its angular momentum stays fixed;
+//   box-on-slope: a cube resting on a plane inclined at `angle` with
+//     friction mu: it sticks when tan(angle) < mu (creeping below the
+//     smoothing speed) and slides with a = g (sin - mu cos) otherwise;
+//   box-pile: n boxes dropped at different heights and tilts onto the
+//     ground, with friction. Bodies meet the planes only, not each other,
+//     so the boxes are spaced apart along x.
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "models/bodies.h"
+#include "models/contact.h"
+#include "models/gravity.h"
+#include "models/scene.h"
+#include "models/springs.h"
+
+namespace springlab {
+
+using Values = std::map<std::string, double>;
+
+// Box sides along x, y, z: (size_x, size_y, size_z) with size_x > size_y >
+// size_z, so the principal moments I_x < I_y < I_z and y is the middle
+// axis. The angular velocity is spin (perturbation, 1, perturbation).
+Scene build_tumbling_box(const Values& p) {
+  const Eigen::Vector3d size(p.at("size_x"), p.at("size_y"), p.at("size_z"));
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Springs>();
+  Body box;
+  box.shape = Body::Shape::kBox;
+  box.size = size;
+  box.density = p.at("density");
+  box.rigidity = p.at("rigidity");
+  box.position = Eigen::Vector3d::Zero();
+  const double spin = p.at("spin"), e = p.at("perturbation");
+  box.omega = spin * Eigen::Vector3d(e, 1.0, e);
+  scene.block<Bodies>().push_back(box);
+  return scene;
+}
+
+// The plane through the origin descends along +x at `angle`:
+//   n = (sin theta, cos theta, 0), down-slope s = (cos theta, -sin theta, 0).
+// The cube is turned about z by -theta (its y axis along n) and rests on
+// its bottom face, sunk to the penalty's resting depth
+// m g cos(theta) / (4 k_c) (four corners share the weight's normal part).
+Scene build_box_on_slope(const Values& p) {
+  if (!(p.at("angle") >= 0.0 && p.at("angle") < 90.0)) {
+    std::ostringstream message;
+    message << "scene 'box-on-slope': parameter 'angle' must be in [0, 90) degrees (got "
+            << p.at("angle") << ")";
+    throw SceneError(message.str());
+  }
+  const double theta = p.at("angle") * std::numbers::pi / 180.0;
+  const double s = p.at("size"), rho = p.at("density"), g = p.at("g");
+  const double k_c = p.at("contact_stiffness");
+  const double m = rho * s * s * s;
+  const Eigen::Vector3d n(std::sin(theta), std::cos(theta), 0.0);
+  const Eigen::Vector3d down_slope(std::cos(theta), -std::sin(theta), 0.0);
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Gravity>().acceleration = {0.0, -g, 0.0};
+  scene.block<Springs>();
+  Body box;
+  box.shape = Body::Shape::kBox;
+  box.size = Eigen::Vector3d::Constant(s);
+  box.density = rho;
+  box.rigidity = p.at("rigidity");
+  box.orientation = {0.0, 0.0, -theta};
+  box.position = (0.5 * s - m * g * std::cos(theta) / (4.0 * k_c)) * n;
+  box.v = p.at("speed") * down_slope;
+  scene.block<Bodies>().push_back(box);
+  Plane plane;
+  plane.normal = n;
+  plane.friction = p.at("friction");
+  scene.block<Planes>().push_back(plane);
+  Contact& contact = scene.block<Contact>();
+  contact.stiffness = k_c;
+  contact.smoothing = p.at("smoothing");
+  return scene;
+}
+
+Scene build_box_pile(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const double s = p.at("size");
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Springs>();
+  for (int i = 0; i < n; ++i) {
+    Body box;
+    box.shape = Body::Shape::kBox;
+    box.size = Eigen::Vector3d(s, 0.75 * s, 0.5 * s);
+    box.density = p.at("density");
+    box.rigidity = p.at("rigidity");
+    // Tilted about a skew axis by a different angle each, so each lands on
+    // an edge or a corner and tumbles.
+    const double angle = 0.3 + 0.4 * i;
+    const Eigen::Vector3d axis = Eigen::Vector3d(1.0, 0.5 * (i % 3), 0.7).normalized();
+    box.orientation = {angle * axis.x(), angle * axis.y(), angle * axis.z()};
+    box.position = Eigen::Vector3d(2.0 * s * i, s * (1.0 + 0.5 * i), 0.0);
+    box.omega = Eigen::Vector3d(0.0, 1.0 - 0.5 * (i % 3), 0.0);
+    scene.block<Bodies>().push_back(box);
+  }
+  Plane ground;
+  ground.normal = {0.0, 1.0, 0.0};
+  ground.friction = p.at("friction");
+  scene.block<Planes>().push_back(ground);
+  Contact& contact = scene.block<Contact>();
+  contact.stiffness = p.at("contact_stiffness");
+  return scene;
+}
+
+}  // namespace springlab
