@@ -43,6 +43,12 @@ int find_material(const Reporter& r, const std::string& where, const Materials& 
 // A rest area/volume of zero (W below 1e-12 of the longest edge^k) is refused.
 void check_rest_shape(const Reporter& r, const std::string& where, const RestShape& shape, int k);
 
+// A material's Poisson ratio where its model has a stable rest state
+// (MaterialModel::min_poisson, materials_kind.cc): refused, naming
+// materials.<name>.poisson, the model's range and why. `tetrahedra`: the
+// material is used by a tetrahedron (some models are unstable there only).
+void check_material_stability(const Reporter& r, const MaterialSpec& m, bool tetrahedra);
+
 // Particles without a "mass" in `document` that belong to an element whose
 // material has a density get the lumped mass sum_e rho W_e / (nodes of e)
 // over the scene's triangles and tetrahedra (docs/physics.md "Finite elements"). Each element
@@ -142,7 +148,6 @@ std::vector<Eigen::Vector3d> rest_positions(const Scene& scene, const Element& e
   for (int n : e.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
   return X;
 }
-
 template <typename Element, typename Check>
 void read_elements(const Json& document, const Reporter& r, Scene& scene, const char* key,
                    Check check) {

@@ -455,3 +455,62 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegratorOnElements,
 
 }  // namespace
 }  // namespace springlab
+
+namespace springlab {
+namespace {
+
+std::string scene_refusal(const std::string& name,
+                          const std::vector<std::pair<std::string, std::string>>& params) {
+  try {
+    make_builtin_scene(name, params);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Issue #38: models whose energy has states below the rest state's at some
+// Poisson ratios ran as nonsense (stable neo-Hookean at -0.9999: every node
+// of the block within 1.2e-4 m of one point, elastic energy -1.33e6 J).
+// Such ratios are refused, saying which range and why; the reasons are the
+// numbers below.
+TEST(FemMaterials, PoissonRatiosWithoutAStableRestStateAreRefusedWithTheReason) {
+  const Lame auxetic = lame(1e5, -0.2);
+  // Stable neo-Hookean: a tetrahedron collapsed to a point has
+  // Psi = lambda' nu < 0; a triangle's Psi(0) = lambda'/2 > 0.
+  const MaterialModel& snh = *find_material_model("stable-neo-hookean");
+  const double shifted = auxetic.lambda + auxetic.mu;
+  EXPECT_NEAR(snh.Psi(Mat::Zero(3, 3), auxetic), shifted * -0.2, 1e-9 * shifted);
+  EXPECT_GT(snh.Psi(Mat::Zero(2, 2), auxetic), 0.0);
+  // Corotated: uniform stretch by 3 already lies below rest (and falls
+  // without bound); neo-Hookean: uniform compression to 1e-3 too.
+  EXPECT_LT(find_material_model("corotated")->Psi(3.0 * Mat::Identity(3, 3), auxetic), 0.0);
+  EXPECT_LT(find_material_model("neo-hookean")->Psi(1e-3 * Mat::Identity(3, 3), auxetic), 0.0);
+  // At poisson 0 all are at least 0 there.
+  const Lame zero = lame(1e5, 0.0);
+  EXPECT_GE(snh.Psi(Mat::Zero(3, 3), zero), -1e-9);
+  EXPECT_GE(find_material_model("corotated")->Psi(3.0 * Mat::Identity(3, 3), zero), 0.0);
+  EXPECT_GE(find_material_model("neo-hookean")->Psi(1e-3 * Mat::Identity(3, 3), zero), 0.0);
+
+  EXPECT_EQ(scene_refusal("block", {{"model", "4"}, {"poisson", "-0.9999"}}),
+            "scene 'block': materials.material.poisson: the stable-neo-hookean model has no stable rest "
+            "state for poisson < 0 in tetrahedra (got -0.9999): a tetrahedron collapsed to a "
+            "point has the energy lambda' nu W < 0, below its rest state's; use poisson in [0, "
+            "0.5), or the linear or stvk model for a negative ratio");
+  EXPECT_NE(scene_refusal("block", {{"model", "1"}, {"poisson", "-0.9999"}})
+                .find("materials.material.poisson: the corotated model has no stable rest state "
+                      "for poisson < 0 (got -0.9999): with lambda < 0 its energy falls without "
+                      "bound as an element stretches"),
+            std::string::npos);
+  EXPECT_NE(scene_refusal("beam", {{"model", "3"}, {"poisson", "-0.1"}})
+                .find("the neo-hookean model has no stable rest state for poisson < 0"),
+            std::string::npos);
+  // Accepted: linear and stvk at any ratio, stable neo-Hookean triangles.
+  EXPECT_EQ(scene_refusal("block", {{"model", "0"}, {"poisson", "-0.9999"}}), "");
+  EXPECT_EQ(scene_refusal("block", {{"model", "2"}, {"poisson", "-0.9999"}}), "");
+  EXPECT_EQ(scene_refusal("beam", {{"model", "4"}, {"poisson", "-0.9"}}), "");
+  EXPECT_EQ(scene_refusal("block", {{"model", "4"}, {"poisson", "0"}}), "");
+}
+
+}  // namespace
+}  // namespace springlab
