@@ -408,6 +408,11 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   double previous_update = 0.0;  // ||dv||_inf of the last full update
   double rate = 0.0;             // its ratio to the one before (0: not known)
   double last_update = 0.0;
+  // What the convergence test made of the last update: the error it
+  // estimates to remain, the rate that estimate used, and why an update
+  // below the tolerance was not taken.
+  double last_remaining = 0.0, last_rate = 0.0;
+  std::string last_why;
   bool careful = false;
   bool started = false;  // the step's first linear solve is behind
   // Updates computed: iterations, plus the retries from the same iterate
@@ -417,10 +422,18 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   for (int iteration = 0;;) {
     if (!r_.allFinite()) return fail("the residual is not finite");
     if (iteration == options().max_newton || ++attempts > 3 * options().max_newton) {
+      // Say why the last update, even one below the tolerance, did not end
+      // the iteration.
       std::ostringstream why;
       why << "no convergence in " << options().max_newton << " iterations (last update "
-          << last_update << " m/s, tolerance " << tol
-          << " m/s); try a larger --max-newton or a smaller --dt";
+          << last_update << " m/s, tolerance " << tol << " m/s";
+      if (last_remaining > tol && last_remaining > last_update) {
+        why << "; converging linearly at the rate " << last_rate << ", it leaves an error of about "
+            << last_remaining << " m/s";
+      } else if (last_update <= tol && !last_why.empty()) {
+        why << "; not taken: " << last_why;
+      }
+      why << "); try a larger --max-newton or a smaller --dt";
       return fail(why.str());
     }
     if (s.discrete_gradient && has_potential) {
@@ -482,6 +495,11 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     }
     const double update = dv_.lpNorm<Eigen::Infinity>();
     last_update = update;
+    last_rate = rate;
+    last_remaining = rate > 0.5 && rate < 1.0 ? update * rate / (1.0 - rate) : update;
+    last_why = ls.converged || ls.negative_curvature
+                   ? ""
+                   : "its linear solve stopped short of its own tolerance";
 
     // The slope of the potential along dv (negative: CG's iterates descend
     // but for round-off).
@@ -570,13 +588,16 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       // (a barrier's gap closed by it): then it is searched like any other,
       // from the step cap.
       const bool small = remaining <= tol || update <= floor;
-      if (small && (!forbidden_states || gap_fraction() > 1.0)) {
+      const bool keeps_gaps = !small || !forbidden_states || gap_fraction() > 1.0;
+      if (small && !keeps_gaps) last_why = "it would close a barrier's gap";
+      if (small && keeps_gaps) {
         alpha = update > 0.0 ? tol / update : 1.0;
         if (!ls.negative_curvature || !expand(alpha)) {
           ++mutable_stats().newton_iterations;
           v += dv_;
           return StepResult::success();
         }
+        last_why = "the incremental potential kept falling beyond it (negative curvature)";
         accepted = true;
       }
     }

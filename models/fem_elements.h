@@ -43,6 +43,13 @@ int find_material(const Reporter& r, const std::string& where, const Materials& 
 // A rest area/volume of zero (W below 1e-12 of the longest edge^k) is refused.
 void check_rest_shape(const Reporter& r, const std::string& where, const RestShape& shape, int k);
 
+// A solid element (2-D triangle, tetrahedron) whose initial positions are
+// inverted relative to its rest shape (det F <= 0) while its model has no
+// energy there (neo-Hookean): refused, naming the element and its J.
+void check_initial_orientation(const Reporter& r, const std::string& where,
+                               const MaterialSpec& m, const std::vector<Eigen::Vector3d>& X,
+                               const std::vector<Eigen::Vector3d>& x, int k);
+
 // A material's Poisson ratio where its model has a stable rest state
 // (MaterialModel::min_poisson, materials_kind.cc): refused, naming
 // materials.<name>.poisson, the model's range and why. `tetrahedra`: the
@@ -148,6 +155,13 @@ std::vector<Eigen::Vector3d> rest_positions(const Scene& scene, const Element& e
   for (int n : e.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
   return X;
 }
+template <typename Element>
+std::vector<Eigen::Vector3d> initial_positions(const Scene& scene, const Element& e) {
+  std::vector<Eigen::Vector3d> x;
+  for (int n : e.nodes) x.push_back(scene.particles[static_cast<std::size_t>(n)].x);
+  return x;
+}
+
 template <typename Element, typename Check>
 void read_elements(const Json& document, const Reporter& r, Scene& scene, const char* key,
                    Check check) {

@@ -34,6 +34,9 @@ void read_tetrahedra(const Json& document, const Reporter& r, Scene& scene) {
                                check_rest_shape(r, where, rest_shape(rest_positions(scene, t), 3),
                                                 3);
                                check_material_stability(r, material_of(scene, t), true);
+                               check_initial_orientation(r, where, material_of(scene, t),
+                                                         rest_positions(scene, t),
+                                                         initial_positions(scene, t), 3);
                              });
 }
 
@@ -44,6 +47,9 @@ void validate_tetrahedra(const Scene& scene, const Reporter& r) {
                                    check_rest_shape(
                                        r, where, rest_shape(rest_positions(scene, t), 3), 3);
                                    check_material_stability(r, material_of(scene, t), true);
+                                   check_initial_orientation(r, where, material_of(scene, t),
+                                                             rest_positions(scene, t),
+                                                             initial_positions(scene, t), 3);
                                  });
 }
 
