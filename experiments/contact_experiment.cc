@@ -52,7 +52,7 @@ Prediction predict(const Scene& scene) {
   const Particle& particle = scene.particles[static_cast<std::size_t>(free_index)];
   const Plane& plane = planes[0];
   const Contact& contact = scene.get<Contact>();
-  p.n = plane.normal.normalized();
+  p.n = plane.normal.stableNormalized();
   p.start = particle.x;
   const double g_n = -g.dot(p.n);  // weight per mass pressing into the plane
   if (!(g_n > 0.0)) return p;
@@ -96,7 +96,7 @@ class ContactWatch final : public Observer {
     const Eigen::MatrixXd vel = model_.scene_velocities(v);
     const Scene& scene = model_.scene();
     for (const Plane& plane : scene.get<Planes>()) {
-      const Eigen::Vector3d n = plane.normal.normalized();
+      const Eigen::Vector3d n = plane.normal.stableNormalized();
       for (Eigen::Index i = 0; i < pos.rows(); ++i) {
         if (scene.particles[static_cast<std::size_t>(i)].fixed) continue;
         double d = 0.0;

@@ -270,12 +270,21 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
       result.status = RunStatus::kDiverged;
       result.diverged_at = t;
       // A finite state of infinite energy (a barrier's gap closed): say where.
+      // (Not "an implicit method": linear-implicit-euler's one linear solve
+      // steps through a plane too; implicit-euler's Newton keeps gaps open.)
       if (model.has_forbidden_states() && x.allFinite()) {
         const std::string where = model.forbidden_state(x);
         if (!where.empty()) {
-          result.failure = where + "; use an implicit method (implicit-euler keeps every gap "
+          result.failure = where + "; use implicit-euler (its Newton iteration keeps every gap "
                                    "open) or a smaller --dt";
         }
+      } else if (model.has_forbidden_states()) {
+        // A stage of a multi-stage step (rk4) inside a plane, where the
+        // barrier has no force, makes the step's end non-finite.
+        result.failure =
+            "the state turned non-finite (with barrier contact: a stage of the step inside a "
+            "plane, where the barrier has no force); use implicit-euler (its Newton iteration "
+            "keeps every gap open) or a smaller --dt";
       }
       break;
     }

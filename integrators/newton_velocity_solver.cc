@@ -282,11 +282,62 @@ StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitSc
     Lag(const MechanicalSystem& m, const Vector& x) : system(m) { system.lag_normal_forces(&x); }
     ~Lag() { system.lag_normal_forces(nullptr); }
   } lag(system(), x_);
+  // Where the step minimizes the incremental potential Phi, a solution lies
+  // no higher than the start guesses the solvers descend from: v_n, and the
+  // v that keeps the stage at x_n (Newton's start where v_n leaves the
+  // states with an energy; for implicit Euler, v = 0 and Phi = E_n, the
+  // step's starting energy). An answer above the lower of the two by more
+  // than Phi's round-off is an iterate that looked converged but is no
+  // minimizer (near-incompressible elements: block n=3 at poisson
+  // 0.49999999999 with L-BFGS, whose stiff initial Hessian makes its updates
+  // small while the residual is not, went from 47 J to 493 J in 1 s of
+  // "completed" steps, each answer up to 26 J above E_n). It is not taken:
+  // L-BFGS's goes to Newton, Newton's to the definite matrix's Newton, and
+  // then the step fails, saying so.
+  const bool minimizes = system().derives_from_potentials() && s.b > 0.0 && s.c > 0.0 &&
+                         !s.discrete_gradient;
+  double phi_start = std::numeric_limits<double>::infinity(), magnitude_start = 0.0;
+  if (minimizes) {
+    Vector v_kept = (-s.a / s.b) * v_;
+    if (s.x_offset != nullptr) v_kept -= (1.0 / (h * s.b)) * *s.x_offset;
+    for (const Vector* guess : {&v_, &v_kept}) {
+      double magnitude = 0.0;
+      stage(h, s, *guess);
+      const double phi = potential(h, s, *guess, magnitude);
+      if (phi < phi_start) {
+        phi_start = phi;
+        magnitude_start = magnitude;
+      }
+    }
+  }
+  double phi_end = 0.0;
+  auto raises_potential = [&](const Vector& v_end) {
+    if (!minimizes || !std::isfinite(phi_start)) return false;
+    double magnitude_end = 0.0;
+    stage(h, s, v_end);
+    phi_end = potential(h, s, v_end, magnitude_end);
+    const double noise = kRoundoff * std::max(magnitude_start, magnitude_end);
+    return !(phi_end <= phi_start + noise);
+  };
+  auto raised_text = [&](const char* solver) {
+    std::ostringstream message;
+    message << name() << ": " << solver << "'s step at t = " << t_ << " (h = " << h
+            << ") raised the incremental potential from " << phi_start << " J to " << phi_end
+            << " J (this method's step minimizes it: not a solution)";
+    return message.str();
+  };
+  std::string quasi_rejected;  // why L-BFGS's answer was not taken
   // L-BFGS needs the potential; where it stalls, Newton solves the step.
   if (quasi && system().derives_from_potentials() && quasi_newton(h, s, v)) {
-    return StepResult::success();
+    if (!raises_potential(v)) return StepResult::success();
+    quasi_rejected = raised_text("L-BFGS");
+    ++mutable_stats().nonlinear_failures;  // Newton from the step's start
   }
+  auto raised = [&] {
+    return StepResult::failure(raised_text("Newton") + "; try a smaller --dt");
+  };
   StepResult result = newton(h, s, v);
+  if (result.ok && raises_potential(v)) result = raised();
   if (!result.ok && system().jacobian_symmetric()) {
     // Projected Newton from the step's start: every update from the definite
     // matrix, a descent direction of the incremental potential with a
@@ -298,12 +349,20 @@ StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitSc
     // second attempt, not the first.
     ++mutable_stats().nonlinear_failures;
     definite_only_ = true;
-    const StepResult second = newton(h, s, v);
+    StepResult second = newton(h, s, v);
     definite_only_ = false;
+    if (second.ok && raises_potential(v)) second = raised();
     if (second.ok) return second;
     result = second;
   }
   if (!result.ok) ++mutable_stats().nonlinear_failures;
+  if (!result.ok && !quasi_rejected.empty()) {
+    const std::string own = name() + ": ";  // Newton's message names the method too
+    const std::string newton_text = result.message.rfind(own, 0) == 0
+                                        ? result.message.substr(own.size())
+                                        : result.message;
+    result = StepResult::failure(quasi_rejected + ", and " + newton_text);
+  }
   return result;
 }
 
@@ -349,6 +408,11 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   double previous_update = 0.0;  // ||dv||_inf of the last full update
   double rate = 0.0;             // its ratio to the one before (0: not known)
   double last_update = 0.0;
+  // What the convergence test made of the last update: the error it
+  // estimates to remain, the rate that estimate used, and why an update
+  // below the tolerance was not taken.
+  double last_remaining = 0.0, last_rate = 0.0;
+  std::string last_why;
   bool careful = false;
   bool started = false;  // the step's first linear solve is behind
   // Updates computed: iterations, plus the retries from the same iterate
@@ -358,10 +422,18 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
   for (int iteration = 0;;) {
     if (!r_.allFinite()) return fail("the residual is not finite");
     if (iteration == options().max_newton || ++attempts > 3 * options().max_newton) {
+      // Say why the last update, even one below the tolerance, did not end
+      // the iteration.
       std::ostringstream why;
       why << "no convergence in " << options().max_newton << " iterations (last update "
-          << last_update << " m/s, tolerance " << tol
-          << " m/s); try a larger --max-newton or a smaller --dt";
+          << last_update << " m/s, tolerance " << tol << " m/s";
+      if (last_remaining > tol && last_remaining > last_update) {
+        why << "; converging linearly at the rate " << last_rate << ", it leaves an error of about "
+            << last_remaining << " m/s";
+      } else if (last_update <= tol && !last_why.empty()) {
+        why << "; not taken: " << last_why;
+      }
+      why << "); try a larger --max-newton or a smaller --dt";
       return fail(why.str());
     }
     if (s.discrete_gradient && has_potential) {
@@ -423,6 +495,11 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
     }
     const double update = dv_.lpNorm<Eigen::Infinity>();
     last_update = update;
+    last_rate = rate;
+    last_remaining = rate > 0.5 && rate < 1.0 ? update * rate / (1.0 - rate) : update;
+    last_why = ls.converged || ls.negative_curvature
+                   ? ""
+                   : "its linear solve stopped short of its own tolerance";
 
     // The slope of the potential along dv (negative: CG's iterates descend
     // but for round-off).
@@ -511,13 +588,16 @@ StepResult ImplicitIntegrator::newton(double h, const VelocityImplicitScheme& s,
       // (a barrier's gap closed by it): then it is searched like any other,
       // from the step cap.
       const bool small = remaining <= tol || update <= floor;
-      if (small && (!forbidden_states || gap_fraction() > 1.0)) {
+      const bool keeps_gaps = !small || !forbidden_states || gap_fraction() > 1.0;
+      if (small && !keeps_gaps) last_why = "it would close a barrier's gap";
+      if (small && keeps_gaps) {
         alpha = update > 0.0 ? tol / update : 1.0;
         if (!ls.negative_curvature || !expand(alpha)) {
           ++mutable_stats().newton_iterations;
           v += dv_;
           return StepResult::success();
         }
+        last_why = "the incremental potential kept falling beyond it (negative curvature)";
         accepted = true;
       }
     }

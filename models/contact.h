@@ -38,4 +38,12 @@ struct Contact {
 
 inline constexpr std::size_t kMaxScenePlanes = 10'000;
 
+class Reporter;
+class Scene;
+// With the barrier, every free particle must start outside every plane
+// (gap > 0): the barrier's energy is infinite at d <= 0. Refused naming the
+// plane, the particle and its gap (planes.cc). It needs the particles, so the
+// friction kind (read after them) calls it.
+void check_barrier_start(const Scene& scene, const Reporter& r);
+
 }  // namespace springlab

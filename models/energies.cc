@@ -1,6 +1,7 @@
 #include "models/energies.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "models/element_kind.h"
@@ -61,8 +62,10 @@ Energies::Energies(std::shared_ptr<const EnergyLayout> layout)
     : layout_(std::move(layout)), values_(layout_->columns.size(), 0.0) {}
 
 double Energies::kinetic_and_spring() const {
+  // Each potential's magnitude: a negative one (an energy below its rest
+  // state's) must not cancel a kinetic energy that blows up.
   double sum = kinetic();
-  for (std::size_t c : layout_->counts_with_spring) sum += values_[c];
+  for (std::size_t c : layout_->counts_with_spring) sum += std::abs(values_[c]);
   return sum;
 }
 

@@ -60,8 +60,9 @@ class Energies {
   const std::vector<double>& values() const { return values_; }
   double kinetic() const { return values_[layout_->kinetic]; }
   double total() const { return values_[layout_->total]; }
-  // Kinetic energy plus the potentials that count with the spring energy:
-  // what docs/command-line.md "The command line"'s divergence rule compares with blowup x E_s.
+  // Kinetic energy plus the magnitudes of the potentials that count with the
+  // spring energy (so that none cancels another): what docs/command-line.md
+  // "The command line"'s divergence rule compares with blowup x E_s.
   double kinetic_and_spring() const;
   // The value of a named column; throws std::out_of_range for a column the
   // layout does not have.

@@ -14,7 +14,9 @@ RestShape rest_shape(const std::vector<Eigen::Vector3d>& X, int dimension) {
   const int nodes = static_cast<int>(X.size());
   const int k = nodes - 1;
   for (int a = 0; a < nodes; ++a) {
-    for (int b = a + 1; b < nodes; ++b) shape.scale = std::max(shape.scale, (X[b] - X[a]).norm());
+    for (int b = a + 1; b < nodes; ++b) {
+      shape.scale = std::max(shape.scale, (X[b] - X[a]).stableNorm());  // (x 1e200: no overflow)
+    }
   }
   Eigen::MatrixXd Dm(k, k);
   if (k == 2 && dimension == 3) {
@@ -86,10 +88,39 @@ int find_material(const Reporter& r, const std::string& where, const Materials& 
 
 void check_rest_shape(const Reporter& r, const std::string& where, const RestShape& shape,
                       int k) {
-  if (!(shape.W > 1e-12 * std::pow(shape.scale, k)) || shape.G.size() == 0) {
+  // Rest positions too large for their area or volume to be a double (x
+  // 1e200: W near 1e600) are not a degenerate shape: say so.
+  const double extent = std::pow(shape.scale, k);
+  if (!std::isfinite(extent) || std::isinf(shape.W)) {
+    r.fail(where, std::string("its rest ") + (k == 2 ? "area" : "volume") +
+                      " overflows a double (its longest rest edge is " +
+                      shortest_text(shape.scale) + " m; rest positions too large)");
+  }
+  if (!(shape.W > 1e-12 * extent) || shape.G.size() == 0) {
     r.fail(where, std::string("its rest ") + (k == 2 ? "area" : "volume") +
                       " is zero (the rest positions of its nodes are " +
                       (k == 2 ? "collinear" : "coplanar") + ")");
+  }
+}
+
+void check_initial_orientation(const Reporter& r, const std::string& where,
+                               const MaterialSpec& m, const std::vector<Eigen::Vector3d>& X,
+                               const std::vector<Eigen::Vector3d>& x, int k) {
+  const MaterialModel* model = find_material_model(m.model);
+  if (model == nullptr || model->finite_everywhere) return;
+  Eigen::MatrixXd Dm(k, k), Ds(k, k);
+  for (int c = 0; c < k; ++c) {
+    Dm.col(c) = (X[c + 1] - X[0]).head(k);
+    Ds.col(c) = (x[c + 1] - x[0]).head(k);
+  }
+  const double rest = Dm.determinant(), now = Ds.determinant();
+  if (!(rest != 0.0) || !std::isfinite(rest) || !std::isfinite(now)) return;  // checked elsewhere
+  const double J = now / rest;
+  if (!(J > 0.0)) {
+    r.fail(where, std::string("its initial shape is ") + (J == 0.0 ? "flat" : "inverted") +
+                      " relative to its rest shape (J = " + shortest_text(J) + "), where the " +
+                      m.model + " energy of material " + json_string(m.name) +
+                      " is infinite (it has none for J <= 0)");
   }
 }
 

@@ -43,6 +43,19 @@ int find_material(const Reporter& r, const std::string& where, const Materials& 
 // A rest area/volume of zero (W below 1e-12 of the longest edge^k) is refused.
 void check_rest_shape(const Reporter& r, const std::string& where, const RestShape& shape, int k);
 
+// A solid element (2-D triangle, tetrahedron) whose initial positions are
+// inverted relative to its rest shape (det F <= 0) while its model has no
+// energy there (neo-Hookean): refused, naming the element and its J.
+void check_initial_orientation(const Reporter& r, const std::string& where,
+                               const MaterialSpec& m, const std::vector<Eigen::Vector3d>& X,
+                               const std::vector<Eigen::Vector3d>& x, int k);
+
+// A material's Poisson ratio where its model has a stable rest state
+// (MaterialModel::min_poisson, materials_kind.cc): refused, naming
+// materials.<name>.poisson, the model's range and why. `tetrahedra`: the
+// material is used by a tetrahedron (some models are unstable there only).
+void check_material_stability(const Reporter& r, const MaterialSpec& m, bool tetrahedra);
+
 // Particles without a "mass" in `document` that belong to an element whose
 // material has a density get the lumped mass sum_e rho W_e / (nodes of e)
 // over the scene's triangles and tetrahedra (docs/physics.md "Finite elements"). Each element
@@ -141,6 +154,12 @@ std::vector<Eigen::Vector3d> rest_positions(const Scene& scene, const Element& e
   std::vector<Eigen::Vector3d> X;
   for (int n : e.nodes) X.push_back(scene.particles[static_cast<std::size_t>(n)].rest_position());
   return X;
+}
+template <typename Element>
+std::vector<Eigen::Vector3d> initial_positions(const Scene& scene, const Element& e) {
+  std::vector<Eigen::Vector3d> x;
+  for (int n : e.nodes) x.push_back(scene.particles[static_cast<std::size_t>(n)].x);
+  return x;
 }
 
 template <typename Element, typename Check>

@@ -216,7 +216,7 @@ class FrictionForce final : public ForceTerm {
 std::unique_ptr<ForceTerm> make_friction_force(const Scene& scene, const ParticleOrder& order) {
   std::vector<FrictionPlane> planes;
   for (const Plane& p : scene.get<Planes>()) {
-    if (p.friction > 0.0) planes.push_back({p.point, p.normal.normalized(), p.friction});
+    if (p.friction > 0.0) planes.push_back({p.point, p.normal.stableNormalized(), p.friction});
   }
   if (planes.empty()) return nullptr;
   return std::make_unique<FrictionForce>(std::move(planes), scene.get<Contact>(), order.dim,
@@ -233,12 +233,23 @@ void add_random_friction(Scene& scene, std::mt19937& rng, RandomStates states) {
   scene.block<Contact>().smoothing = 0.4 + 0.6 * u(rng);
 }
 
+// Friction's kind is read after the particles and the planes: the check
+// that needs both, a barrier's start outside every plane, runs here.
+void read_barrier_start(const Json&, const Reporter& r, Scene& scene) {
+  check_barrier_start(scene, r);
+}
+void validate_barrier_start(const Scene& scene, const Reporter& r) {
+  check_barrier_start(scene, r);
+}
+
 }  // namespace
 
 const ElementKind& friction_kind() {
   static const ElementKind kind = {
       .name = "friction",
       .refers_to_particles = true,
+      .read = read_barrier_start,
+      .validate = validate_barrier_start,
       .make = make_friction_force,
       .add_random = add_random_friction,
   };

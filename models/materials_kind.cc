@@ -5,6 +5,7 @@
 
 #include "models/element_kind.h"
 #include "models/fem.h"
+#include "models/fem_elements.h"
 #include "models/materials/material.h"
 
 namespace springlab {
@@ -23,7 +24,26 @@ void check_material(const Reporter& r, const std::string& where, const MaterialS
   }
   if (m.density) check_positive(r, field(where, "density"), *m.density);
   if (m.thickness) check_positive(r, field(where, "thickness"), *m.thickness);
+  check_material_stability(r, m, /*tetrahedra=*/false);
 }
+
+}  // namespace
+
+void check_material_stability(const Reporter& r, const MaterialSpec& m, bool tetrahedra) {
+  const MaterialModel* model = find_material_model(m.model);
+  if (model == nullptr || !(m.poisson < model->min_poisson)) return;
+  if (model->unstable_in_tetrahedra_only && !tetrahedra) return;
+  r.fail(field(field("materials", m.name), "poisson"),
+         "the " + std::string(model->name) + " model has no stable rest state for poisson < " +
+             shortest_text(model->min_poisson) + (tetrahedra && model->unstable_in_tetrahedra_only
+                                                      ? " in tetrahedra"
+                                                      : "") +
+             " (got " + shortest_text(m.poisson) + "): " + std::string(model->unstable_why) +
+             "; use poisson in [" + shortest_text(model->min_poisson) +
+             ", 0.5), or the linear or stvk model for a negative ratio");
+}
+
+namespace {
 
 void read_materials(const Json& document, const Reporter& r, Scene& scene) {
   if (!document.contains("materials")) return;

@@ -22,7 +22,7 @@ namespace springlab {
 namespace {
 
 Planes unit_normals(Planes planes) {
-  for (Plane& p : planes) p.normal.normalize();
+  for (Plane& p : planes) p.normal.stableNormalize();  // (no overflow: [0, 1e308, 1e308])
   return planes;
 }
 
@@ -163,9 +163,9 @@ void read_planes(const Json& document, const Reporter& r, Scene& scene) {
     p.point = read_vector(r, field(where, "point"), list[k].at("point"), scene.dimension);
     const Eigen::Vector3d n =
         read_vector(r, field(where, "normal"), list[k].at("normal"), scene.dimension);
-    if (!(n.norm() > 0.0) || !std::isfinite(n.norm())) {
-      r.fail(field(where, "normal"), "must be a nonzero vector");
-    }
+    // (Its largest component, not its norm: the norm of a finite vector
+    // may overflow, as [0, 1e308, 1e308]'s does.)
+    if (!(n.cwiseAbs().maxCoeff() > 0.0)) r.fail(field(where, "normal"), "must be a nonzero vector");
     p.normal = n;  // as given (so the file round-trips); the force normalizes it
     if (list[k].contains("friction")) {
       p.friction = read_number(r, field(where, "friction"), list[k].at("friction"));
@@ -180,7 +180,7 @@ void validate_planes(const Scene& scene, const Reporter& r) {
   for (std::size_t k = 0; k < planes.size(); ++k) {
     const std::string where = element("planes", k);
     check_plane(r, where, planes[k], scene.dimension);
-    if (!(planes[k].normal.norm() > 0.0) || !std::isfinite(planes[k].normal.norm())) {
+    if (!(planes[k].normal.cwiseAbs().maxCoeff() > 0.0)) {
       r.fail(field(where, "normal"), "must be a nonzero vector");
     }
   }
@@ -201,6 +201,31 @@ void write_planes(const Scene& scene, std::vector<std::pair<std::string, std::st
 // A plane with a random normal placed so that some particles are in
 // contact: past it (penalty) or within the barrier's distance (barrier,
 // every gap positive).
+}  // namespace
+
+void check_barrier_start(const Scene& scene, const Reporter& r) {
+  const Contact* contact = scene.find<Contact>();
+  const Planes* planes = scene.find<Planes>();
+  if (contact == nullptr || planes == nullptr || contact->model != ContactModel::kBarrier) return;
+  for (std::size_t k = 0; k < planes->size(); ++k) {
+    const Plane& p = (*planes)[k];
+    const Eigen::Vector3d n = p.normal.stableNormalized();
+    for (std::size_t i = 0; i < scene.particles.size(); ++i) {
+      if (scene.particles[i].fixed) continue;
+      const double d = n.dot(scene.particles[i].x - p.point);
+      if (!(d > 0.0)) {
+        r.fail(element("planes", k),
+               "particle " + std::to_string(i) + " starts " + (d == 0.0 ? "on" : "inside") +
+                   " the plane (gap " + shortest_text(d) +
+                   " m), where the barrier's energy is infinite: with contact model "
+                   "\"barrier\" every free particle must start outside every plane");
+      }
+    }
+  }
+}
+
+namespace {
+
 void add_random_planes(Scene& scene, std::mt19937& rng, RandomStates) {
   std::normal_distribution<double> g(0.0, 1.0);
   Eigen::Vector3d n = Eigen::Vector3d::Zero();

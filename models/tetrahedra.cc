@@ -20,6 +20,10 @@ void check_dimension(const Reporter& r, const Scene& scene) {
   }
 }
 
+const MaterialSpec& material_of(const Scene& scene, const Tetrahedron& t) {
+  return scene.get<Materials>()[static_cast<std::size_t>(t.material)];
+}
+
 void read_tetrahedra(const Json& document, const Reporter& r, Scene& scene) {
   if (document.contains("tetrahedra") && document.at("tetrahedra").is_array() &&
       !document.at("tetrahedra").empty()) {
@@ -29,6 +33,10 @@ void read_tetrahedra(const Json& document, const Reporter& r, Scene& scene) {
                              [&](const std::string& where, const Tetrahedron& t) {
                                check_rest_shape(r, where, rest_shape(rest_positions(scene, t), 3),
                                                 3);
+                               check_material_stability(r, material_of(scene, t), true);
+                               check_initial_orientation(r, where, material_of(scene, t),
+                                                         rest_positions(scene, t),
+                                                         initial_positions(scene, t), 3);
                              });
 }
 
@@ -38,6 +46,10 @@ void validate_tetrahedra(const Scene& scene, const Reporter& r) {
                                  [&](const std::string& where, const Tetrahedron& t) {
                                    check_rest_shape(
                                        r, where, rest_shape(rest_positions(scene, t), 3), 3);
+                                   check_material_stability(r, material_of(scene, t), true);
+                                   check_initial_orientation(r, where, material_of(scene, t),
+                                                             rest_positions(scene, t),
+                                                             initial_positions(scene, t), 3);
                                  });
 }
 

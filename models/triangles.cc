@@ -20,6 +20,9 @@ void check_triangle(const Reporter& r, const std::string& where, const Scene& sc
                ", which is not defined for membranes (triangles in a 3-D scene)");
   }
   check_rest_shape(r, where, rest_shape(rest_positions(scene, t), scene.dimension), 2);
+  if (scene.dimension == 2) {  // (a membrane's J = sqrt(det C) is never negative)
+    check_initial_orientation(r, where, m, rest_positions(scene, t), initial_positions(scene, t), 2);
+  }
 }
 
 void read_triangles(const Json& document, const Reporter& r, Scene& scene) {

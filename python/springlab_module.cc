@@ -15,7 +15,10 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <future>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -200,16 +203,44 @@ PYBIND11_MODULE(springlab, m) {
                                    std::to_string(scene.particles.size()) +
                                    " particles, over the cap of 10000000 rows: keep every K-th step with every=K");
         }
+        Recorder recorder(model);
+        // Ctrl-C (a notebook's "interrupt kernel"): Python only notes the
+        // signal and runs its handler when the main thread asks. So the run
+        // goes on a thread of its own while this one, the GIL released,
+        // wakes every kSignalCheck to ask (PyErr_CheckSignals, with the
+        // GIL); on a signal it asks the run to stop (settings.options.stop:
+        // checked between steps and inside adaptive methods' internal
+        // steps), waits for it and raises the handler's KeyboardInterrupt.
+        constexpr auto kSignalCheck = std::chrono::milliseconds(20);
+        std::atomic<bool> stop{false};
+        RunSettings interruptible = settings;
+        interruptible.options.stop = &stop;
         // A pairing the method refuses (xpbd and a neo-Hookean material, the
         // barrier with a projection method) raises springlab.Error, as the
         // command line refuses it; a failure during the run is a result.
-        std::unique_ptr<Integrator> prepared = prepare_run(model, settings, "");
-        Recorder recorder(model);
+        std::unique_ptr<Integrator> prepared = prepare_run(model, interruptible, "");
         RunResult r;
+        bool interrupted = false;
         {
           py::gil_scoped_release release;
-          r = simulate(model, settings, {&recorder}, std::move(prepared));
+          std::future<RunResult> running = std::async(std::launch::async, [&] {
+            return simulate(model, interruptible, {&recorder}, std::move(prepared));
+          });
+          while (running.wait_for(kSignalCheck) != std::future_status::ready) {
+            py::gil_scoped_acquire acquire;
+            if (PyErr_CheckSignals() != 0) {
+              interrupted = true;
+              stop = true;
+              break;
+            }
+          }
+          try {
+            r = running.get();  // rethrows the run's exception
+          } catch (const StopRequested&) {
+            if (!interrupted) throw;
+          }
         }
+        if (interrupted) throw py::error_already_set();  // the handler's exception, still set
         return run_result(model, r, recorder);
       },
       py::arg("scene"), py::arg("integrator"), py::arg("dt"), py::arg("t_end"), py::arg("every") = 1,

@@ -229,6 +229,47 @@ TEST(Contact, BarrierKeepsEveryGapPositiveForImplicitMethods) {
   EXPECT_NE(r.failure.find("particle 0 stepped through plane 0"), std::string::npos) << r.failure;
 }
 
+// Issue #38: linear-implicit-euler (implicit, but one linear solve per step)
+// stepping through the barrier was told to "use an implicit method", and
+// rk4, whose stage inside the plane makes the state non-finite, diverged
+// with no message at all. Both now name what keeps gaps open.
+TEST(Contact, BarrierDivergenceSaysToUseImplicitEulerAndWhy) {
+  const ElasticModel drop_model(drop(1.0, 0.2, 9.81, ContactModel::kBarrier, 1e3, 0.01));
+  // (On the drop linear-implicit-euler's linear solve fails first; the
+  // block, dropped on the ground, it steps through.)
+  const ElasticModel block(make_builtin_scene("block", {{"n", "2"}, {"contact", "1"}}));
+  for (const char* name : {"explicit-euler", "linear-implicit-euler", "rk4"}) {
+    const ElasticModel& model =
+        std::string(name) == "linear-implicit-euler" ? block : drop_model;
+    RunSettings s;
+    s.integrator = name;
+    s.dt = 1.0 / 30.0;
+    s.t_end = 1.0;
+    const RunResult r = simulate(model, s);
+    EXPECT_EQ(r.status, RunStatus::kDiverged) << name;
+    EXPECT_NE(r.failure.find("; use implicit-euler (its Newton iteration keeps every gap open) "
+                             "or a smaller --dt"),
+              std::string::npos)
+        << name << ": " << r.failure;
+    EXPECT_EQ(r.failure.find("an implicit method"), std::string::npos) << r.failure;
+  }
+}
+
+// Issue #38: a plane normal whose norm overflows ([0, 1e308, 1e308], every
+// component finite) was refused as "must be a nonzero vector"; it is the
+// normal [0, 1, 1] / sqrt(2).
+TEST(Contact, HugeFiniteNormalIsNormalizedWithoutOverflow) {
+  const Scene s = parse_scene(
+      R"({"dimension": 3, "particles": [{"x": [0, -1, 0]}], "springs": [],
+          "planes": [{"point": [0, 0, 0], "normal": [0, 1e308, 1e308]}],
+          "contact": {"model": "penalty", "stiffness": 100}})",
+      "huge-normal.json");
+  const ElasticModel model(s);
+  const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
+  // gap d = n.x = -1/sqrt(2): k/2 d^2 = 25 J.
+  EXPECT_NEAR(e["contact"], 25.0, 1e-12);
+}
+
 // The smallest height (coordinate 1) of any free particle at any output.
 class LowestHeight final : public Observer {
  public:

@@ -455,3 +455,107 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegratorOnElements,
 
 }  // namespace
 }  // namespace springlab
+
+namespace springlab {
+namespace {
+
+std::string scene_refusal(const std::string& name,
+                          const std::vector<std::pair<std::string, std::string>>& params) {
+  try {
+    make_builtin_scene(name, params);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Issue #38: models whose energy has states below the rest state's at some
+// Poisson ratios ran as nonsense (stable neo-Hookean at -0.9999: every node
+// of the block within 1.2e-4 m of one point, elastic energy -1.33e6 J).
+// Such ratios are refused, saying which range and why; the reasons are the
+// numbers below.
+TEST(FemMaterials, PoissonRatiosWithoutAStableRestStateAreRefusedWithTheReason) {
+  const Lame auxetic = lame(1e5, -0.2);
+  // Stable neo-Hookean: a tetrahedron collapsed to a point has
+  // Psi = lambda' nu < 0; a triangle's Psi(0) = lambda'/2 > 0.
+  const MaterialModel& snh = *find_material_model("stable-neo-hookean");
+  const double shifted = auxetic.lambda + auxetic.mu;
+  EXPECT_NEAR(snh.Psi(Mat::Zero(3, 3), auxetic), shifted * -0.2, 1e-9 * shifted);
+  EXPECT_GT(snh.Psi(Mat::Zero(2, 2), auxetic), 0.0);
+  // Corotated: uniform stretch by 3 already lies below rest (and falls
+  // without bound); neo-Hookean: uniform compression to 1e-3 too.
+  EXPECT_LT(find_material_model("corotated")->Psi(3.0 * Mat::Identity(3, 3), auxetic), 0.0);
+  EXPECT_LT(find_material_model("neo-hookean")->Psi(1e-3 * Mat::Identity(3, 3), auxetic), 0.0);
+  // At poisson 0 all are at least 0 there.
+  const Lame zero = lame(1e5, 0.0);
+  EXPECT_GE(snh.Psi(Mat::Zero(3, 3), zero), -1e-9);
+  EXPECT_GE(find_material_model("corotated")->Psi(3.0 * Mat::Identity(3, 3), zero), 0.0);
+  EXPECT_GE(find_material_model("neo-hookean")->Psi(1e-3 * Mat::Identity(3, 3), zero), 0.0);
+
+  EXPECT_EQ(scene_refusal("block", {{"model", "4"}, {"poisson", "-0.9999"}}),
+            "scene 'block': materials.material.poisson: the stable-neo-hookean model has no stable rest "
+            "state for poisson < 0 in tetrahedra (got -0.9999): a tetrahedron collapsed to a "
+            "point has the energy lambda' nu W < 0, below its rest state's; use poisson in [0, "
+            "0.5), or the linear or stvk model for a negative ratio");
+  EXPECT_NE(scene_refusal("block", {{"model", "1"}, {"poisson", "-0.9999"}})
+                .find("materials.material.poisson: the corotated model has no stable rest state "
+                      "for poisson < 0 (got -0.9999): with lambda < 0 its energy falls without "
+                      "bound as an element stretches"),
+            std::string::npos);
+  EXPECT_NE(scene_refusal("beam", {{"model", "3"}, {"poisson", "-0.1"}})
+                .find("the neo-hookean model has no stable rest state for poisson < 0"),
+            std::string::npos);
+  // Accepted: linear and stvk at any ratio, stable neo-Hookean triangles.
+  EXPECT_EQ(scene_refusal("block", {{"model", "0"}, {"poisson", "-0.9999"}}), "");
+  EXPECT_EQ(scene_refusal("block", {{"model", "2"}, {"poisson", "-0.9999"}}), "");
+  EXPECT_EQ(scene_refusal("beam", {{"model", "4"}, {"poisson", "-0.9"}}), "");
+  EXPECT_EQ(scene_refusal("block", {{"model", "4"}, {"poisson", "0"}}), "");
+}
+
+}  // namespace
+}  // namespace springlab
+
+namespace springlab {
+namespace {
+
+RunResult run_block(const std::vector<std::pair<std::string, std::string>>& params,
+                    Solver solver, double dt, double t_end) {
+  const ElasticModel model(make_builtin_scene("block", params));
+  RunSettings settings;
+  settings.integrator = "implicit-euler";
+  settings.dt = dt;
+  settings.t_end = t_end;
+  settings.options.solver = solver;
+  return simulate(model, settings);
+}
+
+// Issue #38: backward Euler on a conservative scene cannot gain energy, yet
+// a nearly incompressible block with L-BFGS went from 47.2 J to 493 J in 1 s
+// and "completed": steps that raised the step's incremental potential were
+// taken as solutions. Now each step's potential must not rise above its
+// start's (or the step fails, saying so): the run either keeps its energy
+// at or below the start's or stops with that message.
+TEST(FemSolvers, ImplicitEulerNeverTakesAStepThatRaisesTheIncrementalPotential) {
+  // (Newton alone, at this step, fails at t = 0.0167 on this block: no
+  // convergence in 200 iterations, before and after.)
+  const RunResult r =
+      run_block({{"n", "3"}, {"model", "1"}, {"poisson", "0.49999999999"}},
+                Solver::kQuasiNewton, 0.0166667, 1.0);
+  EXPECT_NEAR(r.energy_initial, 47.218, 1e-3);
+  // No accepted state holds more energy than the start (before: 493 J at
+  // t = 1, "completed").
+  EXPECT_LE(r.energy_final, r.energy_initial) << "t_final " << r.t_final;
+  // L-BFGS's answer at t = 0.35 lies 1.4 J above the step's start (E_n:
+  // the answer up to 26 J above it later on); Newton from the start does
+  // not converge there: the step fails, saying both and what to try.
+  EXPECT_EQ(r.status, RunStatus::kFailed);
+  EXPECT_NE(r.failure.find("implicit-euler: L-BFGS's step at t = 0.35"), std::string::npos)
+      << r.failure;
+  EXPECT_NE(r.failure.find("raised the incremental potential from 17.5"), std::string::npos)
+      << r.failure;
+  EXPECT_NE(r.failure.find(", and Newton failed at t = 0.35"), std::string::npos) << r.failure;
+  EXPECT_NE(r.failure.find("a smaller --dt"), std::string::npos) << r.failure;
+}
+
+}  // namespace
+}  // namespace springlab

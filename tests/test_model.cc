@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "models/builtin_scenes.h"
 #include "models/contact.h"
 #include "models/drag.h"
 #include "models/gravity.h"
@@ -122,6 +123,21 @@ TEST(Model, EnergiesFollowSpecFormulas) {
   EXPECT_EQ(e.kinetic_and_spring(), e.kinetic() + e["spring"]);
   // E_s = T + U + m_free (|g| d + 0): d = 3 (bounding-box diagonal)
   EXPECT_DOUBLE_EQ(model.energy_scale(), 4.0 + 50.0 + 2.0 * 10.0 * 3.0);
+}
+
+// The blow-up measure adds each potential's magnitude: a negative elastic
+// energy (issue #38: a corotated block at poisson -0.9999 reached 1.49e9 J of
+// kinetic energy, cancelled by as much negative elastic energy) cannot hide
+// a kinetic energy that blows up.
+TEST(Model, BlowUpMeasureAddsPotentialMagnitudesSoNoneCancels) {
+  const Scene block = make_builtin_scene("block", {{"n", "2"}});
+  const auto layout = std::make_shared<const EnergyLayout>(energy_layout(block));
+  Energies e(layout);
+  e.set_kinetic(1.49e9);
+  e.add(layout->find("elastic"), -1.49e9);
+  e.add(layout->find("spring"), 2.0);
+  e.finish();
+  EXPECT_EQ(e.kinetic_and_spring(), 1.49e9 + 1.49e9 + 2.0);
 }
 
 // docs/command-line.md "The command line": t,kinetic,spring,gravity,total for every spring scene,

@@ -195,6 +195,11 @@ const MaterialModel& corotated_material() {
   static const MaterialModel model = {
       .name = "corotated",
       .formula = "mu sum_i (sigma_i - 1)^2 + lambda/2 (J - 1)^2",
+      // Uniform stretch s: d mu (s - 1)^2 + lambda/2 (s^d - 1)^2, below 0 and
+      // falling without bound as s grows when lambda < 0 (nu < 0).
+      .min_poisson = 0.0,
+      .unstable_why = "with lambda < 0 its energy falls without bound as an element stretches "
+                      "(lambda/2 (J - 1)^2 outgrows mu sum_i (sigma_i - 1)^2)",
       .Psi = Psi,
       .P = P<Mat>,
       .P3 = P<Eigen::Matrix3d>,

@@ -47,6 +47,15 @@ struct MaterialModel {
   std::string_view formula;  // Psi, for `springlab list` and docs/physics.md
   bool membranes = true;  // defined for 3 x 2 F (linear: not, docs/physics.md "Finite elements")
   bool finite_everywhere = true;  // false: Psi = +infinity somewhere (neo-Hookean, J <= 0)
+  // Poisson ratios below min_poisson leave the model without a stable rest
+  // state: some deformation has less energy than rest (Psi < 0), so a solid
+  // of it collapses or blows up instead of oscillating about its rest shape.
+  // Refused (materials_kind.cc) with `unstable_why` saying where the energy
+  // falls. -1: every ratio in (-1, 0.5) is stable. `tetrahedra_only`: only
+  // 3 x 3 F (tetrahedra) have the lower state; triangles are stable.
+  double min_poisson = -1.0;
+  bool unstable_in_tetrahedra_only = false;
+  std::string_view unstable_why = {};
   // Psi(F); +infinity where the model has no energy (neo-Hookean, J <= 0).
   double (*Psi)(const Mat& F, const Lame& m) = nullptr;
   // P = dPsi/dF (d x k).

@@ -99,6 +99,11 @@ const MaterialModel& neo_hookean_material() {
       .name = "neo-hookean",
       .formula = "mu/2 (I_C - d) - mu ln J + lambda/2 (ln J)^2",
       .finite_everywhere = false,
+      // Uniform compression s: d mu/2 (s^2 - 1) - d mu ln s + lambda d^2/2 (ln s)^2,
+      // falling to -infinity as s -> 0 when lambda < 0 (nu < 0).
+      .min_poisson = 0.0,
+      .unstable_why = "with lambda < 0 its energy falls to -infinity as an element is compressed "
+                      "(lambda/2 (ln J)^2 outgrows -mu ln J as J -> 0)",
       .Psi = Psi,
       .P = P<Mat>,
       .P3 = P<Eigen::Matrix3d>,

@@ -52,6 +52,14 @@ const MaterialModel& stable_neo_hookean_material() {
       .name = "stable-neo-hookean",
       .formula = "mu/2 (I_C - d) + lambda'/2 (J - alpha)^2 - mu^2/(2 lambda'), "
                  "lambda' = lambda + mu, alpha = 1 + mu/lambda'",
+      // A tetrahedron collapsed to a point (F = 0) has Psi = lambda' nu: below
+      // the rest state's 0 when nu < 0 (the minimum over J of Psi with I_C at
+      // its least, 3 J^(2/3), is min(0, lambda' nu)). With d = 2 (triangles)
+      // Psi(0) = lambda'/2 > 0 and Psi >= 0 for every nu.
+      .min_poisson = 0.0,
+      .unstable_in_tetrahedra_only = true,
+      .unstable_why = "a tetrahedron collapsed to a point has the energy lambda' nu W < 0, below "
+                      "its rest state's",
       .Psi = Psi,
       .P = P<Mat>,
       .P3 = P<Eigen::Matrix3d>,

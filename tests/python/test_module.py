@@ -8,8 +8,11 @@ Run by ctest with SPRINGLAB (the executable) set and the module on PYTHONPATH.
 import csv
 import json
 import os
+import signal
 import subprocess
+import sys
 import tempfile
+import time
 import unittest
 import warnings
 
@@ -169,6 +172,39 @@ class Experiments(unittest.TestCase):
                 as_dict = json.load(f)
             from_dict = springlab.experiment(as_dict, os.path.join(tmp, "dict"))
             self.assertEqual(from_dict["tasks_done"], summary["tasks_done"])
+
+
+class Interrupt(unittest.TestCase):
+    def test_ctrl_c_stops_a_run_with_keyboard_interrupt(self):
+        # A run of minutes (cloth 24 at 1 ms for 30 s: about 90 s and more on
+        # a shared machine); SIGINT once it is under way must end it within
+        # seconds with KeyboardInterrupt, as a notebook's "interrupt kernel".
+        script = (
+            "import sys, time, springlab\n"
+            "scene = springlab.load_scene('cloth', n=24)\n"
+            "print('started', flush=True)\n"
+            "start = time.monotonic()\n"
+            "try:\n"
+            "    springlab.run(scene, 'implicit-euler', dt=0.001, t_end=30, every=100)\n"
+            "    print('completed')\n"
+            "except KeyboardInterrupt:\n"
+            "    print('interrupted %.3f' % (time.monotonic() - start), flush=True)\n")
+        process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE, text=True)
+        try:
+            self.assertEqual(process.stdout.readline().strip(), "started")
+            time.sleep(1.0)
+            sent = time.monotonic()
+            process.send_signal(signal.SIGINT)
+            out, err = process.communicate(timeout=60)
+            waited = time.monotonic() - sent
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+        self.assertTrue(out.startswith("interrupted"), (out, err))
+        self.assertEqual(process.returncode, 0, err)
+        self.assertLess(waited, 10.0)
 
 
 if __name__ == "__main__":
