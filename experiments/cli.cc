@@ -630,7 +630,11 @@ int command_list(bool json) {
   for (const std::string& name : integrator_names()) {
     const auto integrator = make_integrator(name);
     const IntegratorInfo& i = integrator->info();
-    out << "  " << name << "  order " << i.order << (i.adaptive ? ", adaptive" : ", fixed step")
+    out << "  " << name << "  order " << i.order
+        << (i.position_order > i.order
+                ? " (positions " + std::to_string(i.position_order) + " where F depends on x alone)"
+                : std::string())
+        << (i.adaptive ? ", adaptive" : ", fixed step")
         << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "")
         << ", " << stability_text(i) << "\n      " << i.scheme << '\n';
   }

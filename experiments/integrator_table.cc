@@ -1,5 +1,6 @@
 #include "experiments/integrator_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -99,6 +100,8 @@ nlohmann::ordered_json integrator_table_json() {
     entry["name"] = name;
     entry["family"] = integrator_family(info);
     entry["order"] = info.order;
+    // The positions' order where F depends on x alone, where higher (fox-goodwin: 4).
+    entry["position_order"] = std::max(info.order, info.position_order);
     entry["adaptive"] = info.adaptive;
     entry["implicit"] = info.implicit;
     entry["symplectic"] = info.symplectic;
