@@ -102,6 +102,15 @@ def section(exp, module, ctx, errors):
             % (esc(exp.name), esc(exp.title()), esc(exp.kind), esc(exp.name), "".join(body)))
 
 
+def marker_text(marker):
+    """A marker as a reader sees it: matplotlib's mathtext markers ("$4$",
+    "$\\alpha$") are drawn as the text between the dollars."""
+    if len(marker) > 2 and marker.startswith("$") and marker.endswith("$"):
+        inner = marker[1:-1]
+        return {"\\alpha": "\u03b1"}.get(inner, inner)
+    return marker
+
+
 def integrators_html(integrators, names):
     """The integrators of this report with the facts springlab states for them."""
     rows = []
@@ -111,7 +120,8 @@ def integrators_html(integrators, names):
                     % (swatch(integrators, n), esc(FAMILY_TITLES.get(integrators.family(n),
                                                                      integrators.family(n))),
                        esc(fmt(integrators.order(n))), esc(s.get("text", "–")),
-                       esc(integrators.marker(n)), esc(integrators.get(n, "scheme", "–"))))
+                       esc(marker_text(integrators.marker(n))),
+                       esc(integrators.get(n, "scheme", "–"))))
     source = ("from %s (springlab list --json)" % esc(integrators.source.name)
               if integrators.source else "<b>integrators.json is missing</b>: colours from a "
               "fixed palette, families and stability unknown")

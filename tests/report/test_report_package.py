@@ -29,6 +29,7 @@ from springlab_report.kinds import KINDS  # noqa: E402
 from springlab_report.kinds.convergence import _coinciding  # noqa: E402
 from springlab_report.kinds.energy import classify  # noqa: E402
 from springlab_report.kinds import spectral  # noqa: E402
+from springlab_report.page import marker_text  # noqa: E402
 
 INTEGRATORS = {"integrators": [
     {"name": "symplectic-euler", "family": "symplectic", "order": 1, "adaptive": False,
@@ -84,6 +85,16 @@ def render(scratch):
     status = report_main.main(["--data", str(scratch.dir), "--out", str(out)])
     page = (out / "index.html").read_text(encoding="utf-8")
     return status, page
+
+
+class MarkerText(unittest.TestCase):
+    """The integrators table shows a mathtext marker as the figures draw it."""
+
+    def test_mathtext_markers_are_shown_as_their_text(self):
+        self.assertEqual(marker_text("$4$"), "4")
+        self.assertEqual(marker_text("$\\alpha$"), "\u03b1")
+        self.assertEqual(marker_text("o"), "o")
+        self.assertEqual(marker_text("$"), "$")
 
 
 class Classification(unittest.TestCase):
