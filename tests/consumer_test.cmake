@@ -1,7 +1,9 @@
 # The CMake package end to end: install this build tree into a fresh prefix,
 # configure and build examples/consumer against it with find_package(springlab),
-# and run the result (which checks its hanging mass against m g / k).
-# Arguments: -DBINARY_DIR -DSOURCE_DIR -DWORK_DIR -DGENERATOR -DCXX
+# and run the result (which checks its hanging mass against m g / k); with
+# -DPYTHON and -DPYTHON_DIR (the module's folder under the prefix), import
+# the installed Python module from there and run a scene.
+# Arguments: -DBINARY_DIR -DSOURCE_DIR -DWORK_DIR -DGENERATOR -DCXX [-DPYTHON -DPYTHON_DIR]
 file(REMOVE_RECURSE ${WORK_DIR})
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE out)
@@ -20,3 +22,19 @@ run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples/consumer -B ${WORK_DIR}/build -G 
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix)
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/hanging_spring)
+if(PYTHON AND NOT IS_ABSOLUTE "${PYTHON_DIR}")
+  # A script file: run() takes its arguments as a CMake list, which a
+  # one-line `python -c` with semicolons would split.
+  file(WRITE ${WORK_DIR}/installed_module.py [=[
+import os
+import springlab
+prefix = os.environ["SPRINGLAB_PREFIX"]
+assert springlab.__file__.startswith(prefix + os.sep), springlab.__file__
+r = springlab.run(springlab.load_scene("spring"), "implicit-euler", dt=0.01, t_end=1)
+assert r["status"] == "completed", r["status"]
+print("installed module", springlab.__file__, "ran", r["stats"]["steps"], "steps")
+]=])
+  run(${CMAKE_COMMAND} -E env PYTHONPATH=${WORK_DIR}/prefix/${PYTHON_DIR}
+      SPRINGLAB_PREFIX=${WORK_DIR}/prefix PYTHONDONTWRITEBYTECODE=1
+      ${PYTHON} ${WORK_DIR}/installed_module.py)
+endif()
