@@ -17,6 +17,7 @@ std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_solver_error_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_spectral_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_rigid_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -34,6 +35,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"rotation", &make_rotation_experiment},
       {"solver-error", &make_solver_error_experiment},
       {"spectral", &make_spectral_experiment},
+      {"rigid", &make_rigid_experiment},
   };
   return kinds;
 }

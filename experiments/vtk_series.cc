@@ -137,7 +137,8 @@ void VtkSeries::check_replaceable(const std::vector<std::string>& old) const {
 }
 
 VtkSeries::VtkSeries(const ElasticModel& model, const Scene& scene, std::string dir)
-    : model_(model), dir_(std::move(dir)), stem_(vtk_stem(scene.name)) {
+    : model_(model), dir_(std::move(dir)), stem_(vtk_stem(scene.name)),
+      bodies_(scene, model.free_particle_count()) {
   if (dir_.empty()) throw std::runtime_error("--vtk: the folder name is empty");
   while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
   struct stat st {};
@@ -177,6 +178,8 @@ VtkSeries::VtkSeries(const ElasticModel& model, const Scene& scene, std::string 
   for (std::size_t i = 0; i < joined.size(); ++i) {
     if (!joined[i]) cells.push_back({.size = 1, .nodes = {static_cast<int>(i), 0, 0, 0}});
   }
+  bodies_.append_cells(static_cast<int>(scene.particles.size()), cells);
+  bodies_.append_fixed(fixed_);
   std::string connectivity, offsets, types;
   long long offset = 0;
   for (const Cell& c : cells) {
@@ -193,7 +196,8 @@ VtkSeries::VtkSeries(const ElasticModel& model, const Scene& scene, std::string 
                "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">" + types +
                "</DataArray>\n"
                "      </Cells>\n";
-  cells_xml_.insert(0, "    <Piece NumberOfPoints=\"" + std::to_string(scene.particles.size()) +
+  const std::size_t points = scene.particles.size() + static_cast<std::size_t>(bodies_.points());
+  cells_xml_.insert(0, "    <Piece NumberOfPoints=\"" + std::to_string(points) +
                            "\" NumberOfCells=\"" + std::to_string(cells.size()) + "\">\n");
 }
 
@@ -225,8 +229,17 @@ void VtkSeries::observe(double t, const Vector& x, const Vector& v) {
   }
   // Points and velocities in 3-D (VTK's points have three coordinates; a
   // 2-D scene lies in z = 0).
-  const Eigen::MatrixXd positions = model_.scene_positions(x);
-  const Eigen::MatrixXd velocities = model_.scene_velocities(v);
+  Eigen::MatrixXd positions = model_.scene_positions(x);
+  Eigen::MatrixXd velocities = model_.scene_velocities(v);
+  if (bodies_.points() > 0) {  // the bodies' surface vertices after the particles
+    Eigen::MatrixXd body_x, body_v;
+    bodies_.states(x, v, body_x, body_v);
+    const Eigen::Index n = positions.rows();
+    positions.conservativeResize(n + body_x.rows(), 3);
+    velocities.conservativeResize(n + body_v.rows(), 3);
+    positions.bottomRows(body_x.rows()) = body_x;
+    velocities.bottomRows(body_v.rows()) = body_v;
+  }
   auto triples = [](const Eigen::MatrixXd& m) {
     std::string text;
     for (Eigen::Index i = 0; i < m.rows(); ++i) {

@@ -3,7 +3,8 @@
 // One VTK XML UnstructuredGrid file per output time, `DIR/<stem>_NNNNNN.vtu`
 // (points with their velocity and a `fixed` flag; springs as lines,
 // triangles and tetrahedra as cells; a particle no element joins as a
-// vertex), and `DIR/<stem>.pvd`, the series with each frame's time, which is
+// vertex; then each rigid body's surface vertices as points, its triangles
+// as cells: vtk_bodies.h), and `DIR/<stem>.pvd`, the series with each frame's time, which is
 // what ParaView opens. <stem> is the scene's name with anything but letters,
 // digits, '-', '_' and '.' made '_'.
 //
@@ -28,6 +29,7 @@
 #include <vector>
 
 #include "experiments/simulation.h"
+#include "experiments/vtk_bodies.h"
 #include "models/element_kind.h"
 
 namespace springlab {
@@ -59,6 +61,7 @@ class VtkSeries final : public Observer {
   std::string dir_, temp_dir_, stem_;
   bool dir_existed_ = false, published_ = false;
   std::vector<unsigned char> fixed_;
+  VtkBodies bodies_;  // rigid bodies' surfaces: points after the particles'
   std::string cells_xml_;  // the <Cells> block: the same in every frame
   std::vector<double> times_;
   std::atomic<int> frames_{0};

@@ -4,7 +4,7 @@ look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
 from . import (cloth_showcase, contact, convergence, damping_budget, energy, mode, motion,
-               rotation, solver_error, spectral, stability, stability_region,
+               rigid, rotation, solver_error, spectral, stability, stability_region,
                step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
@@ -20,6 +20,7 @@ KINDS = {m.KIND: m for m in (
     contact,
     mode,
     rotation,
+    rigid,
     cloth_showcase,
     step_energy,
 )}
