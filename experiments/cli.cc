@@ -30,7 +30,9 @@
 #include "experiments/signals.h"
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
+#include "integrators/newton_velocity_solver.h"
 #include "integrators/registry.h"
+#include "integrators/sparse_direct_solver.h"
 #include "integrators/xpbd.h"
 #include "models/builtin_scenes.h"
 #include "models/element_kind.h"
@@ -274,8 +276,33 @@ void check_initial_energy(const ElasticModel& model, const std::string& scene_ar
 // A pairing the method refuses before its first step (xpbd and a
 // neo-Hookean block, projective dynamics and the barrier) is a usage error:
 // one line naming the fix, before any output is opened (issue 38.6).
+std::unique_ptr<Integrator> prepare_or_refuse_pairing(const ElasticModel& model,
+                                                      const RunSettings& run,
+                                                      const std::string& scene_arg);
+
+// A Newton method whose matrix's factor will not fit in memory is refused
+// before any output, with the estimate and the limit (issue 38.1; the rule
+// is sparse_direct_solver.h's). Quasi-Newton factors a smaller matrix and
+// meets the check at run time only if it falls back to Newton.
 std::unique_ptr<Integrator> prepare_or_refuse(const ElasticModel& model, const RunSettings& run,
                                               const std::string& scene_arg) {
+  std::unique_ptr<Integrator> integrator = prepare_or_refuse_pairing(model, run, scene_arg);
+  if (dynamic_cast<const ImplicitIntegrator*>(integrator.get()) != nullptr &&
+      run.options.solver != Solver::kQuasiNewton) {
+    const std::string why = factor_fit_error(model.jacobian_pattern());
+    if (!why.empty()) {
+      throw UsageError("--integrator " + run.integrator + ": " + why +
+                       ": use a coarser mesh, --solver quasi-newton (it factors a matrix of a "
+                       "third of the unknowns), or a method that factors none (rk4, xpbd, "
+                       "projective-dynamics)");
+    }
+  }
+  return integrator;
+}
+
+std::unique_ptr<Integrator> prepare_or_refuse_pairing(const ElasticModel& model,
+                                                      const RunSettings& run,
+                                                      const std::string& scene_arg) {
   try {
     return prepare_integrator(model, run);
   } catch (const RunRefused& e) {
@@ -942,6 +969,12 @@ int run_cli(int argc, char** argv) {
       }
       return 0;
     }
+  } catch (const std::bad_alloc&) {
+    // An allocation outside the factor checks (the scene itself, its
+    // matrices) failed: one line, not "std::bad_alloc" alone (issue 38.1).
+    std::cerr << "springlab: error: out of memory (the scene or its matrices): use a coarser "
+                 "mesh, or raise ulimit -v if it is set\n";
+    return 1;
   } catch (const std::exception& e) {
     std::string what = e.what();
     std::replace(what.begin(), what.end(), '\n', ' ');

@@ -45,6 +45,14 @@ constexpr double kMaxEscape = 10.0;
 // barrier's first gap (IPC's step cap: short of contact, never at it).
 constexpr double kGapCap = 0.9;
 
+// A factor that does not fit in memory (issue 38.1): the solver's line and
+// what to try; no other method, no second attempt (each needs as much).
+std::string out_of_memory_text(const SparseDirectSolver& solver) {
+  return solver.error() +
+         ": use a coarser mesh, --solver quasi-newton (it factors a matrix of a third of the "
+         "unknowns), or a method that factors none (rk4, xpbd, projective-dynamics)";
+}
+
 }  // namespace
 
 StepResult ImplicitIntegrator::do_initialize() {
@@ -147,7 +155,9 @@ bool ImplicitIntegrator::refresh_preconditioner(double t, const Vector& x, const
   preconditioner_valid_ = preconditioner_.factorize(*a, MatrixKind::kPositiveDefinite) &&
                           preconditioner_.positive_definite();
   cg_slow_ = 0;
-  if (!preconditioner_valid_) {
+  if (!preconditioner_valid_ && preconditioner_.out_of_memory()) {
+    error = out_of_memory_text(preconditioner_);
+  } else if (!preconditioner_valid_) {
     error = "the definite Newton matrix is not positive definite";
     if (!preconditioner_.error().empty()) error += " (" + preconditioner_.error() + ")";
   }
@@ -172,7 +182,8 @@ ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
     direct_current_ = true;
     if (!direct_.factorize(jacobian_, kind)) {
       direct_current_ = false;
-      error = "the Newton matrix is singular (" + direct_.error() + ")";
+      error = direct_.out_of_memory() ? out_of_memory_text(direct_)
+                                      : "the Newton matrix is singular (" + direct_.error() + ")";
       out.ok = false;
       return out;
     }
@@ -186,6 +197,10 @@ ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
 
   if ((!preconditioner_valid_ || cg_slow_ > 0) &&
       !refresh_preconditioner(t, x, v, h, b, c, definite, error)) {
+    if (preconditioner_.out_of_memory()) {
+      out.ok = false;
+      return out;
+    }
     // No positive definite matrix to precondition with (a negative mass,
     // say, cannot happen; round-off in a nearly singular one can).
     return direct(MatrixKind::kSymmetric);
@@ -205,6 +220,10 @@ ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
   if (cg.finite && !cg.converged && !cg.negative_curvature) {
     // The kept factor is too far from this matrix: a fresh one, at once.
     if (!refresh_preconditioner(t, x, v, h, b, c, definite, error)) {
+      if (preconditioner_.out_of_memory()) {
+        out.ok = false;
+        return out;
+      }
       return direct(MatrixKind::kSymmetric);
     }
     cg = krylov(std::max(max_iterations, kCgHardLimit));
@@ -255,7 +274,8 @@ bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vecto
     direct_current_ = false;
     if (!direct_.factorize(jacobian_, system().jacobian_symmetric() ? MatrixKind::kSymmetric
                                                                     : MatrixKind::kGeneral)) {
-      error = "the step's matrix is singular (" + direct_.error() + ")";
+      error = direct_.out_of_memory() ? out_of_memory_text(direct_)
+                                      : "the step's matrix is singular (" + direct_.error() + ")";
       return false;
     }
     if (!direct_.solve(jd_, dv)) {
@@ -350,7 +370,8 @@ StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitSc
   // is not Phi's parts' magnitude, so a check at that scale refuses good
   // steps.
   StepResult result = newton(h, s, v);
-  if (!result.ok && system().jacobian_symmetric()) {
+  const bool out_of_memory = direct_.out_of_memory() || preconditioner_.out_of_memory();
+  if (!result.ok && system().jacobian_symmetric() && !out_of_memory) {
     // Projected Newton from the step's start: every update from the definite
     // matrix, a descent direction of the incremental potential with a
     // search that cannot fail but to round-off. It converges linearly where

@@ -27,6 +27,16 @@
 // figures), and with it keeps CHOLMOD's own OpenMP loops on the calling
 // thread (sparse_direct_solver.cc); the environment variable
 // SPRINGLAB_BLAS_THREADS overrides both.
+//
+// Memory (issue 38.1). A factor's size is known before any numeric work:
+// CHOLMOD's symbolic analysis of the pattern (AMD ordering, column counts)
+// gives nnz(L) exactly for that ordering, in O(nnz(A)) time and memory.
+// The rule: a factorization is attempted only when its estimated bytes,
+// kFactorBytesPerNonzero x nnz(L), fit in memory_limit_bytes(); otherwise
+// factorize() fails with out_of_memory() set and a message quoting both
+// numbers, and so does every allocation that fails anyway (CHOLMOD's
+// OUT_OF_MEMORY or TOO_LARGE status, std::bad_alloc from Eigen): no
+// fallback to another method, which would need as much again.
 #pragma once
 
 #include <Eigen/SparseCholesky>
@@ -51,6 +61,36 @@ enum class MatrixKind { kPositiveDefinite, kSymmetric, kGeneral };
 //     at 1e-3 m/s on cloth 64 44.6 -> 36.6 ms per step, projective
 //     dynamics 7.0 -> 5.7 ms on cloth 64 and 34 -> 31 ms on cloth 128.
 enum class FactorUse { kRefactoredOften, kSolvedOften };
+
+// A factor's size, from the symbolic analysis only.
+struct FactorEstimate {
+  double nonzeros = 0.0;  // nnz(L), AMD ordering
+  double bytes = 0.0;     // kFactorBytesPerNonzero * nonzeros
+};
+// Bytes per nonzero of L: its value (8) and row index (4), plus a third
+// again for what a factorization holds beside L (supernodal padding,
+// CHOLMOD's update workspace, Eigen's column copies). Measured on block
+// n = 20 / 30 with implicit-euler (docs/reliability.md).
+constexpr double kFactorBytesPerNonzero = 16.0;
+// A supernodal factorization's first BLAS call makes OpenBLAS's work buffer
+// (128 MB in Debian's build), and OpenBLAS retries a failed one forever
+// (issue 38.1: "spun > 120 s inside blas_memory_alloc"): the rule counts it.
+constexpr double kBlasBufferBytes = 256e6;
+FactorEstimate estimate_factor(const SparseMatrix& a);
+// Bytes this process may still allocate: physical memory
+// (sysconf(_SC_PHYS_PAGES) * _SC_PAGE_SIZE), or, when RLIMIT_AS is set and
+// tighter, that limit less the address space already mapped
+// (/proc/self/statm). Infinity when neither is known.
+double memory_limit_bytes();
+// "1.5 GB": bytes in the unit that suits them.
+std::string format_bytes(double bytes);
+// Empty when a factor of `a` fits in `limit` bytes; otherwise one line with
+// the estimate and the limit ("the factor of the 89373 x 89373 Newton matrix
+// needs about 2.1 GB (3.1e8 nonzeros), over the 1.2 GB this process may
+// allocate"), without advice: the caller says what to try.
+// `extra`: bytes needed beside the factor (kBlasBufferBytes when supernodal).
+std::string factor_fit_error(const SparseMatrix& a, double limit = memory_limit_bytes(),
+                             double extra = kBlasBufferBytes);
 
 class SparseDirectSolver {
  public:
@@ -80,12 +120,22 @@ class SparseDirectSolver {
   // own count; 0 for the other methods).
   double factor_flops() const { return factor_flops_; }
   const std::string& error() const { return error_; }
+  // The last factorize() failed because the factor did not fit in memory
+  // (estimated or an allocation failed): trying another method or a smaller
+  // step will not help.
+  bool out_of_memory() const { return out_of_memory_; }
+  // The limit factorize() checks its estimate against (memory_limit_bytes()
+  // when not set; infinity skips the check, for tests of the allocation
+  // failures themselves).
+  void set_memory_limit(double bytes) { memory_limit_ = bytes; }
 
  private:
   enum class Method { kNone, kCholesky, kLdlt, kLu };
   bool factorize_cholesky(const SparseMatrix& a);
   bool factorize_ldlt(const SparseMatrix& a);
   bool factorize_lu(const SparseMatrix& a);
+  bool fits(const SparseMatrix& a);
+  bool fail_out_of_memory(const SparseMatrix& a, const std::string& where);
 
   struct Cholmod;  // CHOLMOD's common block and factor (cholmod.h stays in the .cc)
   std::unique_ptr<Cholmod> cholmod_;
@@ -93,6 +143,9 @@ class SparseDirectSolver {
   Eigen::SparseLU<SparseMatrix> lu_;
   bool ldlt_analyzed_ = false;
   bool lu_analyzed_ = false;
+  bool fit_checked_ = false;
+  bool out_of_memory_ = false;
+  double memory_limit_ = -1.0;  // < 0: memory_limit_bytes()
   Method method_ = Method::kNone;
   double factor_nonzeros_ = 0.0;
   double factor_flops_ = 0.0;
