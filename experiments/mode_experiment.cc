@@ -30,6 +30,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include "experiments/experiment.h"
@@ -59,8 +60,13 @@ StepMapPrediction predict(const std::string& integrator, double w, double h,
   // also for methods that carry more than (x, v), the Newmark family's a_n
   // and BDF2's previous step): lambda = exp(w h / (1 + e) (-xi +- i)), with
   // e the relative period error and xi the damping ratio.
-  const StepSpectrum s = step_spectrum(integrator, options, w * h);
   StepMapPrediction p;
+  StepSpectrum s;
+  try {
+    s = step_spectrum(integrator, options, w * h);
+  } catch (const std::runtime_error&) {
+    return p;  // a step of the method failed on the oscillator: no prediction
+  }
   if (!std::isfinite(s.period_error) || !std::isfinite(s.damping_ratio)) return p;  // no period
   p.period = 2.0 * std::numbers::pi / w * (1.0 + s.period_error);
   p.amplitude_per_period = std::exp(-2.0 * std::numbers::pi * s.damping_ratio);
