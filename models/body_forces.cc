@@ -345,15 +345,10 @@ class BodyFrictionForce final : public ForceTerm {
         }
         const Eigen::Vector3d u = vertex_point(v, c.v);
         s.vt = u - s.n.dot(u) * s.n;
-        const double y2 = s.vt.squaredNorm();
-        s.y = std::sqrt(y2);
-        if (s.y < eps_) {
-          s.g = 2.0 / eps_ - s.y / (eps_ * eps_);
-          s.g_over_y = s.y > 0.0 ? -1.0 / (eps_ * eps_ * s.y) : 0.0;
-        } else {
-          s.g = 1.0 / s.y;
-          s.g_over_y = -1.0 / (y2 * s.y);
-        }
+        const FrictionWeight w = friction_weight(s.vt.squaredNorm(), eps_);
+        s.y = w.y;
+        s.g = w.g;
+        s.g_over_y = w.g_over_y;
         visit(i, v, s);
       }
     }

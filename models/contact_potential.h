@@ -38,6 +38,23 @@ inline ContactPhi barrier_phi(double kappa, double h, double d) {
           kappa * (-2.0 * l - 4.0 * e / d + e * e / (d * d))};
 }
 
+// Smoothed Coulomb friction's weight (IPC, Li et al. 2020, sec. 5.2;
+// friction_force.cc): F = -mu f_n g(y) v_t with y = |v_t| and
+//   g(y) = f1(y) / y = 2/eps - y/eps^2 (y < eps), 1/y beyond,
+// and g'(y) / y = -1/(eps^2 y) or -1/y^3 (0 at y = 0, where v_t v_t^T = 0),
+// the two numbers the force and its dF/dv need. Particles (friction_force.cc)
+// and bodies' surface vertices (body_forces.cc) share it.
+struct FrictionWeight {
+  double y, g, g_over_y;
+};
+
+// From y2 = |v_t|^2.
+inline FrictionWeight friction_weight(double y2, double eps) {
+  const double y = std::sqrt(y2);
+  if (y < eps) return {y, 2.0 / eps - y / (eps * eps), y > 0.0 ? -1.0 / (eps * eps * y) : 0.0};
+  return {y, 1.0 / y, -1.0 / (y2 * y)};
+}
+
 // phi of the scene's contact model (its stiffness and distance resolved).
 struct ContactLaw {
   ContactModel model = ContactModel::kPenalty;

@@ -159,14 +159,10 @@ class FrictionForce final : public ForceTerm {
           s.vt[r] = c.v[i * D + r] - vn * s.n[r];
           y2 += s.vt[r] * s.vt[r];
         }
-        s.y = std::sqrt(y2);
-        if (s.y < eps_) {
-          s.g = 2.0 / eps_ - s.y / (eps_ * eps_);
-          s.g_over_y = s.y > 0.0 ? -1.0 / (eps_ * eps_ * s.y) : 0.0;
-        } else {
-          s.g = 1.0 / s.y;
-          s.g_over_y = -1.0 / (y2 * s.y);
-        }
+        const FrictionWeight w = friction_weight(y2, eps_);
+        s.y = w.y;
+        s.g = w.g;
+        s.g_over_y = w.g_over_y;
         visit(i, p.mu, s);
       }
     }
