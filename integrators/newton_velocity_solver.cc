@@ -313,8 +313,10 @@ StepResult ImplicitIntegrator::solve_velocity(double h, const VelocityImplicitSc
   // small while the residual is not, went from 47 J to 493 J in 1 s of
   // "completed" steps, each answer up to 26 J above E_n). L-BFGS's answer is
   // then not taken: Newton solves the step from its start.
-  const bool minimizes = system().derives_from_potentials() && s.b > 0.0 && s.c > 0.0 &&
-                         !s.discrete_gradient;
+  // (Only L-BFGS's answers are checked: Newton's and every other method's
+  // steps pay nothing for it.)
+  const bool minimizes = quasi && system().derives_from_potentials() && s.b > 0.0 &&
+                         s.c > 0.0 && !s.discrete_gradient;
   double phi_start = std::numeric_limits<double>::infinity(), magnitude_start = 0.0;
   if (minimizes) {
     Vector v_kept = (-s.a / s.b) * v_;
