@@ -12,12 +12,30 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from PIL import Image  # noqa: E402  (matplotlib's own dependency)
 
 DPI = 100
 # No "Software" (matplotlib version) in the PNG: the same data gives the same bytes.
 SAVE_METADATA = {"Software": None}
 RC = {"font.size": 10, "axes.titlesize": 11, "svg.hashsalt": "springlab", "path.simplify": True,
       "agg.path.chunksize": 20000, "legend.fontsize": 8}
+
+
+# Figures are stored as 256-colour PNGs: line plots on white use few
+# colours, and the palette makes each PNG (and so the page, which embeds
+# them) about a third of the full-colour size. No dithering, so the same
+# figure gives the same bytes.
+PALETTE_COLOURS = 256
+
+
+def palette_png(rgba_png):
+    """A PNG's bytes as a 256-colour PNG (median cut, no dithering)."""
+    image = Image.open(io.BytesIO(rgba_png)).convert("RGB")
+    quantized = image.quantize(colors=PALETTE_COLOURS, method=Image.Quantize.MEDIANCUT,
+                               dither=Image.Dither.NONE)
+    out = io.BytesIO()
+    quantized.save(out, format="PNG", optimize=True)
+    return out.getvalue()
 
 
 class Figures:
@@ -32,7 +50,7 @@ class Figures:
         fig.savefig(buf, format="png", dpi=DPI, metadata=SAVE_METADATA, bbox_inches="tight",
                     pad_inches=0.12)
         plt.close(fig)
-        data = buf.getvalue()
+        data = palette_png(buf.getvalue())
         (self.outdir / filename).write_bytes(data)
         self.saved.append((filename, data))
         return filename, data
@@ -142,3 +160,42 @@ def finite_positive(*arrays):
     for a in arrays:
         mask &= np.isfinite(a) & (a > 0)
     return mask
+
+
+# Offsets (points) tried for a point's label, in order: right above, right
+# below, left above, left below.
+LABEL_OFFSETS = ((5, 4, "left", "bottom"), (5, -4, "left", "top"),
+                 (-5, 4, "right", "bottom"), (-5, -4, "right", "top"))
+
+
+def label_points(ax, candidates, fontsize=7.0, most=None, avoid=()):
+    """Labels some points without piling them up: candidates (x, y, text,
+    colour) in order of importance; each is drawn at the first offset where
+    it stays inside the axes and overlaps no label drawn before it, no text
+    already in the axes and no marker at the points `avoid` (x, y), else
+    left out. At most `most` labels. Returns the number drawn."""
+    from matplotlib.transforms import Bbox
+    fig = ax.figure
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    box = ax.get_window_extent(renderer)
+    blocked = [t.get_window_extent(renderer) for t in ax.texts]
+    r = 3.0 * fig.dpi / 72.0  # a marker's half size
+    for x, y in avoid:
+        px, py = ax.transData.transform((x, y))
+        if np.isfinite(px) and np.isfinite(py):
+            blocked.append(Bbox([[px - r, py - r], [px + r, py + r]]))
+    placed = []
+    for x, y, text, colour in candidates:
+        if most is not None and len(placed) >= most:
+            break
+        for dx, dy, ha, va in LABEL_OFFSETS:
+            t = ax.annotate(text, (x, y), textcoords="offset points", xytext=(dx, dy), ha=ha,
+                            va=va, fontsize=fontsize, color=colour)
+            bb = t.get_window_extent(renderer)
+            if bb.x0 >= box.x0 and bb.x1 <= box.x1 and bb.y0 >= box.y0 and bb.y1 <= box.y1 \
+                    and not any(bb.overlaps(p) for p in placed + blocked):
+                placed.append(bb)
+                break
+            t.remove()
+    return len(placed)

@@ -12,7 +12,7 @@ from .data import DataError, load_experiments
 from .figures import RC, Figures, esc
 from .integrators import Integrators
 from .kinds import KINDS
-from .page import Context, attempt, integrators_html, page, section
+from .page import Context, DataFiles, attempt, integrators_html, page, section
 
 PROG = "make_report.py"
 INTEGRATORS_FILE = "integrators.json"
@@ -91,7 +91,8 @@ def main(argv=None):
                          % (module.TITLE, kind))
 
     figs = Figures(outdir)
-    ctx = Context(integrators, figs)
+    files = DataFiles(outdir)
+    ctx = Context(integrators, figs, files)
     errors = []
     toc = [("integrators", "The integrators")]
     body = [attempt(errors, "integrator table", integrators_html, integrators, names)]
@@ -115,6 +116,11 @@ def main(argv=None):
     tmp = outdir / "index.html.tmp"
     tmp.write_text(html, encoding="utf-8")
     os.replace(tmp, outdir / "index.html")
+    # Files of an earlier report that this page no longer links.
+    if files.dir.is_dir():
+        for p in files.dir.iterdir():
+            if p.name not in files.copied and p.is_file():
+                p.unlink()
     for e in errors:
         sys.stderr.write("%s: error: %s\n" % (PROG, e))
     print("%s: wrote %s (%d figures)%s" % (PROG, outdir / "index.html", len(figs.saved),

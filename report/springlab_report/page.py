@@ -2,7 +2,9 @@
 integrator table, the benchmarks, and the settings each experiment used."""
 
 import json
+import shutil
 import traceback
+from urllib.parse import quote
 
 import matplotlib.pyplot as plt
 
@@ -35,6 +37,7 @@ details { margin: 0.4em 0; overflow-x: auto; } summary { cursor: pointer; }
 .player-panel canvas { display: block; }
 .player-label { font-size: 0.8em; padding: 0 4px 3px; max-width: 292px; }
 .player-value { color: #555; }
+.player-flag { color: #b00000; font-weight: bold; }
 .player-controls { margin: 0.3em 0; } .player-slider { width: 30em; vertical-align: middle; }
 #report-status { color: #888; font-size: 0.8em; margin-top: 3em; }
 """
@@ -70,12 +73,53 @@ SCRIPT = """
 """
 
 
-class Context:
-    """What a kind module draws with: the integrator table, the figure saver."""
+# The experiments' files are copied beside the page, into OUTDIR/data/, and
+# linked relatively: the page holds summaries, the full tables are a click
+# away, also when the page is opened from file://.
+DATA_SUBDIR = "data"
+# A scene shown inline in its settings only up to this size (a 64 x 64
+# cloth is megabytes of JSON); larger ones are shortened, the file linked.
+SCENE_INLINE_CHARS = 20000
+# In the settings shown on the page, lists of objects longer than this keep
+# their first few entries (the whole file is linked beside them).
+LIST_KEEP = 3
+LIST_LIMIT = 12
 
-    def __init__(self, integrators, figs):
+
+class DataFiles:
+    """Copies data files into OUTDIR/data/ and gives the relative links to them."""
+
+    def __init__(self, outdir):
+        self.dir = outdir / DATA_SUBDIR
+        self.copied = []
+
+    def link(self, path, text=None):
+        """A link to a copy of `path` beside the page (copied once)."""
+        if path.name not in self.copied:
+            self.dir.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(path, self.dir / path.name)
+            self.copied.append(path.name)
+        return '<a href="%s/%s">%s</a>' % (DATA_SUBDIR, esc(quote(path.name)),
+                                           esc(text if text is not None else path.name))
+
+
+def size_text(nbytes):
+    """A file size as a reader wants it: "512 B", "38 kB", "18.2 MB"."""
+    if nbytes < 1000:
+        return "%d B" % nbytes
+    if nbytes < 1e6:
+        return "%.0f kB" % (nbytes / 1e3)
+    return "%.1f MB" % (nbytes / 1e6)
+
+
+class Context:
+    """What a kind module draws with: the integrator table, the figure saver,
+    the data files beside the page."""
+
+    def __init__(self, integrators, figs, files=None):
         self.integrators = integrators
         self.figs = figs
+        self.files = files if files is not None else DataFiles(figs.outdir)
 
 
 def attempt(errors, what, fn, *args):
@@ -97,7 +141,8 @@ def section(exp, module, ctx, errors):
         body.append(attempt(errors, "%s (%s)" % (exp.name, exp.kind), module.render, exp, ctx))
     else:
         body.append(note_html("No data for this experiment: skipped."))
-    body.append(attempt(errors, "%s settings" % exp.name, settings_html, exp, ctx.integrators))
+    body.append(attempt(errors, "%s settings" % exp.name, settings_html, exp, ctx.integrators,
+                        ctx.files))
     return ('<section id="%s"><h2>%s <small>(%s: %s)</small></h2>\n%s</section>\n'
             % (esc(exp.name), esc(exp.title()), esc(exp.kind), esc(exp.name), "".join(body)))
 
@@ -154,23 +199,55 @@ def find_scenes(obj, path=""):
 
 def compact_json(obj, indent=0):
     """Pretty JSON that keeps short arrays/objects (particles, springs) on one line."""
-    flat = json.dumps(obj, separators=(", ", ": "))
+    flat = json.dumps(obj, separators=(", ", ": "), ensure_ascii=False)
     if len(flat) <= 100 or not isinstance(obj, (dict, list)):
         return flat
     pad = "  " * (indent + 1)
     if isinstance(obj, dict):
-        items = ["%s%s: %s" % (pad, json.dumps(k), compact_json(v, indent + 1))
+        items = ["%s%s: %s" % (pad, json.dumps(k, ensure_ascii=False), compact_json(v, indent + 1))
                  for k, v in obj.items()]
         return "{\n" + ",\n".join(items) + "\n" + "  " * indent + "}"
     items = [pad + compact_json(v, indent + 1) for v in obj]
     return "[\n" + ",\n".join(items) + "\n" + "  " * indent + "]"
 
 
-def settings_html(exp, integrators):
+def shortened(obj):
+    """The settings as shown on the page: a list of more than LIST_LIMIT
+    objects or lists (particles, springs, cells), or of more than 40 numbers,
+    keeps its first LIST_KEEP entries and says how many more there are."""
+    if isinstance(obj, dict):
+        return {k: shortened(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        nested = any(isinstance(v, (dict, list)) for v in obj)
+        if len(obj) > (LIST_LIMIT if nested else 40):
+            return [shortened(v) for v in obj[:LIST_KEEP]] + [
+                "\u2026 %d more" % (len(obj) - LIST_KEEP)]
+        return [shortened(v) for v in obj]
+    return obj
+
+
+def data_files_html(exp, files):
+    """Links to the experiment's settings file and its full tables, copied
+    beside the page, with their sizes and rows."""
+    items = []
+    for suffix in sorted(exp.tables, key=lambda k: (k != "", k)):
+        t = exp.tables[suffix]
+        items.append("%s (%s row%s, %s)" % (files.link(t.path), "{:,}".format(len(t)),
+                                            "" if len(t) == 1 else "s",
+                                            size_text(t.path.stat().st_size)))
+    items.append("%s (the settings, %s)" % (files.link(exp.settings_path),
+                                            size_text(exp.settings_path.stat().st_size)))
+    return "<p><b>Data</b> (CSV tables and the settings file, beside this page): %s.</p>\n" % (
+        ", ".join(items))
+
+
+def settings_html(exp, integrators, files=None):
     s = exp.settings
     if not s:
         return ""
     out = ["<h3>Scene and settings used <small>(%s)</small></h3>\n" % esc(exp.settings_path.name)]
+    if files is not None:
+        out.append(data_files_html(exp, files))
     desc = s.get("description")
     if isinstance(desc, str) and desc:
         out.append("<p>%s</p>\n" % esc(desc))
@@ -199,9 +276,14 @@ def settings_html(exp, integrators):
         if text in seen:
             continue
         seen.append(text)
+        if len(text) > SCENE_INLINE_CHARS:
+            label += " (%s of JSON, shortened here: the whole scene is %s in %s)" % (
+                size_text(len(text)), esc(where), esc(exp.settings_path.name))
+            text = compact_json(shortened(scene))
         out.append("<details><summary>%s</summary><pre>%s</pre></details>\n" % (label, esc(text)))
-    out.append("<details><summary>The complete settings file %s</summary><pre>%s</pre></details>\n"
-               % (esc(exp.settings_path.name), esc(compact_json(s))))
+    out.append("<details><summary>The settings file %s (long lists shortened; the whole file is "
+               "linked above)</summary><pre>%s</pre></details>\n"
+               % (esc(exp.settings_path.name), esc(compact_json(shortened(s)))))
     return "".join(out)
 
 

@@ -3,7 +3,8 @@
 // one camera. Written for springlab; no library, no network.
 //
 // Each <figure class="player"> holds its data as JSON (frames as base64
-// little-endian float32, frame x particle x xyz). While it plays it counts
+// little-endian int16, frame x particle x xyz, each frame on its own grid
+// q: position = lo + (value + 32767) step, -32768 for a non-finite one). While it plays it counts
 // the frames it drew (data-frames-drawn) and, from the canvas pixels, the
 // panels that show something (data-nonempty-panels of data-panels): what
 // tests/report/check_report.py reads. `index.html#player-t=0.5` opens every
@@ -12,10 +13,15 @@
   if (window.springlabPlayer) return;
   window.springlabPlayer = true;
 
-  function decode(b64) {
-    var s = atob(b64), bytes = new Uint8Array(s.length);
-    for (var i = 0; i < s.length; i++) bytes[i] = s.charCodeAt(i);
-    return new Float32Array(bytes.buffer);
+  function decode(b64, q, n) {
+    var s = atob(b64), view = new DataView(new ArrayBuffer(s.length));
+    for (var i = 0; i < s.length; i++) view.setUint8(i, s.charCodeAt(i));
+    var out = new Float32Array(s.length / 2);
+    for (var k = 0; k < out.length; k++) {
+      var v = view.getInt16(2 * k, true), f = Math.floor(k / (3 * n)), a = k % 3;
+      out[k] = v === -32768 ? NaN : q[6 * f + a] + (v + 32767) * q[6 * f + 3 + a];
+    }
+    return out;
   }
 
   // Orthographic camera. A planar scene is seen face on (x right, the
@@ -62,7 +68,7 @@
       var good = p.energy.filter(function (e, f) { return e !== null && !p.past[f]; });
       var rel = function (e) { return p.Es ? (e - p.E0) / p.Es : 0; };
       var span = good.reduce(function (m, e) { return Math.max(m, Math.abs(rel(e))); }, 1e-3);
-      return {p: p, x: decode(p.x), view: el.querySelector('.player-view'),
+      return {p: p, x: decode(p.x, p.q, n), view: el.querySelector('.player-view'),
               energy: el.querySelector('.player-energy'), value: el.querySelector('.player-value'),
               rel: rel, span: span};
     });

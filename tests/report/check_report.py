@@ -13,17 +13,24 @@ has no images, when the page shows an error (an element with class
 image), when the marker is missing (the script did not run), when a motion
 player did not advance at least 5 frames or left a panel's canvas empty (its
 data-frames-drawn, data-panels and data-nonempty-panels, which player.js
-computes from the canvas pixels), or when Chromium is not installed or fails. Prints "report OK: N images" on success.
+computes from the canvas pixels), or when Chromium is not installed or fails.
+Before Chromium it reads the file itself: it fails when the page is larger
+than --max-bytes (default 6 MB), when a relative link (href, src) names a
+file that is not there (the CSV tables and settings copied beside the page),
+or when the page holds text escaped twice (`&amp;#x27;`, `&amp;gt;`: shown
+to the reader as raw entities). Prints "report OK: N images" on success.
 """
 
 import argparse
 import os
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
 from html.parser import HTMLParser
 from pathlib import Path
+from urllib.parse import unquote
 
 PROG = "check_report.py"
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
@@ -126,10 +133,40 @@ def run_chromium(chromium, extra, url, timeout):
     return proc.stdout.decode("utf-8", "replace")
 
 
+# An entity whose '&' was escaped again: the reader sees "&#x27;" or "&gt;".
+TWICE_ESCAPED = re.compile(r"&amp;(#x?[0-9a-fA-F]+|[a-zA-Z]+);")
+LINK = re.compile(r'(?:href|src)="([^"]*)"')
+
+
+def file_problems(page, max_bytes):
+    """What is wrong with the page as a file: its size, links to files that
+    are not there, text escaped twice."""
+    problems = []
+    size = page.stat().st_size
+    if size > max_bytes:
+        problems.append("the page is %d bytes, more than %d" % (size, max_bytes))
+    text = page.read_text(encoding="utf-8")
+    missing = []
+    for link in LINK.findall(text):
+        if not link or link.startswith(("data:", "#", "http:", "https:", "mailto:")):
+            continue
+        target = page.parent / Path(*unquote(link.split("#")[0]).split("/"))
+        if not target.is_file():
+            missing.append(link)
+    if missing:
+        problems.append("%d link(s) to files that are not beside the page: %s"
+                        % (len(missing), ", ".join(sorted(set(missing))[:10])))
+    twice = sorted(set(m.group(0) for m in TWICE_ESCAPED.finditer(text)))
+    if twice:
+        problems.append("text escaped twice (shown as raw entities): %s" % ", ".join(twice))
+    return problems
+
+
 def check(args):
     page = Path(args.html)
     if not page.is_file():
         raise Fail("%s: no such file" % page)
+    problems = file_problems(page, args.max_bytes)
     chromium = find_chromium(args.chromium)
     url = page.resolve().as_uri()
     dom = run_chromium(chromium, ["--dump-dom", "--virtual-time-budget=10000"], url, args.timeout)
@@ -138,7 +175,6 @@ def check(args):
     scan = DomScan()
     scan.feed(dom)
     scan.close()
-    problems = []
     if scan.errors:
         for text in scan.errors:
             first = " ".join("".join(text).split())
@@ -203,6 +239,8 @@ def main(argv=None):
     ap.add_argument("--screenshot", help="also write a 1400x3000 screenshot PNG here")
     ap.add_argument("--expect-players", action="store_true",
                     help="fail when the page has no motion player")
+    ap.add_argument("--max-bytes", type=int, default=6_000_000,
+                    help="fail when the page is larger (default 6,000,000)")
     ap.add_argument("--timeout", type=float, default=120.0,
                     help="seconds to allow each Chromium run (default 120)")
     args = ap.parse_args(argv)

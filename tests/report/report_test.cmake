@@ -27,7 +27,7 @@ foreach(out IN ITEMS report again)
   run_step("make_report.py (${out})" "${PYTHON}" "${SOURCE_DIR}/report/make_report.py"
            --data "${WORK_DIR}/data" --out "${WORK_DIR}/${out}")
 endforeach()
-file(GLOB outputs RELATIVE "${WORK_DIR}/report" "${WORK_DIR}/report/*")
+file(GLOB_RECURSE outputs RELATIVE "${WORK_DIR}/report" "${WORK_DIR}/report/*")
 foreach(output IN LISTS outputs)
   file(SHA256 "${WORK_DIR}/report/${output}" first)
   file(SHA256 "${WORK_DIR}/again/${output}" second)
@@ -36,4 +36,5 @@ foreach(output IN LISTS outputs)
   endif()
 endforeach()
 run_step("the report in Chromium" "${PYTHON}" "${SOURCE_DIR}/tests/report/check_report.py"
-         --html "${WORK_DIR}/report/index.html" --chromium "${CHROMIUM}" --expect-players)
+         --html "${WORK_DIR}/report/index.html" --chromium "${CHROMIUM}" --expect-players
+         --max-bytes 6000000)

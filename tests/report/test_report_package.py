@@ -28,7 +28,7 @@ from springlab_report.integrators import Integrators  # noqa: E402
 from springlab_report.kinds import KINDS  # noqa: E402
 from springlab_report.kinds.convergence import _coinciding  # noqa: E402
 from springlab_report.kinds.energy import classify  # noqa: E402
-from springlab_report.kinds import spectral  # noqa: E402
+from springlab_report.kinds import motion, spectral  # noqa: E402
 from springlab_report.page import marker_text  # noqa: E402
 
 INTEGRATORS = {"integrators": [
@@ -155,10 +155,12 @@ class EnergySentences(unittest.TestCase):
         t = [0.1 * k for k in range(60)]
         energy_data(self.s, {"symplectic-euler": (t, [1 + 0.1 * math.sin(x) for x in t])})
         render(self.s)
-        first = {p.name: p.read_bytes() for p in (self.s.dir / "out").iterdir()}
-        shutil.rmtree(self.s.dir / "out")
+        out = self.s.dir / "out"
+        first = {str(p.relative_to(out)): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+        self.assertIn("data/energy.csv", first)
+        shutil.rmtree(out)
         render(self.s)
-        second = {p.name: p.read_bytes() for p in (self.s.dir / "out").iterdir()}
+        second = {str(p.relative_to(out)): p.read_bytes() for p in out.rglob("*") if p.is_file()}
         self.assertEqual(first, second)
 
 
@@ -218,8 +220,12 @@ class Motion(unittest.TestCase):
         by_name = {p["name"]: p for p in data["panels"]}
         ie, ee = by_name["implicit-euler"], by_name["explicit-euler"]
         self.assertEqual(ie["t"], [0, 0.1, 0.2])
-        x = np.frombuffer(base64.b64decode(ie["x"]), dtype="<f4").reshape(3, 2, 3)
-        np.testing.assert_array_equal(x[:, 1, 1], [0.0, -0.5, -1.0])
+        x = motion.decode_frames(ie["x"], ie["q"], 2)
+        self.assertEqual(x.shape, (3, 2, 3))
+        np.testing.assert_allclose(x[:, 1, 1], [0.0, -0.5, -1.0], rtol=0, atol=1e-12)
+        # Past the blow-up bound a frame keeps its own grid: x = 1000 comes back.
+        self.assertAlmostEqual(float(motion.decode_frames(ee["x"], ee["q"], 2)[1, 1, 0]), 1000.0,
+                               places=9)
         self.assertEqual(ee["past"], [0, 1])
         # The camera frames the good frames only: the explosion (x = 1000) leaves the picture.
         self.assertEqual(data["bounds"], [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
@@ -534,6 +540,152 @@ class SolverErrorKind(unittest.TestCase):
         self.assertTrue((self.s.dir / "out" / "se-0-small-steps.png").is_file())
 
 
+def rewrite(scratch, name, keep, extra):
+    """The CSV `name` without the lines `keep` rejects, plus the lines `extra`."""
+    lines = [x for x in (scratch.dir / name).read_text().splitlines() if keep(x)]
+    scratch.write(name, "\n".join(lines + extra) + "\n")
+
+
+def linked_files(page):
+    """The relative links of the page (href and src, not data: or #)."""
+    return [h for h in re.findall(r'(?:href|src)="([^"]+)"', page)
+            if not h.startswith(("data:", "#", "http:", "https:"))]
+
+
+class MotionFlags(unittest.TestCase):
+    """The sentences under a player: a completed run that gains more than
+    E_s is flagged, a run's message is shown as written (escaped once)."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def implicit_euler_energies(self, energies):
+        rewrite(self.s, "motion-frames.csv", lambda x: ",implicit-euler," not in x, [
+            "0,pair,implicit-euler,0.1,%r,0,%r" % (t, e)
+            for t, e in zip((0, 0.1, 0.2), energies)])
+
+    def test_a_completed_run_that_gains_more_than_es_is_flagged(self):
+        motion_data(self.s)
+        self.implicit_euler_energies((0.0, 5.0, 3.0))  # E(0) = 0, E_s = 2: up to +2.5 E_s
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        text = html.unescape(page)
+        self.assertIn("implicit-euler ran to t = 0.2 s; energy change at its last good frame 1.5 "
+                      "E_s \u2014 but it completed with an energy gain of up to 2.5 E_s (more than "
+                      "1 E_s)", text)
+        self.assertEqual(page.count('class="player-flag"'), 1)
+        self.assertIn("energy gain up to +2.5 E_s: not a physical motion", text)
+
+    def test_a_gain_below_es_is_not_flagged(self):
+        motion_data(self.s)
+        self.implicit_euler_energies((0.0, 1.8, 1.0))  # up to +0.9 E_s
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        self.assertNotIn("player-flag", page.split("<body>")[1])
+        self.assertNotIn("but it completed with an energy gain", page)
+
+    def test_a_message_is_escaped_once(self):
+        motion_data(self.s)
+        message = "this scene's triangle elements need poisson >= 0 & <corotated>"
+        rewrite(self.s, "motion-runs.csv", lambda x: ",explicit-euler," not in x,
+                ["1,pair,explicit-euler,0.1,failed,0,0,0.001,0,2,%s" % message])
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        self.assertIn("explicit-euler failed at t = 0 s: " + message, html.unescape(page))
+        for twice in ("&amp;#x27;", "&amp;gt;", "&amp;lt;", "&amp;amp;"):
+            self.assertNotIn(twice, page)
+
+
+class MotionBudget(unittest.TestCase):
+    """A case whose positions would exceed the player's budget embeds every
+    k-th frame (k as small as fits), the last good one and the frames past
+    the blow-up bound, and says so."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_long_runs_are_thinned_and_the_caption_says_so(self):
+        n, frames = 300, 220
+        motion_data(self.s)
+        settings = json.loads((self.s.dir / "motion.json").read_text())
+        scene = settings["cases"][0]["scene"]
+        scene["particles"] = [{"x": [float(i), 0.0]} for i in range(n)]
+        settings["cases"][0]["cells"] = []
+        settings["cases"][0]["t_end"] = (frames - 1) * 0.1
+        self.s.json("motion.json", settings)
+        rows, energy = [], []
+        for f in range(frames):
+            t = round(0.1 * f, 10)
+            rows += ["0,pair,implicit-euler,0.1,%r,0,%d,%r,%r,0" % (t, i, float(i), -t)
+                     for i in range(n)]
+            energy.append("0,pair,implicit-euler,0.1,%r,0,%r" % (t, -t))
+        for f, past in ((0, 0), (1, 0), (2, 0), (3, 1)):
+            rows += ["1,pair,explicit-euler,0.1,%r,%d,%d,%r,0,0" % (0.1 * f, past, i,
+                                                                  float(i) * (1 + 1e3 * past))
+                     for i in range(n)]
+        rewrite(self.s, "motion.csv", lambda x: x.startswith("task"), rows)
+        rewrite(self.s, "motion-frames.csv", lambda x: x.startswith("task"), energy)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        data = json.loads(re.search(r'class="player-data">(.*?)</script>', page, re.S).group(1))
+        # 224 frames of 300 particles as int16 in base64: 537,600 characters.
+        chars = (frames + 4) * n * 3 * 2 * 4 / 3
+        k = int(np.ceil(chars / motion.PLAYER_BUDGET_CHARS))
+        self.assertGreater(k, 1)
+        self.assertEqual(data["thinned"], k)
+        ie = {p["name"]: p for p in data["panels"]}["implicit-euler"]
+        ee = {p["name"]: p for p in data["panels"]}["explicit-euler"]
+        good = [round(0.1 * f, 10) for f in range(frames)]
+        expect = sorted(set(good[::k]) | {good[-1]})
+        self.assertEqual([round(t, 10) for t in ie["t"]], expect)
+        self.assertEqual(ee["past"][-1], 1)   # the frame past the bound is kept
+        self.assertLessEqual(sum(len(p["x"]) for p in data["panels"]),
+                             motion.PLAYER_BUDGET_CHARS)
+        self.assertIn("one in %d of those is embedded" % k, page)
+
+
+class PageWeight(unittest.TestCase):
+    """A scene of megabytes in the settings stays out of the page: the page
+    shows it shortened and links the files, copied beside it."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_big_settings_are_linked_not_embedded(self):
+        energy_data(self.s, {"implicit-euler": ([0, 1, 2], [1.0, 0.9, 0.8])})
+        settings = json.loads((self.s.dir / "energy.json").read_text())
+        n = 20000
+        big = {"name": "big", "dimension": 3, "gravity": [0, -9.81, 0],
+               "particles": [{"x": [i * 1e-3, 0.5, 0.25], "mass": 0.01} for i in range(n)],
+               "springs": [{"i": i, "j": i + 1, "k": 1000.0} for i in range(n - 1)]}
+        settings["cases"] = [{"scene": big, "dt": 0.01}]
+        self.s.json("energy.json", settings)
+        settings_bytes = (self.s.dir / "energy.json").stat().st_size
+        self.assertGreater(settings_bytes, 1_000_000)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        self.assertLess(len(page.encode("utf-8")), 200_000)
+        self.assertIn("20000 particles, 19999 springs", page)
+        self.assertIn("\u2026 19997 more", page)
+        links = linked_files(page)
+        for name in ("data/energy.csv", "data/energy-runs.csv", "data/energy.json"):
+            self.assertIn(name, links)
+        out = self.s.dir / "out"
+        for link in links:
+            self.assertTrue((out / link).is_file(), link)
+        self.assertEqual((out / "data" / "energy.json").read_bytes(),
+                         (self.s.dir / "energy.json").read_bytes())
+
+
 class MotionCases(unittest.TestCase):
     """Two cases with the same scene name and step (the cloth with and
     without the ground): each player shows its own case's runs."""
@@ -572,8 +724,8 @@ class MotionCases(unittest.TestCase):
         ys = []
         for data in players:
             ie = {p["name"]: p for p in data["panels"]}["implicit-euler"]
-            x = np.frombuffer(base64.b64decode(ie["x"]), dtype="<f4").reshape(3, 2, 3)
-            ys.append(float(x[2, 1, 1]))
+            x = motion.decode_frames(ie["x"], ie["q"], 2)
+            ys.append(round(float(x[2, 1, 1]), 12))
         self.assertEqual(ys, [-1.0, -2.0])
         ee = {p["name"]: p for p in players[1]["panels"]}["explicit-euler"]
         self.assertEqual((ee["status"], ee["failure"]), ("failed", "no way"))

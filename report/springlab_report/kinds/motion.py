@@ -28,8 +28,57 @@ ABOUT = (
 PLAYER_JS = Path(__file__).resolve().parent.parent / "player.js"
 
 
-def _float32_b64(a):
-    return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode("ascii")
+# Positions are embedded as 16-bit integers, each frame on its own grid
+# from its smallest to its largest coordinate per axis (1/65534 of the
+# frame's extent: far below a pixel; a frame past the blow-up bound keeps
+# its own huge extent). A non-finite coordinate is NO_VALUE.
+NO_VALUE = -32768
+LEVELS = 65534
+# The position data of one player (base64 text) is kept under this many
+# characters: a longer case keeps every k-th output frame (and every frame
+# past the blow-up bound, and the last good one), and its caption says so.
+PLAYER_BUDGET_CHARS = 500_000
+# A run that completes with its energy above E(0) by more than this many
+# E_s at some frame is flagged: springs, gravity and contact do not make
+# energy, so a gain of the whole energy scale is the method's.
+GAIN_FLAG_ES = 1.0
+
+
+def encode_frames(xyz):
+    """(frames, particles, 3) positions as base64 little-endian int16 and,
+    per frame, its grid: [lo_x, lo_y, lo_z, step_x, step_y, step_z]; a
+    position is lo + (value + 32767) step."""
+    out = np.full(xyz.shape, NO_VALUE, dtype="<i2")
+    grids = []
+    for f, frame in enumerate(xyz):
+        ok = np.isfinite(frame)
+        lo = np.array([float(frame[ok[:, a], a].min()) if ok[:, a].any() else 0.0
+                       for a in range(3)])
+        hi = np.array([float(frame[ok[:, a], a].max()) if ok[:, a].any() else 0.0
+                       for a in range(3)])
+        step = np.where(hi > lo, (hi - lo) / LEVELS, 1.0)
+        q = np.rint((np.where(ok, frame, lo) - lo) / step) - 32767
+        out[f] = np.where(ok, q, NO_VALUE).astype("<i2")
+        grids.extend(float(v) for v in np.concatenate([lo, step]))
+    return base64.b64encode(out.tobytes()).decode("ascii"), grids
+
+
+def decode_frames(text, grids, particles):
+    """encode_frames' inverse (for the tests): (frames, particles, 3)."""
+    q = np.frombuffer(base64.b64decode(text), dtype="<i2").reshape(-1, particles, 3)
+    g = np.asarray(grids, dtype=float).reshape(-1, 6)
+    x = g[:, None, :3] + (q.astype(float) + 32767) * g[:, None, 3:]
+    return np.where(q == NO_VALUE, np.nan, x)
+
+
+def thinned(frame_t, frame_past, every):
+    """Indices of the frames kept when only every `every`-th good frame is:
+    those, the last good frame and every frame past the blow-up bound."""
+    good = np.flatnonzero(~frame_past)
+    keep = set(good[::every].tolist()) | set(np.flatnonzero(frame_past).tolist())
+    if len(good):
+        keep.add(int(good[-1]))
+    return np.array(sorted(keep), dtype=int)
 
 
 def case_data(exp, ctx, case_index, case, positions, frames, runs):
@@ -75,9 +124,18 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
             "status": run.get("status", "completed"),
             "stopped_at": run.get("diverged_at"), "failure": run.get("failure") or "",
             "E0": run.get("energy_initial"), "Es": run.get("energy_scale"),
-            "t": [float(v) for v in frame_t], "past": [int(v) for v in frame_past],
-            "energy": [None if not np.isfinite(e) else float(e) for e in energy],
-            "x": _float32_b64(xyz)})
+            "gain": energy_gain(energy[~frame_past], run),
+            "t": frame_t, "past": frame_past, "energy": energy, "x": xyz})
+    # Every k-th frame, k as small as keeps the positions within the budget
+    # (base64: 4 characters per 3 bytes, 2 bytes a coordinate).
+    chars = sum(len(p["t"]) for p in panels) * n * 3 * 2 * 4 / 3
+    every = max(1, int(np.ceil(chars / PLAYER_BUDGET_CHARS)))
+    for p in panels:
+        keep = thinned(p["t"], p["past"], every)
+        p["x"], p["q"] = encode_frames(p["x"][keep])
+        p["t"] = [float(v) for v in p["t"][keep]]
+        p["energy"] = [None if not np.isfinite(e) else float(e) for e in p["energy"][keep]]
+        p["past"] = [int(v) for v in p["past"][keep]]
     pts = np.concatenate(good) if good else np.zeros((1, 3))
     pts = pts[np.all(np.isfinite(pts), axis=1)]
     if len(pts) == 0:
@@ -97,9 +155,26 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
         if len(axes) == 1 and len(point) >= 2:
             planes.append({"axis": axes[0], "at": float(point[axes[0]])})
     return {"id": "player-%s-%d" % (exp.name, case_index), "scene": name, "dt": dt, "planes": planes,
-            "every": case.get("every", 1), "particles": n, "cells": cells, "fixed": fixed,
+            "every": case.get("every", 1), "thinned": every, "particles": n, "cells": cells, "fixed": fixed,
             "up": up, "planar": flat, "bounds": [[float(a) for a in lo], [float(b) for b in hi]],
             "t_end": case.get("t_end"), "panels": panels}
+
+
+def energy_gain(energy, run):
+    """The largest (E - E(0)) / E_s over the good frames, or None."""
+    e0, es = run.get("energy_initial"), run.get("energy_scale")
+    finite = energy[np.isfinite(energy)]
+    if not es or e0 is None or not len(finite):
+        return None
+    return float((finite.max() - e0) / es)
+
+
+def gain_flag(panel):
+    """The warning for a completed run that gained more than GAIN_FLAG_ES, or ""."""
+    gain = panel.get("gain")
+    if panel["status"] != "completed" or gain is None or gain <= GAIN_FLAG_ES:
+        return ""
+    return "energy gain up to +%s E_s: not a physical motion" % fmt(gain, 3)
 
 
 def case_of(task, integrators):
@@ -178,13 +253,20 @@ def case_facts(data):
         es = p["Es"] if p["Es"] else None
         change = "" if not e or not es else " energy change at its last good frame %s E_s" % fmt(
             (e[-1] - e[0]) / es, 2)
+        # Plain text: facts_html escapes it.
         if p["status"] == "diverged":
-            facts.append("%s diverged at t = %s s;%s" % (esc(p["name"]), fmt(p["stopped_at"]), change))
+            facts.append("%s diverged at t = %s s;%s" % (p["name"], fmt(p["stopped_at"]), change))
         elif p["status"] == "failed":
-            facts.append("%s failed at t = %s s: %s" % (esc(p["name"]), fmt(p["stopped_at"]),
-                                                        esc(p["failure"])))
+            facts.append("%s failed at t = %s s: %s" % (p["name"], fmt(p["stopped_at"]),
+                                                        p["failure"]))
         else:
-            facts.append("%s ran to t = %s s;%s" % (esc(p["name"]), fmt(p["t"][-1]), change))
+            flag = gain_flag(p)
+            facts.append("%s ran to t = %s s;%s%s" % (
+                p["name"], fmt(p["t"][-1]), change,
+                "" if not flag else " \u2014 but it completed with an energy gain of up to %s "
+                "E_s (more than %s E_s): springs, gravity and contact make no energy, so this "
+                "motion is the method's, not the scene's" % (fmt(p["gain"], 3),
+                                                               fmt(GAIN_FLAG_ES))))
     return facts
 
 
@@ -193,17 +275,24 @@ def player_html(data):
         '<div class="player-panel"><canvas class="player-view" width="300" height="250"></canvas>'
         '<canvas class="player-energy" width="300" height="46"></canvas>'
         '<div class="player-label"><span class="sw" style="background:%s"></span>%s '
-        '<span class="player-value"></span></div></div>' % (esc(p["colour"]), esc(p["name"]))
+        '<span class="player-value"></span>%s</div></div>' % (
+            esc(p["colour"]), esc(p["name"]),
+            '<br><span class="player-flag">%s</span>' % esc(gain_flag(p)) if gain_flag(p) else "")
         for p in data["panels"])
+    shown = data["every"] * data["thinned"]
+    thinned = ("" if data["thinned"] == 1 else
+               " (the run wrote a frame every %s; one in %d of those is embedded to keep the "
+               "page light, plus the last good one and those past the blow-up bound)"
+               % (esc(str(data["every"])), data["thinned"]))
     return ('<figure class="player" id="%s" data-frames-drawn="0">\n'
             '<div class="player-controls"><button type="button" class="player-play">Pause</button> '
             '<input type="range" class="player-slider" min="0" max="1000" value="0"> '
             '<span class="player-time">t = 0 s</span></div>\n'
             '<div class="player-panels">%s</div>\n'
-            '<figcaption>%s, dt = %s s: every %s step%s shown, %s panels on one clock and one '
+            '<figcaption>%s, dt = %s s: every %s step%s shown%s, %s panels on one clock and one '
             'camera. Under each panel, (E - E(0)) / E_s over time; the dot is now.</figcaption>\n'
             '<script type="application/json" class="player-data">%s</script>\n</figure>\n'
             % (esc(data["id"]), panels, esc(str(data["scene"])), fmt(data["dt"], 4),
-               esc(str(data["every"])), "" if data["every"] == 1 else "s",
+               esc(str(shown)), "" if shown == 1 else "s", thinned,
                len(data["panels"]),
                json.dumps(data, separators=(",", ":")).replace("</", "<\\/")))
