@@ -18,6 +18,10 @@ FAMILY_TITLES = {"explicit": "explicit", "symplectic": "symplectic", "implicit":
 _FALLBACK_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
                      "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#000000", "#393b79"]
 _FALLBACK_MARKERS = ["o", "s", "^", "D", "v", "P", "X", "<", ">", "h", "p", "*"]
+# Colours for a second variant of one integrator in a figure (dark, so they
+# read apart from the integrators' own colours).
+_VARIANT_COLOURS = ["#000000", "#8c564b", "#1f77b4", "#ff7f0e", "#2ca02c", "#17becf",
+                    "#393b79", "#7f7f7f"]
 
 
 class Integrators:
@@ -90,6 +94,30 @@ class Integrators:
         kw = dict(color=self.colour(name), marker=self.marker(name), ls=self.linestyle(name))
         kw.update(extra)
         return kw
+
+    def variant_styles(self, runs):
+        """Styles for runs (integrator, variant) drawn side by side: each
+        integrator's first run in its own colour and marker, a further
+        variant of the same integrator in a colour and marker no other run
+        of the figure uses, so that no two runs look alike."""
+        used_colours = {self.colour(n) for n, _ in runs}
+        used_markers = {self.marker(n) for n, _ in runs}
+        spare_colours = [c for c in _VARIANT_COLOURS if c not in used_colours]
+        spare_markers = [m for m in _FALLBACK_MARKERS if m not in used_markers]
+        seen, out, extra = set(), {}, 0
+        for name, variant in runs:
+            if name not in seen:
+                seen.add(name)
+                out[(name, variant)] = self.style(name)
+                continue
+            out[(name, variant)] = self.style(
+                name,
+                color=spare_colours[extra % len(spare_colours)] if spare_colours
+                else self.colour(name),
+                marker=spare_markers[extra % len(spare_markers)] if spare_markers
+                else self.marker(name))
+            extra += 1
+        return out
 
     def sort(self, names):
         """By family (explicit, symplectic, implicit, adaptive), then by name."""

@@ -99,3 +99,48 @@ class FamilyGrid:
         else:
             ax.text(0.5, 0.5, "no %s method in this run" % family, transform=ax.transAxes,
                     ha="center", va="center", color="0.5")
+
+
+def case_parameters(exp, k):
+    """The built-in scene parameters case k of the definition asked for
+    ({"n": 64}), or {}: the settings file holds the definition as given."""
+    d = exp.setting("definition")
+    cases = d.get("cases") if isinstance(d, dict) else None
+    if not isinstance(cases, list) or not 0 <= k < len(cases) or not isinstance(cases[k], dict):
+        return {}
+    p = cases[k].get("parameters")
+    return p if isinstance(p, dict) else {}
+
+
+def case_particles(exp, k):
+    """The number of particles of case k's scene in the settings, or None."""
+    cases = exp.setting("cases")
+    try:
+        return len(cases[k]["scene"]["particles"])
+    except (KeyError, IndexError, TypeError):
+        return None
+
+
+def scene_title(exp, k, scene):
+    """A scene's name with what sets its size: "cloth (n = 64, 4096 particles)"."""
+    parts = ["%s = %s" % (key, fmt(v) if isinstance(v, (int, float)) else v)
+             for key, v in case_parameters(exp, k).items()]
+    particles = case_particles(exp, k)
+    if particles is not None:
+        parts.append("%d particles" % particles)
+    return "%s (%s)" % (scene, ", ".join(parts)) if parts else scene
+
+
+def case_index(exp, scene, dt):
+    """The index of the first case of the settings with this scene name and
+    step (dt as text from a table), or None."""
+    cases = exp.setting("cases")
+    if not isinstance(cases, list):
+        return None
+    for k, c in enumerate(cases):
+        try:
+            if c["scene"]["name"] == scene and (dt is None or float(c["dt"]) == float(dt)):
+                return k
+        except (KeyError, TypeError, ValueError):
+            continue
+    return None

@@ -29,6 +29,8 @@ REGIME_TEXT = {
     "stop": ("stopping distance", "stops on level ground"),
     "bounce": ("deepest penetration", "bounces on a penalty floor"),
 }
+# The unit of each regime's measured quantity (docs/physics.md "Contact with planes").
+REGIME_UNIT = {"stick": "m/s", "slide": "m/s²", "stop": "m", "bounce": "m"}
 CEILING = 10.0  # errors drawn up to 1000 %; above, and failed runs, at the top
 FLOOR = 1e-8    # and from 1e-8 (round-off of the measurement) up
 
@@ -112,7 +114,9 @@ def error_figure(exp, ctx, db, groups, refused):
         ax.axhline(0.01, color="0.5", lw=0.8, ls=":")
         ax.set_xlabel("step dt [s] (adaptive methods: output interval)")
         ax.set_ylabel("|measured / theory − 1|")
-        ax.set_title("%s — %s (theory %s)" % (title, quantity, fmt(theory, 4)), loc="left",
+        unit = REGIME_UNIT.get(regime)
+        ax.set_title("%s\n%s: theory %s%s" % (title, quantity, fmt(theory, 4),
+                                              " " + unit if unit else ""), loc="left",
                      fontweight="bold", fontsize=10)
         ax.grid(True, which="major", alpha=0.3)
         sentence = within_sentence(title, quantity, within, dts)

@@ -8,7 +8,8 @@ the rows."""
 import numpy as np
 
 from ..data import Columns
-from ..figures import esc, facts_html, figure_html, fmt, legend_outside, new_figure
+from ..figures import esc, facts_html, figure_html, fmt, label_points, legend_outside, new_figure
+from .common import scene_title
 
 KIND = "solver-error"
 TITLE = "Solving the step: solver error against discretization error"
@@ -111,8 +112,8 @@ def small_steps_figure(exp, ctx, db, rows, runs, case, integ):
         ax.set_xscale("log")
         ax.set_xlabel("substeps S (iterations N = cost / S)")
         ax.set_ylabel(ylabel)
-        ax.set_title("%s — %s" % (db["scene"][rows[0]], title), loc="left", fontweight="bold",
-                     fontsize=10)
+        ax.set_title("%s — %s" % (scene_title(exp, case, db["scene"][rows[0]]), title),
+                     loc="left", fontweight="bold", fontsize=10)
         ax.grid(True, which="major", alpha=0.3)
     if any(line.get_ydata().size and np.any(np.asarray(line.get_ydata(), float) > 0)
            for line in axes[2].get_lines()):
@@ -159,10 +160,43 @@ def family(e):
     return e["name"]
 
 
+# Labels per panel: the variants on the lower-left front first, then each
+# method's cheapest and dearest; any that would overlap are left out (the
+# sentences under the figure list every variant).
+LABELS = 12
+
+
+def short_variant(variant):
+    text = variant.replace("newton-tol ", "tol ").replace("iterations ", "N=").replace(
+        "substeps ", "S=")
+    if text.endswith("; quasi-newton"):
+        text = "QN " + text[:-len("; quasi-newton")]
+    return text
+
+
+def label_order(points):
+    """(x, y, text, colour) of the points worth a label, most telling first:
+    the front (no other point both cheaper and closer), cheapest first; then
+    each method's two ends."""
+    front, best = [], float("inf")
+    for x, y, text, colour, _ in sorted(points, key=lambda p: (p[0], p[1])):
+        if y < best:
+            front.append((x, y, text, colour))
+            best = y
+    ends = []
+    for fam in dict.fromkeys(p[4] for p in points):
+        mine = sorted((p for p in points if p[4] == fam), key=lambda p: p[0])
+        for p in (mine[0], mine[-1]):
+            if p[:4] not in front and p[:4] not in ends:
+                ends.append(p[:4])
+    return front + ends
+
+
 def case_figure(exp, ctx, db, rows, case, integ):
     disc = float(np.median([db["discretization_error"][r] for r in rows
                             if np.isfinite(db["discretization_error"][r])]))
     scene = db["scene"][rows[0]]
+    titled = scene_title(exp, case, scene)
     entries = summaries(db, rows)
     fig = new_figure(13.5, 5.0)
     axes = fig.subplots(1, 2)
@@ -170,8 +204,10 @@ def case_figure(exp, ctx, db, rows, case, integ):
     for e in entries:
         if e["completed"]:
             families.setdefault(family(e), []).append(e)
+    labelled = []
     for ax, col, title in ((axes[0], "solver_error", "distance to the implicit Euler step"),
                            (axes[1], "total_error", "distance to the true motion")):
+        points = []
         for fam, members in families.items():
             members = sorted(members, key=lambda e: e["wall_seconds"])
             name = members[0]["name"]
@@ -182,16 +218,8 @@ def case_figure(exp, ctx, db, rows, case, integ):
             ys = [max(e[col], FLOOR) for e in members]
             ax.plot(xs, ys, ms=7, mfc="none", mew=1.4, lw=1.1, label=fam, **style)
             for e, x, y in zip(members, xs, ys):
-                # Points crowding the dashed line are left unlabelled. Labels
-                # take their method's colour; quasi-Newton's say "QN", as its
-                # points share Newton's colour and meet them.
-                if e["variant"] and abs(np.log10(y / disc)) > 0.25:
-                    text = e["variant"].replace("newton-tol ", "tol ").replace(
-                        "iterations ", "N=").replace("substeps ", "S=")
-                    if text.endswith("; quasi-newton"):
-                        text = "QN " + text[:-len("; quasi-newton")]
-                    ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 3),
-                                fontsize=6.5, color=style["color"])
+                if e["variant"]:
+                    points.append((x, y, short_variant(e["variant"]), style["color"], fam))
         ax.axhline(disc, color="0.35", lw=1.2, ls="--")
         ax.text(0.99, disc, "implicit Euler's discretization error per step ", va="top",
                 ha="right", fontsize=7.5, color="0.3", transform=ax.get_yaxis_transform())
@@ -199,9 +227,13 @@ def case_figure(exp, ctx, db, rows, case, integ):
         ax.set_yscale("log")
         ax.set_xlabel("wall time per step [ms] (median)")
         ax.set_ylabel("max position error after one step [m] (median)")
-        ax.set_title("%s — %s" % (scene, title), loc="left", fontweight="bold", fontsize=10)
+        ax.set_title("%s — %s" % (titled, title), loc="left", fontweight="bold", fontsize=10)
         ax.grid(True, which="major", alpha=0.3)
+        labelled.append((ax, points))
     legend_outside(axes[1])
+    for ax, points in labelled:
+        label_points(ax, label_order(points), fontsize=6.5, most=LABELS,
+                     avoid=[(p[0], p[1]) for p in points])
     saved = ctx.figs.save(fig, "%s-%d.png" % (exp.name, case))
 
     facts = []
@@ -244,7 +276,8 @@ def case_figure(exp, ctx, db, rows, case, integ):
                "Euler run (every sampled step); its end is compared with that run's next state "
                "(left: the solver error) and with the true motion over the step (right: RK4 at "
                "0.1 / w_max). Markers are the variants of one method (its tolerance, iterations "
-               "N, substeps S), joined by cost; dotted: implicit Euler solved by quasi-Newton, and "
+               "N, substeps S), joined by cost; the labelled ones are the cheapest for their "
+               "error and each method's ends (the sentences below list all); dotted: implicit Euler solved by quasi-Newton, and "
                "projective dynamics with Chebyshev acceleration. "
                "The dashed line is implicit Euler's own error against the true motion. Times are "
                "wall times of one step, the integrator set up outside it.")

@@ -39,11 +39,25 @@ def render(exp, ctx):
                      texts=("integrator",)) if region_t is not None else None
     names = integ.sort(set(runs["integrator"]))
     factors = sorted(set(float(f) for f in runs["factor"]))
-    ncol = min(4, len(names))
+    ncol = columns(len(names))
     blocks = (len(names) + ncol - 1) // ncol
     import matplotlib.pyplot as plt
-    fig = plt.figure(figsize=(3.3 * ncol, 3.25 * blocks * len(factors) + 0.5), layout="constrained")
-    axes = fig.subplots(blocks * len(factors), ncol, squeeze=False)
+    # Slots about as tall as the windows (Im z spans more than Re z): the
+    # equal-axes panels fill them.
+    fig = plt.figure(figsize=(1.95 * ncol + 0.6, 3.0 * blocks * len(factors) + 0.7),
+                     layout="constrained")
+    # One row of panels per (block of methods, step factor), each a
+    # subfigure labelled on its left by its step: h = 0.9 h*, 1.1 h*.
+    # (The last, short subfigure holds the legend.)
+    nrows = blocks * len(factors)
+    rows = fig.subfigures(nrows + 1, 1, squeeze=False,
+                          height_ratios=[1.0] * nrows + [0.1])[:, 0]
+    axes = []
+    for block in range(blocks):
+        for k, factor in enumerate(factors):
+            sub = rows[block * len(factors) + k]
+            sub.supylabel("h = %s h*" % fmt(factor), fontweight="bold", fontsize=11)
+            axes.append(sub.subplots(1, ncol, squeeze=False)[0])
     facts = []
     for j, name in enumerate(names):
         block, col = divmod(j, ncol)
@@ -54,34 +68,44 @@ def render(exp, ctx):
         for r in mine:
             per_factor[float(runs["factor"][r])] = r
         for k, factor in enumerate(factors):
-            ax = axes[block * len(factors) + k, col]
+            ax = axes[block * len(factors) + k][col]
             r = per_factor.get(factor)
             if r is None:
                 ax.set_visible(False)
                 continue
             _panel(ax, integ, name, grid, window, modes, runs, r, factor)
+            if col == 0:
+                ax.set_ylabel("Im z", fontsize=8, labelpad=1)
         facts.append(_fact(name, runs, mine))
     for j in range(len(names), blocks * ncol):
         block, col = divmod(j, ncol)
         for k in range(len(factors)):
-            axes[block * len(factors) + k, col].set_visible(False)
+            axes[block * len(factors) + k][col].set_visible(False)
     handles = [Line2D([], [], color="0.3", lw=1.5), Line2D([], [], marker="o", color="0.2",
                                                              ls="none", ms=5),
                Line2D([], [], marker="x", color=OUTSIDE, ls="none", ms=8, mew=2)]
     labels = ["|R(z)| = 1 (inside shaded)", "z = h λ inside the region", "outside: |R(z)| > 1"]
-    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3,
-               frameon=False, fontsize=9)
+    rows[-1].legend(handles, labels, loc="center", ncol=3, frameon=False, fontsize=9)
     saved = ctx.figs.save(fig, exp.name + ".png")
     scene = runs["scene"][0] if len(runs) else "?"
     caption = ("Stability region |R(z)| <= 1 of each method (shaded; the boundary in its colour) "
                "and the eigenvalues λ of the scene '%s' scaled by the step, z = h λ, at %s times "
-               "the method's limit h* (one row each). A mode outside the region grows by |R(z)| "
+               "the method's limit h* (one row each, labelled on its left; a method without a "
+               "limit is shown at the step its title gives). A mode outside the region grows by |R(z)| "
                "> 1 every step: red crosses. The title says what the run at that step did. "
-               "Partitioned methods have no region here: their limit comes from bisection on "
-               "runs, and the thick segment is their stable range for undamped modes."
+               "Methods whose step the data gives no region for in this plane show the "
+               "eigenvalues only; for the partitioned ones (their limit comes from bisection on "
+               "runs) the thick segment on the imaginary axis is their stable range for undamped "
+               "modes."
                % (scene, " and ".join(fmt(f) for f in factors)))
     return figure_html(saved, "stability regions with the scene's eigenvalues", esc(caption)) + \
         facts_html(facts)
+
+
+def columns(n):
+    """Panels per row: 4 to 6, the one that leaves the fewest empty places
+    in the last row (5 on a tie)."""
+    return min((5, 4, 6), key=lambda c: (-n % c, abs(c - 5)))
 
 
 def _grid(region, name):
@@ -123,8 +147,6 @@ def _panel(ax, integ, name, grid, window, modes, runs, r, factor):
         limit = integ.stability(name).get("limit_wh")
         if isinstance(limit, (int, float)) and limit > 0:
             ax.plot([0, 0], [-limit, limit], color=colour, lw=5, alpha=0.5, solid_capstyle="butt")
-        ax.text(0.03, 0.03, "no region in the z-plane\n(partitioned method)",
-                transform=ax.transAxes, fontsize=7, color="0.35", va="bottom")
     ax.axhline(0, color="0.6", lw=0.6, zorder=0)
     ax.axvline(0, color="0.6", lw=0.6, zorder=0)
     outside = 0
@@ -143,19 +165,19 @@ def _panel(ax, integ, name, grid, window, modes, runs, r, factor):
     ax.set_aspect("equal", adjustable="box")
     ax.tick_params(labelsize=7)
     ax.set_xlabel("Re z", fontsize=8, labelpad=1)
-    ax.set_ylabel("Im z", fontsize=8, labelpad=1)
     dt = runs["dt"][r]
     if runs["diverged"][r] == 1:
         at = runs["diverged_at"][r]
-        outcome = "run diverged (t = %s s)" % fmt(at, 3)
+        outcome = "run diverged at %s s" % fmt(at, 3)
     else:
         outcome = "run stable"
-    where = ("%d of %d modes outside" % (outside, total)) if grid is not None else ""
+    where = ("%d of %d modes outside" % (outside, total)) if grid is not None \
+        else "no region in the z-plane"
     limit_from = runs["limit_from"][r]
-    step = ("h = %s h* = %s s" % (fmt(factor), fmt(dt, 3)) if limit_from in ("R", "runs")
+    step = ("h = %s s" % fmt(dt, 3) if limit_from in ("R", "runs")
             else "h = %s s (%s)" % (fmt(dt, 3), "no limit" if limit_from == "none" else limit_from))
-    ax.set_title("%s\n%s\n%s%s" % (name, step, where + "; " if where else "", outcome),
-                 fontsize=8.5, loc="left", color="black")
+    ax.set_title("\n".join([name, step, where, outcome]),
+                 fontsize=8, loc="left", color="black")
     ax.title.set_color(colour if runs["diverged"][r] != 1 else OUTSIDE)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..data import Columns
 from ..figures import esc, facts_html, figure_html, fmt, legend_outside, new_figure
+from .common import case_index, scene_title
 
 KIND = "step-energy"
 TITLE = "Energy per step and compressed springs"
@@ -41,11 +42,12 @@ def render(exp, ctx):
         for r in cidx:
             by_run.setdefault((steps["task"][r], steps["integrator"][r], steps["stiffness"][r]),
                               []).append(r)
+        styles = integ.variant_styles([(name, stiffness) for _, name, stiffness in by_run])
         for k, ((task, name, stiffness), idx) in enumerate(by_run.items()):
             idx = np.asarray(idx)
-            style = integ.style(name)
-            # The integrator's colour and marker; its definite variant
-            # dotted with filled markers, so the two read apart.
+            # Every run its own colour and marker (integrators.variant_styles);
+            # the definite variant also dotted with filled markers.
+            style = styles[(name, stiffness)]
             fill = "none"
             if stiffness == "definite":
                 style = dict(style, ls=":")
@@ -62,7 +64,9 @@ def render(exp, ctx):
         axes[row, 0].set_xlabel("t [s]")
         axes[row, 0].set_ylabel("total energy [J]")
         axes[row, 0].set_yscale("symlog", linthresh=1.0)
-        axes[row, 0].set_title("%s, dt = %s s" % (scene, fmt(float(dt), 6)), loc="left",
+        k = case_index(exp, scene, dt)
+        axes[row, 0].set_title("%s, dt = %s s" % (scene if k is None else scene_title(exp, k, scene),
+                                                 fmt(float(dt), 6)), loc="left",
                                fontweight="bold")
         axes[row, 1].set_xlabel("compressed springs at the end of the step")
         axes[row, 1].set_ylabel("energy change of the step [J]")
