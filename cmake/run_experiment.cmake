@@ -1,0 +1,90 @@
+# Runs one experiment definition for the report, unless its results in OUT
+# are current: the report after `cmake --workflow --preset bench` (or after
+# drawing changes in report/) then takes seconds, not minutes.
+#   cmake -DSPRINGLAB=path/to/springlab -DDEFINITION=experiments/x.json -DOUT=report-data
+#         -P run_experiment.cmake
+# Results are current when OUT/<name>.stamp, written after the run succeeded,
+# holds the SHA-256 of the definition, of every scene file it names and of
+# the springlab executable, exactly as they are now, and the settings file
+# OUT/<name>.json and every table it lists are there. Anything else reruns
+# the experiment (delete the stamp to force it). The stamp holds hashes only,
+# no time: the same inputs give the same stamp.
+foreach(var IN ITEMS SPRINGLAB DEFINITION OUT)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "run_experiment.cmake: -D${var}=... is required")
+  endif()
+endforeach()
+
+file(READ "${DEFINITION}" text)
+# The output files are named by the definition's "name" (default: its kind).
+string(JSON name ERROR_VARIABLE no_name GET "${text}" name)
+if(no_name)
+  string(JSON name ERROR_VARIABLE no_kind GET "${text}" experiment)
+  if(no_kind)
+    # Malformed: springlab says what is wrong, with the file and line.
+    set(name "")
+  endif()
+endif()
+
+# What the results depend on.
+file(SHA256 "${DEFINITION}" hash)
+set(stamp_text "definition ${hash}\n")
+get_filename_component(definition_dir "${DEFINITION}" DIRECTORY)
+string(REGEX MATCHALL "\"[^\"]+\\.json\"" named "${text}")
+list(REMOVE_DUPLICATES named)
+foreach(quoted IN LISTS named)
+  string(REGEX REPLACE "^\"(.*)\"$" "\\1" scene "${quoted}")
+  if(EXISTS "${definition_dir}/${scene}" AND NOT IS_DIRECTORY "${definition_dir}/${scene}")
+    file(SHA256 "${definition_dir}/${scene}" hash)
+    string(APPEND stamp_text "scene ${scene} ${hash}\n")
+  endif()
+endforeach()
+file(SHA256 "${SPRINGLAB}" hash)
+string(APPEND stamp_text "springlab ${hash}\n")
+
+set(stamp "${OUT}/${name}.stamp")
+set(current FALSE)
+if(NOT name STREQUAL "" AND EXISTS "${stamp}" AND EXISTS "${OUT}/${name}.json")
+  file(READ "${stamp}" old)
+  if(old STREQUAL stamp_text)
+    set(current TRUE)
+    file(READ "${OUT}/${name}.json" settings)
+    string(JSON complete ERROR_VARIABLE err GET "${settings}" complete)
+    if(err OR NOT complete)
+      set(current FALSE)
+    endif()
+    string(JSON tables ERROR_VARIABLE err LENGTH "${settings}" tables)
+    if(err)
+      set(current FALSE)
+      set(tables 0)
+    endif()
+    if(tables GREATER 0)
+      math(EXPR last "${tables} - 1")
+      foreach(k RANGE ${last})
+        string(JSON table ERROR_VARIABLE err GET "${settings}" tables ${k} file)
+        if(err OR NOT EXISTS "${OUT}/${table}")
+          set(current FALSE)
+        endif()
+      endforeach()
+    endif()
+  endif()
+endif()
+
+if(current)
+  message("[${name}] reused: the definition, its scene files and springlab are unchanged "
+          "(delete ${stamp} to run it again)")
+  return()
+endif()
+
+if(NOT name STREQUAL "")
+  file(REMOVE "${stamp}")
+endif()
+execute_process(COMMAND "${SPRINGLAB}" experiment "${DEFINITION}" --out "${OUT}"
+                RESULT_VARIABLE status)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "springlab experiment ${DEFINITION} failed (exit status ${status})")
+endif()
+if(NOT name STREQUAL "")
+  file(WRITE "${stamp}.tmp" "${stamp_text}")
+  file(RENAME "${stamp}.tmp" "${stamp}")
+endif()
