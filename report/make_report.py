@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Render the springlab course experiments as one self-contained HTML page.
+"""Render the springlab course experiments as one HTML page.
 
     python3 report/make_report.py --data DIR --out OUTDIR [--bench FILE.json]
 
@@ -9,8 +9,10 @@ columns, the tables themselves, integrators.json (`springlab list --json`:
 every integrator's family, stability, colour and marker), and optionally
 springlab_bench's Google Benchmark JSON (--bench FILE.json, or else
 benchmarks.json in DIR). Writes one PNG per figure into OUTDIR and
-OUTDIR/index.html with every figure embedded, so the page alone is
-self-contained.
+OUTDIR/index.html with every figure embedded; the experiments' full tables
+and settings files are copied into OUTDIR/data/ and linked from the page,
+which shows summaries (docs/experiments-and-report.md "The report page and
+its data").
 
 The code is the package report/springlab_report/: data.py reads, one module
 per experiment kind in kinds/ draws (kinds/__init__.py is the registry),

@@ -36,7 +36,7 @@ def collect_names(experiments, integrators):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(prog=PROG, description="Render the springlab course experiments "
-                                 "as one self-contained HTML page.")
+                                 "as one HTML page.")
     ap.add_argument("--data", required=True, help="directory with the experiment CSV/JSON files "
                     "and integrators.json")
     ap.add_argument("--out", required=True, help="output directory (index.html and PNGs)")
