@@ -7,7 +7,6 @@ with report/ on PYTHONPATH. Each test builds a small data directory by hand,
 with known answers, and reads back the figures' labels or the page's
 sentences."""
 
-import base64
 import html
 import json
 import math
@@ -914,6 +913,58 @@ class Styles(unittest.TestCase):
                              ["explicit-euler", "symplectic-euler", "implicit-euler"])
         finally:
             s.close()
+
+
+class VariantStyles(unittest.TestCase):
+    """Runs of one integrator side by side (step-energy's two linear-implicit
+    variants) never share a colour or a marker."""
+
+    def test_every_run_looks_different(self):
+        s = Scratch()
+        try:
+            s.json("integrators.json", INTEGRATORS)
+            integ = Integrators.load(s.dir / "integrators.json")
+            runs = [("implicit-euler", "exact"), ("implicit-euler", "definite"),
+                    ("implicit-euler", "third"), ("explicit-euler", "")]
+            styles = integ.variant_styles(runs)
+            self.assertEqual(styles[runs[0]]["color"], "#9467bd")  # the first keeps its own
+            self.assertEqual(len({st["color"] for st in styles.values()}), len(runs))
+            self.assertEqual(len({st["marker"] for st in styles.values()}), len(runs))
+        finally:
+            s.close()
+
+
+class Labels(unittest.TestCase):
+    """label_points on a crowded cluster: the labels it draws overlap neither
+    each other nor the markers, stay inside the axes, and some are left out."""
+
+    def test_crowded_labels_do_not_overlap(self):
+        import matplotlib.pyplot as plt
+        from springlab_report.figures import label_points
+        rng = np.random.default_rng(3)
+        x = 10 ** rng.uniform(1, 1.3, 40)
+        y = 10 ** rng.uniform(-3, -2.7, 40)
+        fig, ax = plt.subplots(figsize=(5, 4))
+        ax.plot(x, y, "o")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        drawn = label_points(ax, [(a, b, "S=%d; N=%d" % (k, 40 - k), "k")
+                                  for k, (a, b) in enumerate(zip(x, y))],
+                             avoid=list(zip(x, y)))
+        fig.draw_without_rendering()
+        renderer = fig.canvas.get_renderer()
+        boxes = [t.get_window_extent(renderer) for t in ax.texts]
+        self.assertEqual(len(boxes), drawn)
+        self.assertGreater(drawn, 0)
+        self.assertLess(drawn, 40)
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                self.assertFalse(boxes[i].overlaps(boxes[j]), (i, j))
+        frame = ax.get_window_extent(renderer)
+        for b in boxes:
+            self.assertTrue(frame.x0 <= b.x0 and b.x1 <= frame.x1 and frame.y0 <= b.y0
+                            and b.y1 <= frame.y1)
+        plt.close(fig)
 
 
 class Convergence(unittest.TestCase):
