@@ -19,7 +19,7 @@ import numpy as np
 
 from .data import DataError, finite, read_json
 
-from .figures import (count, esc, facts_html, figure_html, fmt, legend_outside, log_log, new_figure,
+from .figures import (count, esc, facts_html, figure_html, fmt, log_log, new_figure,
                       note_html, swatch)
 
 BENCH_FILE = "benchmarks.json"
@@ -428,25 +428,49 @@ def _per_sim_second(e):
     return e["cpu_time"] / dt if finite(dt) and dt > 0 else math.nan
 
 
+# The cost figure is drawn for a slide: two panels a row, large type, thick
+# lines, one legend for every panel.
+COST_RC = {"font.size": 13, "axes.titlesize": 15, "axes.labelsize": 13, "xtick.labelsize": 12,
+           "ytick.labelsize": 12, "legend.fontsize": 11}
+
+
 def _cost_figure(entries, integrators, figs):
     """Per scene: cost against size (log-log) when it was measured at several
     sizes, else one bar per method (log scale)."""
+    import matplotlib.pyplot as plt
     scenes = sorted(set(e["scene"] for e in entries))
     sized = [sc for sc in scenes if len(set(e["size"] for e in entries if e["scene"] == sc)) > 1]
-    fig = new_figure(6.4 * len(scenes) + 2.6, 5.4)
-    axes = fig.subplots(1, len(scenes), squeeze=False)[0]
+    ordered = sized + [sc for sc in scenes if sc not in sized]
+    cols = min(2, len(ordered))
+    rows = (len(ordered) + cols - 1) // cols
     facts = []
-    for ax, scene in zip(axes, sized + [sc for sc in scenes if sc not in sized]):
-        mine = [e for e in entries if e["scene"] == scene]
-        if scene in sized:
-            _cost_lines(ax, mine, integrators)
-        else:
-            _cost_bars(ax, mine, integrators)
-        ax.set_title("%s%s" % (scene, "" if scene in sized else ", %d free particles"
-                               % int(mine[0]["size"])), loc="left", fontweight="bold")
-        facts.extend(_cost_facts(scene, mine))
-    legend_outside(axes[0] if sized else axes[-1])
-    return figs.save(fig, "bench-cost.png"), facts
+    with plt.rc_context(COST_RC):
+        fig = new_figure(7.0 * cols + 3.2, 5.6 * rows)
+        axes = fig.subplots(rows, cols, squeeze=False)
+        for j, scene in enumerate(ordered):
+            ax = axes[j // cols, j % cols]
+            mine = [e for e in entries if e["scene"] == scene]
+            if scene in sized:
+                _cost_lines(ax, mine, integrators)
+            else:
+                _cost_bars(ax, mine, integrators)
+            ax.set_title("%s%s" % (scene, "" if scene in sized else ", %d free particles"
+                                   % int(mine[0]["size"])), loc="left", fontweight="bold")
+            facts.extend(_cost_facts(scene, mine))
+        for j in range(len(ordered), rows * cols):
+            axes[j // cols, j % cols].set_visible(False)
+        # One legend for all panels, in the integrators' order.
+        handles = {}
+        for ax in axes.flat:
+            for h, label in zip(*ax.get_legend_handles_labels()):
+                handles.setdefault(label, h)
+        names = integrators.sort(handles)
+        if names:
+            axes[0, cols - 1].legend([handles[n] for n in names], names, loc="upper left",
+                                     bbox_to_anchor=(1.02, 1.0), frameon=False, borderaxespad=0.0,
+                                     handlelength=2.6)
+        saved = figs.save(fig, "bench-cost.png")
+    return saved, facts
 
 
 def _cost_lines(ax, mine, integrators):
@@ -455,12 +479,12 @@ def _cost_lines(ax, mine, integrators):
         n = np.array([p[0] for p in pts], dtype=float)
         c = np.array([p[1] for p in pts])
         ok = (n > 0) & np.isfinite(c) & (c > 0)
-        ax.plot(n[ok], c[ok], ms=7, mfc="none", mew=1.4, lw=1.6, label=name,
+        ax.plot(n[ok], c[ok], ms=9, mfc="none", mew=1.8, lw=2.2, label=name,
                 **integrators.style(name))
     if log_log(ax):
-        ax.axhline(1.0, color="0.5", lw=1.2, zorder=1)
+        ax.axhline(1.0, color="0.5", lw=1.6, zorder=1)
         ax.text(0.99, 1.0, "real time ", transform=ax.get_yaxis_transform(), va="bottom",
-                ha="right", color="0.35", fontsize=8)
+                ha="right", color="0.35", fontsize=12)
         sizes = sorted(set(e["size"] for e in mine if e["size"] > 0))
         if 0 < len(sizes) <= 12:
             from matplotlib.ticker import NullFormatter, ScalarFormatter
@@ -468,7 +492,7 @@ def _cost_lines(ax, mine, integrators):
             ax.xaxis.set_major_formatter(ScalarFormatter())
             ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("free particles")
-    ax.set_ylabel("CPU seconds per simulated second")
+    ax.set_ylabel("CPU s per simulated s")
     ax.grid(True, which="major", alpha=0.3)
     ax.grid(True, which="minor", alpha=0.1)
 
@@ -479,12 +503,12 @@ def _cost_bars(ax, mine, integrators):
     ys = np.arange(len(costs))
     ax.barh(ys, [c for c, _ in costs], color=[integrators.colour(n) for _, n in costs],
             hatch=None, alpha=0.85)
-    ax.set_yticks(ys, [n for _, n in costs], fontsize=8)
+    ax.set_yticks(ys, [n for _, n in costs], fontsize=11)
     ax.set_xscale("log")
-    ax.axvline(1.0, color="0.5", lw=1.2)
-    ax.text(1.0, 1.0, " real time", transform=ax.get_xaxis_transform(), va="top", ha="left",
-            color="0.35", fontsize=8)
-    ax.set_xlabel("CPU seconds per simulated second")
+    ax.axvline(1.0, color="0.5", lw=1.6)
+    ax.text(1.0, 0.01, "real time ", transform=ax.get_xaxis_transform(), va="bottom",
+            ha="right", color="0.35", fontsize=12)
+    ax.set_xlabel("CPU s per simulated s")
     ax.grid(True, axis="x", which="major", alpha=0.3)
 
 
