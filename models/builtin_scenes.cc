@@ -26,6 +26,12 @@ Scene build_slope(const std::map<std::string, double>& p);
 Scene build_tumbling_box(const std::map<std::string, double>& p);
 Scene build_box_on_slope(const std::map<std::string, double>& p);
 Scene build_box_pile(const std::map<std::string, double>& p);
+// builtin_fluids.cc: the fluid scenes.
+Scene build_dam_break(const std::map<std::string, double>& p);
+Scene build_tank(const std::map<std::string, double>& p);
+Scene build_sloshing(const std::map<std::string, double>& p);
+double dam_break_particles(const std::map<std::string, double>& p);
+double tank_particles(const std::map<std::string, double>& p);
 
 namespace {
 
@@ -225,6 +231,9 @@ Counts block_counts(const Values& p) {
 
 
 
+Counts dam_break_counts(const Values& p) { return {dam_break_particles(p), 0.0}; }
+Counts tank_counts(const Values& p) { return {tank_particles(p), 0.0}; }
+
 // Structural 2 n (n-1), shear 2 (n-1)^2, bend 2 n (n-2), as build_cloth makes them.
 Counts cloth_counts(const Values& p) {
   const double n = p.at("n");
@@ -234,6 +243,19 @@ Counts cloth_counts(const Values& p) {
 ParameterSpec param(const char* name, double value, const char* meaning, Range range,
                     double min = 0.0, double max = 0.0) {
   return {{name, value, meaning}, range, min, max};
+}
+
+// The fluid scenes' shared parameters (builtin_fluids.cc).
+std::vector<ParameterSpec> fluid_params(double spacing, double alpha) {
+  return {param("spacing", spacing, "particle spacing l [m] (smoothing length 1.3 l)",
+                Range::kPositive),
+          param("dimension", 2, "2: particles in the x-y plane, 3: in space", Range::kWhole, 2, 3),
+          param("density", 1000, "rest density rho0 [kg/m^3]", Range::kPositive),
+          param("sound", 10, "speed of sound as a multiple of sqrt(g H), H the water's height",
+                Range::kPositive),
+          param("alpha", alpha, "viscosity as Monaghan's alpha: nu = alpha h c / (2 (d + 2))",
+                Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kPositive)};
 }
 
 // The material parameters of the finite-element scenes.
@@ -405,6 +427,30 @@ const std::vector<Generator>& generators() {
                 Range::kPositive),
           param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
          build_box_on_slope},
+        {{"dam-break",
+          "a water column a wide and 2a high released against the wall of a box 5a long "
+          "(Martin and Moyce 1952), weakly compressible SPH with wall particles",
+          {}},
+         with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive)},
+              fluid_params(0.005, 0.02)),
+         build_dam_break, dam_break_counts, "spacing"},
+        {{"tank",
+          "water at rest in a box: it settles to hydrostatic pressure rho0 g depth",
+          {}},
+         with({param("width", 0.5, "width of the box (and 4x its depth along z in 3-D) [m]",
+                     Range::kPositive),
+               param("depth", 0.25, "depth of the water [m]", Range::kPositive)},
+              fluid_params(0.0125, 0.1)),
+         build_tank, tank_counts, "spacing"},
+        {{"sloshing",
+          "the first standing wave of a tank (period 2 pi / w, w^2 = g k tanh(k H), k = pi / "
+          "width), started from rest level with the mode's velocity",
+          {}},
+         with({param("amplitude", 0.01, "the wave's amplitude at the walls [m]", Range::kAny),
+               param("width", 0.5, "width of the box [m]", Range::kPositive),
+               param("depth", 0.25, "depth of the water [m]", Range::kPositive)},
+              fluid_params(0.0125, 0.02)),
+         build_sloshing, tank_counts, "spacing"},
         {{"box-pile",
           "n boxes dropped at different heights and tilts onto the ground with friction (they "
           "meet the ground, not each other: spaced apart along x)",
