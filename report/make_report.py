@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Render the springlab course experiments as one self-contained HTML page.
 
-    python3 report/make_report.py --data DIR --out OUTDIR [--bench FILE.json]
+    python3 report/make_report.py --data DIR --out OUTDIR [--bench FILE.json] [--lab LAB.html]
 
 Reads only what springlab writes (the data contract is experiments/README.md):
 each experiment's settings file <name>.json, which names its tables and their
@@ -10,7 +10,9 @@ every integrator's family, stability, colour and marker), and optionally
 springlab_bench's Google Benchmark JSON (--bench FILE.json, or else
 benchmarks.json in DIR). Writes one PNG per figure into OUTDIR and
 OUTDIR/index.html with every figure embedded, so the page alone is
-self-contained.
+self-contained. With --lab build/web/lab.html (the WebAssembly lab page,
+docs/browser-lab.md) the page is copied to OUTDIR/lab.html and linked when it
+exists.
 
 The code is the package report/springlab_report/: data.py reads, one module
 per experiment kind in kinds/ draws (kinds/__init__.py is the registry),
