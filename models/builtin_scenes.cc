@@ -3,12 +3,12 @@
 #include "models/builtin_scenes.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <map>
 #include <optional>
 
 #include "models/contact.h"
+#include "models/decimal_text.h"
 #include "models/drag.h"
 #include "models/gravity.h"
 #include "models/springs.h"
@@ -62,11 +62,7 @@ struct Generator {
   const char* size_parameter = nullptr;        // the parameter the counts grow with
 };
 
-std::string format_number(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
+std::string format_number(double value) { return shortest_decimal(value); }
 
 // The whole text must be one finite decimal number: "", "1x", "nan", "inf",
 // " 1" are refused (strtod would accept some of them, or a prefix).
@@ -75,8 +71,8 @@ std::optional<double> parse_number(const std::string& text) {
   const char* last = text.data() + text.size();
   if (first != last && *first == '+' && last - first > 1 && first[1] != '-') ++first;
   double value = 0.0;
-  const auto result = std::from_chars(first, last, value);
-  if (result.ec != std::errc() || result.ptr != last || !std::isfinite(value)) return std::nullopt;
+  const char* end = read_decimal(first, last, value);
+  if (end != last || !std::isfinite(value)) return std::nullopt;
   return value;
 }
 

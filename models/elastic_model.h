@@ -64,6 +64,9 @@ class ElasticModel final : public MechanicalSystem {
   int dimension() const { return order_.dim; }
   int particle_count() const { return static_cast<int>(order_.internal_of_scene.size()); }
   int free_particle_count() const { return order_.free_particles; }
+  // Which unknowns a scene particle has: internal index p (free when
+  // p < free_particle_count(), its coordinates at x[p * dim ..]).
+  const ParticleOrder& particle_order() const { return order_; }
   const Scene& scene() const { return scene_; }
 
   // Initial state of the free degrees of freedom.
