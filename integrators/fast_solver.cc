@@ -43,7 +43,13 @@ SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constra
 StepResult FastSolver::do_initialize() {
   dim_ = system().dimension_of_state();
   std::string why = "this system has no projective form; use implicit-euler";
-  if (dim_ < 1 || !system().projective_form(constraints_, elements_, why)) {
+  position_projections_.clear();
+  const bool has_form =
+      dim_ >= 1 &&
+      (takes_projections_
+           ? system().position_based_form(constraints_, elements_, position_projections_, why)
+           : system().projective_form(constraints_, elements_, why));
+  if (!has_form) {
     return StepResult::failure(name() + ": " + why);
   }
   system().plane_constraints(planes_);

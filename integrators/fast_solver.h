@@ -6,6 +6,7 @@
 // gap of one constraint.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,8 +32,9 @@ class FastSolver : public Integrator {
   using Integrator::Integrator;
 
   // Reads the distance constraints and the projective elements
-  // (MechanicalSystem::projective_form); a failure that says what to use
-  // when the system's stiff forces have no such form.
+  // (MechanicalSystem::projective_form; with takes_projections_, its
+  // position_based_form, whose projections go to position_projections_); a failure
+  // that says what to use when the system's stiff forces have no such form.
   StepResult do_initialize() override;
 
   // F minus the constraints' forces, counted as a force evaluation.
@@ -51,6 +53,10 @@ class FastSolver : public Integrator {
   std::vector<DistanceConstraint> constraints_;
   std::vector<ProjectiveElement> elements_;
   std::vector<PlaneConstraint> planes_;  // contact planes (xpbd solves them)
+  // Constraints the system projects itself (MechanicalSystem::
+  // position_based_form): read only by a solver that sets takes_projections_.
+  bool takes_projections_ = false;
+  std::vector<std::unique_ptr<PositionProjection>> position_projections_;
   Vector inv_particle_mass_;  // 1/m per free particle
 };
 

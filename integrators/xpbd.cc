@@ -25,7 +25,9 @@ Xpbd::Xpbd()
                   .stability_note = "for linear springs, one iteration per substep (S implicit "
                                     "Euler steps of h/S); unconverged projections of stiff "
                                     "nonlinear springs can gain energy; damping, drag and wind "
-                                    "are explicit"}) {}
+                                    "are explicit"}) {
+  takes_projections_ = true;
+}
 
 
 StepResult Xpbd::do_initialize() {
@@ -114,6 +116,7 @@ StepResult Xpbd::do_step(double h) {
     const double t = t_ + s * hs;
     eval_external_force(t, x_, v_, f_);
     predict(hs);
+    for (const auto& projection : position_projections_) projection->begin(x_);
     lambda_.setZero();
     if (!elements_.empty()) lambda_elements_.setZero();
     if (!planes_.empty()) lambda_planes_.setZero();
@@ -124,10 +127,12 @@ StepResult Xpbd::do_step(double h) {
         default: project_constraints<3>(); break;
       }
       if (!elements_.empty()) project_elements(hs);
+      for (const auto& projection : position_projections_) projection->project(x_, hs);
       if (!planes_.empty()) project_planes(hs);
       ++mutable_stats().newton_iterations;
     }
     v_ = (x_ - x_prev_) / hs;
+    for (const auto& projection : position_projections_) projection->correct_velocity(x_, v_, hs);
     if (!planes_.empty()) apply_friction(hs);
   }
   return StepResult::success();

@@ -38,6 +38,11 @@
 // after the springs as one constraint over all of the element's nodes:
 //   dlambda = (-C - a~ lambda_e) / (sum_i w_i |grad_i C|^2 + a~),
 //   x_i += w_i dlambda grad_i C.
+// Constraints the model projects itself (MechanicalSystem::
+// position_based_form: a fluid's density constraints, position-based
+// fluids, models/fluid_density_projection.cc) are found at the substep's
+// predicted positions (begin) and projected after the elements in each
+// iteration (project); their velocity filter runs after v is set.
 // On a spring of rest length 0 one iteration is exactly implicit Euler's
 // substep (tests/test_fast_solvers.cc), so S substeps of one iteration are S
 // implicit Euler steps of h/S; more iterations converge toward it on

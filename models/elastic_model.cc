@@ -377,11 +377,19 @@ bool ElasticModel::laplacian_form(std::vector<DistanceConstraint>& constraints,
   return stiff_forms(constraints, elements, ElementForm::kLaplacian, why);
 }
 
+bool ElasticModel::position_based_form(
+    std::vector<DistanceConstraint>& constraints, std::vector<ProjectiveElement>& elements,
+    std::vector<std::unique_ptr<PositionProjection>>& projections, std::string& why) const {
+  return stiff_forms(constraints, elements, ElementForm::kProjective, why, &projections);
+}
+
 bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
                                std::vector<ProjectiveElement>& elements, ElementForm form,
-                               std::string& why) const {
+                               std::string& why,
+                               std::vector<std::unique_ptr<PositionProjection>>* projections) const {
   out.clear();
   elements.clear();
+  if (projections != nullptr) projections->clear();
   std::vector<DistanceConstraint> all;
   std::vector<PlaneConstraint> planes;
   std::vector<ProjectiveElement> projective;
@@ -389,6 +397,10 @@ bool ElasticModel::stiff_forms(std::vector<DistanceConstraint>& out,
     if (term->plane_constraints(planes)) continue;           // plane_constraints
     if (!term->conservative() || !term->stiff()) continue;  // external: explicit
     if (term->distance_constraints(all)) continue;
+    if (projections != nullptr && term->projects_positions()) {
+      projections->push_back(term->position_projection());
+      continue;
+    }
     const bool has_form = form == ElementForm::kProjective
                               ? term->projective_elements(projective, why)
                               : term->laplacian_elements(projective);
@@ -450,7 +462,8 @@ void ElasticModel::external_force(double t, const Vector& x, const Vector& v, Ve
       constraint_terms_.push_back(
           term->plane_constraints(planes) ||
           (term->conservative() && term->stiff() &&
-           (term->distance_constraints(probe) || term->laplacian_elements(elements))));
+           (term->distance_constraints(probe) || term->laplacian_elements(elements) ||
+            term->projects_positions())));
     }
   }
   f_all_.setZero(x_all_.size());

@@ -56,6 +56,10 @@ class ElasticModel final : public MechanicalSystem {
                        std::string& why) const override;
   bool laplacian_form(std::vector<DistanceConstraint>& constraints,
                       std::vector<ProjectiveElement>& elements) const override;
+  bool position_based_form(std::vector<DistanceConstraint>& constraints,
+                           std::vector<ProjectiveElement>& elements,
+                           std::vector<std::unique_ptr<PositionProjection>>& projections,
+                           std::string& why) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void lag_normal_forces(const Vector* x_lag) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
@@ -137,10 +141,14 @@ class ElasticModel final : public MechanicalSystem {
   // distance constraints, and their elements in the form asked for; false
   // where a term has neither form (why says which).
   enum class ElementForm { kProjective, kLaplacian };
+  // With `projections`, a term that projects positions itself adds its
+  // projection instead of failing.
   bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>& elements,
-                   ElementForm form, std::string& why) const;
+                   ElementForm form, std::string& why,
+                   std::vector<std::unique_ptr<PositionProjection>>* projections = nullptr) const;
   // Which terms the fast solvers solve as constraints (distance
-  // constraints, elements, contact planes: external_force skips them); set
+  // constraints, elements, position projections, contact planes:
+  // external_force skips them); set
   // at its first call.
   mutable std::vector<char> constraint_terms_;
 };

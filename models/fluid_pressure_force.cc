@@ -48,9 +48,20 @@ constexpr double kPatternSkin = 0.25;
 class FluidPressureForce final : public ForceTerm {
  public:
   FluidPressureForce(std::vector<SphParticles> fluids, int dim, int free_particles,
-                     const double* x_all)
-      : fluids_(std::move(fluids)), dim_(dim), free_(free_particles) {
-    follow(x_all);
+                     std::vector<double> x_all)
+      : fluids_(std::move(fluids)), dim_(dim), free_(free_particles), x_all0_(std::move(x_all)) {
+    follow(x_all0_.data());
+  }
+
+  // xpbd: the density constraints of position-based fluids
+  // (fluid_density_projection.cc) instead of the pressure force.
+  bool projects_positions() const override { return true; }
+  std::unique_ptr<PositionProjection> position_projection() const override {
+    return make_fluid_density_projection(fluids_, x_all0_, dim_, free_);
+  }
+  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
+    why = "fluid forces have no projective form (xpbd runs them as position-based fluids)";
+    return false;
   }
 
   std::string_view name() const override { return "fluid"; }
@@ -268,6 +279,7 @@ class FluidPressureForce final : public ForceTerm {
   std::vector<NeighbourGrid> pattern_;
   std::vector<std::vector<double>> pattern_x_;
   const SparseMatrix* pattern_matrix_ = nullptr;
+  std::vector<double> x_all0_;  // every particle at the start, internal order
   mutable std::vector<double> a_;
 };
 
@@ -292,7 +304,7 @@ std::unique_ptr<ForceTerm> make_fluid_pressure_force(const Scene& scene, const P
     }
   }
   return std::make_unique<FluidPressureForce>(std::move(particles), dim, order.free_particles,
-                                              x.data());
+                                              std::vector<double>(x.begin(), x.end()));
 }
 
 }  // namespace springlab

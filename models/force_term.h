@@ -14,6 +14,7 @@
 
 #include <array>
 #include <limits>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -186,6 +187,11 @@ class ForceTerm {
     why = std::string(name()) + " forces have no projective form";
     return false;
   }
+  // A stiff conservative term with neither form whose constraints a
+  // position-based solver can project (MechanicalSystem::
+  // position_based_form) returns them; nullptr where it has none.
+  virtual std::unique_ptr<PositionProjection> position_projection() const { return nullptr; }
+  virtual bool projects_positions() const { return false; }
   // The same elements for quasi-Newton's initial Hessian (MechanicalSystem::
   // laplacian_form), any material, without a projection.
   virtual bool laplacian_elements(std::vector<ProjectiveElement>& /*out*/) const { return false; }

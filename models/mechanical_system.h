@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,27 @@ struct ProjectiveElement {
   // The projection, dim x k (models/materials/kinematics.h: polar's R,
   // nearest_unit_volume).
   Deformation (*project)(const Deformation& F) = nullptr;
+};
+
+// Constraints that a position-based solver (xpbd, docs/integrators.md
+// "Fast solvers") cannot list once, because which particles they couple
+// changes with the state (a fluid's density constraints: one per particle,
+// over its neighbours), so the model projects them itself. In each substep
+// the solver calls
+//   begin(x)               at the predicted positions (the free unknowns):
+//                          finds what stays fixed for the substep (the
+//                          neighbours) and zeroes the multipliers;
+//   project(x, h_s)        once per iteration: moves x toward the
+//                          constraints, compliance a~ = alpha / h_s^2
+//                          (XPBD, Macklin, Mueller and Chentanez 2016);
+//   correct_velocity(x, v) after v = (x - x_prev) / h_s: a velocity filter
+//                          the constraints come with (none by default).
+class PositionProjection {
+ public:
+  virtual ~PositionProjection() = default;
+  virtual void begin(const Vector& x) = 0;
+  virtual void project(Vector& x, double hs) = 0;
+  virtual void correct_velocity(const Vector& /*x*/, Vector& /*v*/, double /*hs*/) {}
 };
 
 class MechanicalSystem {
@@ -182,6 +204,17 @@ class MechanicalSystem {
                                std::string& why) const {
     why = "this system has no projective form; use implicit-euler";
     return false;
+  }
+  // The position-based solvers' view (xpbd): projective_form's, where a
+  // stiff force without that form may come instead as a PositionProjection
+  // (appended to `projections`, which the solver then owns). The default
+  // has none.
+  virtual bool position_based_form(std::vector<DistanceConstraint>& constraints,
+                                   std::vector<ProjectiveElement>& elements,
+                                   std::vector<std::unique_ptr<PositionProjection>>& projections,
+                                   std::string& why) const {
+    projections.clear();
+    return projective_form(constraints, elements, why);
   }
   // Quasi-Newton's initial Hessian (docs/integrators.md "Fast solvers"): the distance
   // constraints and, for elements of any material, the Laplacian part of a

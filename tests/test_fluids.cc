@@ -493,5 +493,164 @@ TEST(FluidScenes, EveryIntegratorRunsOrRefusesAtTheStart) {
   EXPECT_GE(ran, 15);
 }
 
+// ---- Position-based fluids (xpbd; models/fluid_density_projection.cc) ----
+
+// The system's projections, as xpbd reads them.
+std::vector<std::unique_ptr<PositionProjection>> projections_of(const ElasticModel& model) {
+  std::vector<DistanceConstraint> constraints;
+  std::vector<ProjectiveElement> elements;
+  std::vector<std::unique_ptr<PositionProjection>> projections;
+  std::string why;
+  EXPECT_TRUE(model.position_based_form(constraints, elements, projections, why)) << why;
+  return projections;
+}
+
+// Without walls, every pair's moves are equal and opposite in momentum
+// (the tensile-instability term too: it is mass-weighted), and the
+// projections lower the compression.
+TEST(FluidPositionBased, ProjectionKeepsMomentumAndRelievesCompression) {
+  for (int dim : {2, 3}) {
+    const Scene scene = random_blob(dim, dim == 2 ? 150 : 120, 9, 0.0);
+    const ElasticModel model(scene);
+    auto projections = projections_of(model);
+    ASSERT_EQ(projections.size(), 1u);
+    Vector x = model.initial_positions();
+    const Vector x0 = x;
+    projections[0]->begin(x);
+    const double hs = 0.1;  // a~ small beside the constraints' stiffness
+    auto compression = [&](const Vector& y) {
+      std::vector<double> flat(y.data(), y.data() + y.size());
+      const FluidFields fields = fluid_fields(scene, scene.get<Fluids>().front(), flat.data());
+      double sum = 0.0;
+      for (double rho : fields.density) sum += std::max(rho / scene.get<Fluids>().front().density - 1.0, 0.0);
+      return sum;
+    };
+    projections[0]->project(x, hs);
+    Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
+    double moved = 0.0;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      const double m = model.mass()[k];
+      momentum[k % dim] += m * (x[k] - x0[k]);
+      moved += m * std::abs(x[k] - x0[k]);
+    }
+    ASSERT_GT(moved, 0.0);
+    EXPECT_LT(momentum.norm(), 1e-12 * moved) << dim << "-D";
+    for (int it = 0; it < 20; ++it) projections[0]->project(x, hs);
+    std::cout << dim << "-D blob: sum of compressions " << compression(x0) << " -> "
+              << compression(x) << " after 21 projections\n";
+    EXPECT_LT(compression(x), 0.5 * compression(x0)) << dim << "-D";
+  }
+}
+
+// Interior density of the free particles a kernel support or more below
+// the surface, at the run's last state: the largest |rho / rho0 - 1|.
+double interior_density_error(const ElasticModel& model, const Vector& x_free) {
+  const Scene& scene = model.scene();
+  const Fluid& fluid = scene.get<Fluids>().front();
+  const Eigen::MatrixXd x = model.scene_positions(x_free);
+  std::vector<double> flat(static_cast<std::size_t>(x.size()));
+  for (Eigen::Index s = 0; s < x.rows(); ++s) {
+    for (Eigen::Index r = 0; r < x.cols(); ++r) flat[static_cast<std::size_t>(s * x.cols() + r)] = x(s, r);
+  }
+  const FluidFields fields = fluid_fields(scene, fluid, flat.data());
+  double surface = -INFINITY;
+  for (int s = 0; s < fluid.count; ++s) {
+    if (!scene.particles[static_cast<std::size_t>(s)].fixed) surface = std::max(surface, x(s, 1));
+  }
+  const double support = 2.0 * kSmoothingPerSpacing * fluid.spacing;
+  double worst = 0.0;
+  int interior = 0;
+  for (int s = 0; s < fluid.count; ++s) {
+    if (scene.particles[static_cast<std::size_t>(s)].fixed || x(s, 1) >= surface - support) continue;
+    worst = std::max(worst, std::abs(fields.density[static_cast<std::size_t>(s)] / fluid.density - 1.0));
+    ++interior;
+  }
+  EXPECT_GT(interior, 0);
+  return worst;
+}
+
+TEST(FluidPositionBased, TankAtRestKeepsItsDensity) {
+  const Scene scene = make_builtin_scene(
+      "tank", {{"width", "0.2"}, {"depth", "0.2"}, {"spacing", "0.0125"}});
+  const ElasticModel model(scene);
+  RunSettings s;
+  s.integrator = "xpbd";
+  s.dt = 1.0 / 120.0;
+  s.t_end = 1.0;
+  s.every = 1000;
+  s.options.substeps = 8;
+  Samples run;
+  Recorder recorder(run);
+  const RunResult r = simulate(model, s, {&recorder});
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  const double worst = interior_density_error(model, run.x.back());
+  // The water stays in its box, below its height plus a spacing.
+  const Eigen::MatrixXd x = model.scene_positions(run.x.back());
+  double lowest = INFINITY, highest = -INFINITY;
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    if (scene.particles[static_cast<std::size_t>(p)].fixed) continue;
+    lowest = std::min(lowest, x(p, 1));
+    highest = std::max(highest, x(p, 1));
+  }
+  std::cout << "PBF tank after 1 s: interior density within " << 100.0 * worst
+            << " % of rho0, water between y = " << lowest << " and " << highest << " m\n";
+  EXPECT_LT(worst, 0.04);
+  EXPECT_GT(lowest, 0.0);
+  EXPECT_LT(highest, 0.2 + 0.0125);
+}
+
+TEST(FluidPositionBased, DamBreakFrontStaysBelowRittersBound) {
+  const double a = 0.1, g = 9.81;
+  const Scene scene = make_builtin_scene("dam-break", {{"a", "0.1"}, {"spacing", "0.01"}});
+  const ElasticModel model(scene);
+  const double l = 0.01, time_scale = std::sqrt(2.0 * g / a);
+  RunSettings s;
+  s.integrator = "xpbd";
+  s.dt = 0.004;
+  s.t_end = 0.2;
+  s.options.substeps = 8;
+  Samples run;
+  Recorder recorder(run);
+  const RunResult r = simulate(model, s, {&recorder});
+  ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
+  std::vector<double> front;
+  for (const Vector& x : run.x) {
+    const Eigen::MatrixXd p = model.scene_positions(x);
+    double most = 0.0;
+    for (Eigen::Index k = 0; k < p.rows(); ++k) {
+      if (!scene.particles[static_cast<std::size_t>(k)].fixed) most = std::max(most, p(k, 0));
+    }
+    front.push_back(most + 0.5 * l);
+  }
+  const double ritter = 2.0 * std::sqrt(g * 2.0 * a);
+  double fastest = 0.0, Z2 = 0.0;
+  for (std::size_t k = 1; k < front.size(); ++k) {
+    fastest = std::max(fastest, (front[k] - front[k - 1]) / (run.t[k] - run.t[k - 1]));
+    if (Z2 == 0.0 && run.t[k] * time_scale >= 2.0) {
+      const double f = (2.0 / time_scale - run.t[k - 1]) / (run.t[k] - run.t[k - 1]);
+      Z2 = (front[k - 1] + f * (front[k] - front[k - 1])) / a;
+    }
+  }
+  const double reference = interpolate(martin_moyce(), 2.0);
+  std::cout << "PBF dam break: fastest front " << fastest << " m/s (Ritter " << ritter
+            << "), Z(T = 2) = " << Z2 << " against Martin and Moyce " << reference << "\n";
+  EXPECT_LT(fastest, ritter);
+  EXPECT_NEAR(Z2 / reference, 1.0, 0.15);
+}
+
+// The other fast solvers refuse a fluid, naming the one that runs it.
+TEST(FluidPositionBased, ProjectiveDynamicsRefusesNamingXpbd) {
+  const ElasticModel model(make_builtin_scene(
+      "tank", {{"width", "0.1"}, {"depth", "0.05"}, {"spacing", "0.0125"}}));
+  RunSettings s;
+  s.integrator = "projective-dynamics";
+  s.dt = 0.01;
+  s.t_end = 0.02;
+  const RunResult r = simulate(model, s, {});
+  EXPECT_EQ(r.status, RunStatus::kFailed);
+  EXPECT_NE(r.failure.find("xpbd runs them as position-based fluids"), std::string::npos)
+      << r.failure;
+}
+
 }  // namespace
 }  // namespace springlab
