@@ -53,20 +53,6 @@ int cells(double length, double l) {
   return static_cast<int>(std::clamp(std::round(length / l), 1.0, 1e8));
 }
 
-double lattice_mass(double rho0, double l, int dim) {
-  const CubicSpline w(kSmoothingPerSpacing * l, dim);
-  double sum = 0.0;
-  const int reach = 3;
-  for (int i = -reach; i <= reach; ++i) {
-    for (int j = -reach; j <= reach; ++j) {
-      for (int k = dim == 3 ? -reach : 0; k <= (dim == 3 ? reach : 0); ++k) {
-        sum += w.value(l * std::sqrt(double(i * i + j * j + k * k)));
-      }
-    }
-  }
-  return rho0 / sum;
-}
-
 Eigen::Vector3d site(const Box& b, int i, int j, int k) {
   return {(i + 0.5) * b.l, (j + 0.5) * b.l, b.dim == 3 ? (k + 0.5) * b.l : 0.0};
 }

@@ -4,8 +4,11 @@
 // "pressure" column. Each fluid is
 //   {"particles": [first, count], "density": rho0, "spacing": l,
 //    "speed_of_sound": c, "viscosity": nu, "kernel": "cubic-spline"}
-// (viscosity 0 and kernel "cubic-spline" when absent).
+// (viscosity 0 and kernel "cubic-spline" when absent), or the block form
+// with "box": [[x0, y0(, z0)], [x1, y1(, z1)]] instead of "particles",
+// which fills the box with new particles at the spacing (fill_box).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <numeric>
@@ -77,6 +80,52 @@ void check_disjoint(const Reporter& r, const Fluids& fluids) {
   }
 }
 
+// The block form {"box": [[x0, y0(, z0)], [x1, y1(, z1)]], "spacing": l}:
+// the box's lattice of cells of side l (round((x1 - x0) / l) along each
+// axis, at least 1), one free particle at rest at each cell's centre, of
+// mass lattice_mass (fluids.h), appended to the scene's particles; the
+// fluid is that run of particles.
+void fill_box(const Reporter& r, const std::string& where, const Json& box, Fluid& f,
+              Scene& scene) {
+  require_array(r, where, box);
+  if (box.size() != 2) {
+    r.fail(where, "must be [[corner], [corner]] (got " + std::to_string(box.size()) + " entries)");
+  }
+  const int dim = scene.dimension;
+  const Eigen::Vector3d lo = read_vector(r, where + "[0]", box[0], dim);
+  const Eigen::Vector3d hi = read_vector(r, where + "[1]", box[1], dim);
+  double total = 1.0;
+  std::array<long, 3> cells{1, 1, 1};
+  for (int k = 0; k < dim; ++k) {
+    if (!(hi[k] > lo[k])) {
+      r.fail(where, "its second corner must lie above its first along every axis (axis " +
+                        std::to_string(k) + ": " + shortest_text(lo[k]) + " to " +
+                        shortest_text(hi[k]) + ")");
+    }
+    const double n = std::max(1.0, std::round((hi[k] - lo[k]) / f.spacing));
+    total *= n;
+    if (!(total <= static_cast<double>(kMaxSceneParticles - scene.particles.size()))) {
+      r.fail(where, "would make more than " + std::to_string(kMaxSceneParticles) +
+                        " particles in the scene at this spacing");
+    }
+    cells[static_cast<std::size_t>(k)] = static_cast<long>(n);
+  }
+  const double mass = lattice_mass(f.density, f.spacing, dim);
+  f.first = static_cast<int>(scene.particles.size());
+  for (long k = 0; k < cells[2]; ++k) {
+    for (long j = 0; j < cells[1]; ++j) {
+      for (long i = 0; i < cells[0]; ++i) {
+        Particle p;
+        p.x = lo + f.spacing * Eigen::Vector3d(i + 0.5, j + 0.5, dim == 3 ? k + 0.5 : 0.0);
+        if (dim == 2) p.x.z() = 0.0;
+        p.mass = mass;
+        scene.particles.push_back(p);
+      }
+    }
+  }
+  f.count = static_cast<int>(scene.particles.size()) - f.first;
+}
+
 void read_fluids(const Json& document, const Reporter& r, Scene& scene) {
   if (!document.contains("fluids")) return;
   const Json& list = document.at("fluids");
@@ -90,25 +139,35 @@ void read_fluids(const Json& document, const Reporter& r, Scene& scene) {
     const Json& j = list[k];
     require_object(r, where, j);
     check_keys(r, where, j,
-               {"particles", "density", "spacing", "speed_of_sound", "viscosity", "kernel"},
-               {"particles", "density", "spacing", "speed_of_sound"});
-    const std::string range = field(where, "particles");
-    require_array(r, range, j.at("particles"));
-    if (j.at("particles").size() != 2) {
-      r.fail(range, "must be [first, count] (got " + std::to_string(j.at("particles").size()) +
-                        " numbers)");
+               {"particles", "box", "density", "spacing", "speed_of_sound", "viscosity", "kernel"},
+               {"density", "spacing", "speed_of_sound"});
+    if (j.contains("particles") == j.contains("box")) {
+      r.fail(where, "needs either \"particles\": [first, count] or \"box\": [[corner], "
+                    "[corner]] (exactly one)");
     }
-    const double first = read_number(r, range + "[0]", j.at("particles")[0]);
-    const double count = read_number(r, range + "[1]", j.at("particles")[1]);
     Fluid f;
-    f.first = check_particle_index(r, where, "particles[0]", first, scene.particles.size());
-    if (count != std::floor(count) || count < 1) {
-      r.fail(range + "[1]", "must be a whole number >= 1 (got " + shortest_text(count) + ")");
-    }
-    check_particle_index(r, where, "particles[1]", first + count - 1, scene.particles.size());
-    f.count = static_cast<int>(count);
     f.density = read_number(r, field(where, "density"), j.at("density"));
     f.spacing = read_number(r, field(where, "spacing"), j.at("spacing"));
+    if (j.contains("box")) {
+      check_positive(r, field(where, "density"), f.density);
+      check_positive(r, field(where, "spacing"), f.spacing);
+      fill_box(r, field(where, "box"), j.at("box"), f, scene);
+    } else {
+      const std::string range = field(where, "particles");
+      require_array(r, range, j.at("particles"));
+      if (j.at("particles").size() != 2) {
+        r.fail(range, "must be [first, count] (got " + std::to_string(j.at("particles").size()) +
+                          " numbers)");
+      }
+      const double first = read_number(r, range + "[0]", j.at("particles")[0]);
+      const double count = read_number(r, range + "[1]", j.at("particles")[1]);
+      f.first = check_particle_index(r, where, "particles[0]", first, scene.particles.size());
+      if (count != std::floor(count) || count < 1) {
+        r.fail(range + "[1]", "must be a whole number >= 1 (got " + shortest_text(count) + ")");
+      }
+      check_particle_index(r, where, "particles[1]", first + count - 1, scene.particles.size());
+      f.count = static_cast<int>(count);
+    }
     f.speed_of_sound = read_number(r, field(where, "speed_of_sound"), j.at("speed_of_sound"));
     if (j.contains("viscosity")) f.viscosity = read_number(r, field(where, "viscosity"), j.at("viscosity"));
     if (j.contains("kernel")) {

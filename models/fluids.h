@@ -75,6 +75,11 @@ struct TaitEquation {
   }
 };
 
+// The mass m = rho0 / sum_k W(|k| l) of each particle of a square (cubic)
+// lattice of spacing l, so that an interior particle's summation density
+// is rho0 exactly (the built-in scenes' and the "box" form's particles).
+double lattice_mass(double rho0, double spacing, int dimension);
+
 // The densities rho_i = sum_j m_j W(|x_i - x_j|, h) (self included) and
 // pressures p(rho_i) of one fluid's particles, in its order, at the scene
 // positions `x` (particle s at x[s * dimension]): for output (--vtk) and tests.

@@ -325,9 +325,16 @@ Scene parse_scene(const std::string& json_text, const std::string& source) {
     scene.particles.push_back(
         read_particle(r, element("particles", p), particles[p], scene.dimension));
   }
-  check_has_free_particle(r, scene.particles, doc.contains("bodies") &&
-                                                 doc.at("bodies").is_array() &&
-                                                 !doc.at("bodies").empty());
+  // (A fluid's "box" makes free particles of its own: fluid_kind.cc.)
+  const auto makes_particles = [&](const char* key, const char* inner) {
+    if (!doc.contains(key) || !doc.at(key).is_array()) return false;
+    for (const Json& e : doc.at(key)) {
+      if (inner == nullptr || (e.is_object() && e.contains(inner))) return true;
+    }
+    return false;
+  };
+  check_has_free_particle(r, scene.particles,
+                          makes_particles("bodies", nullptr) || makes_particles("fluids", "box"));
 
   for (const ElementKind* kind : kinds_in_phase(true)) {
     if (kind->read != nullptr) kind->read(doc, r, scene);

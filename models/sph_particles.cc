@@ -63,6 +63,20 @@ SphParticles make_sph_particles(const Scene& scene, const Fluid& fluid,
   return SphParticles(fluid, std::move(index), std::move(mass), scene.dimension);
 }
 
+double lattice_mass(double rho0, double spacing, int dimension) {
+  const CubicSpline w(kSmoothingPerSpacing * spacing, dimension);
+  double sum = 0.0;
+  const int reach = 3;  // 3 l > the support 2.6 l
+  for (int i = -reach; i <= reach; ++i) {
+    for (int j = -reach; j <= reach; ++j) {
+      for (int k = dimension == 3 ? -reach : 0; k <= (dimension == 3 ? reach : 0); ++k) {
+        sum += w.value(spacing * std::sqrt(double(i * i + j * j + k * k)));
+      }
+    }
+  }
+  return rho0 / sum;
+}
+
 FluidFields fluid_fields(const Scene& scene, const Fluid& fluid, const double* x) {
   std::vector<int> identity(scene.particles.size());
   for (std::size_t s = 0; s < identity.size(); ++s) identity[s] = static_cast<int>(s);

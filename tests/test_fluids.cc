@@ -493,6 +493,37 @@ TEST(FluidScenes, EveryIntegratorRunsOrRefusesAtTheStart) {
   EXPECT_GE(ran, 15);
 }
 
+// The block form of a fluid: a box filled at the spacing, each cell's
+// centre a particle, masses such that an interior particle sits at rho0;
+// written back as a [first, count] range after the file's particles, it
+// reads back to the same scene.
+TEST(FluidScenes, BoxBlockFillsItsLatticeAtRestDensity) {
+  const std::string text = R"({"dimension": 2, "gravity": [0, -9.81],
+    "particles": [{"x": [-1, -1], "fixed": true}], "springs": [],
+    "fluids": [{"box": [[0, 0], [0.1, 0.06]], "density": 1000, "spacing": 0.01,
+                "speed_of_sound": 10, "viscosity": 0.001}]})";
+  const Scene scene = parse_scene(text, "box.json");
+  ASSERT_EQ(scene.particles.size(), 1u + 10u * 6u);
+  const Fluid& f = scene.get<Fluids>().front();
+  EXPECT_EQ(f.first, 1);
+  EXPECT_EQ(f.count, 60);
+  EXPECT_EQ(scene.particles[1].x, Eigen::Vector3d(0.005, 0.005, 0.0));
+  EXPECT_EQ(scene.particles[60].x, Eigen::Vector3d(0.095, 0.055, 0.0));
+  EXPECT_FALSE(scene.particles[60].fixed);
+  std::vector<double> flat;
+  for (const Particle& p : scene.particles) {
+    flat.push_back(p.x.x());
+    flat.push_back(p.x.y());
+  }
+  const FluidFields fields = fluid_fields(scene, f, flat.data());
+  // Particle (4, 2) of the 10 x 6 block has every lattice neighbour
+  // within 2h = 2.6 l in the block: density rho0.
+  EXPECT_NEAR(fields.density[2 * 10 + 4] / 1000.0, 1.0, 1e-12);
+  const Scene again = parse_scene(scene_to_json(scene), "again.json");
+  EXPECT_EQ(scene_to_json(again), scene_to_json(scene));
+  EXPECT_EQ(again.get<Fluids>().front().first, 1);
+}
+
 // ---- Position-based fluids (xpbd; models/fluid_density_projection.cc) ----
 
 // The system's projections, as xpbd reads them.
