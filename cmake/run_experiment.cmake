@@ -4,7 +4,7 @@
 #   cmake -DSPRINGLAB=path/to/springlab -DDEFINITION=experiments/x.json -DOUT=report-data
 #         -P run_experiment.cmake
 # Results are current when OUT/<name>.stamp, written after the run succeeded,
-# holds the SHA-256 of the definition, of every scene file it names and of
+# holds the SHA-256 of the definition, of every scene (or data) file it names and of
 # the springlab executable, exactly as they are now, and the settings file
 # OUT/<name>.json and every table it lists are there. Anything else reruns
 # the experiment (delete the stamp to force it). The stamp holds hashes only,
@@ -30,7 +30,7 @@ endif()
 file(SHA256 "${DEFINITION}" hash)
 set(stamp_text "definition ${hash}\n")
 get_filename_component(definition_dir "${DEFINITION}" DIRECTORY)
-string(REGEX MATCHALL "\"[^\"]+\\.json\"" named "${text}")
+string(REGEX MATCHALL "\"[^\"]+\\.(json|csv)\"" named "${text}")
 list(REMOVE_DUPLICATES named)
 foreach(quoted IN LISTS named)
   string(REGEX REPLACE "^\"(.*)\"$" "\\1" scene "${quoted}")

@@ -18,6 +18,7 @@ std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_solver_error_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_spectral_experiment(const DefinitionObject&);
 std::unique_ptr<Experiment> make_rigid_experiment(const DefinitionObject&);
+std::unique_ptr<Experiment> make_fluid_experiment(const DefinitionObject&);
 
 const std::vector<ExperimentKind>& experiment_kinds() {
   static const std::vector<ExperimentKind> kinds = {
@@ -36,6 +37,7 @@ const std::vector<ExperimentKind>& experiment_kinds() {
       {"solver-error", &make_solver_error_experiment},
       {"spectral", &make_spectral_experiment},
       {"rigid", &make_rigid_experiment},
+      {"fluid", &make_fluid_experiment},
   };
   return kinds;
 }

@@ -133,7 +133,7 @@ TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
             "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
-            "motion, contact, mode, rotation, solver-error, spectral, rigid)");
+            "motion, contact, mode, rotation, solver-error, spectral, rigid, fluid)");
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {

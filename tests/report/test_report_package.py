@@ -506,6 +506,95 @@ class RigidKind(unittest.TestCase):
         self.assertTrue((self.s.dir / "out" / "rigid.png").is_file())
 
 
+def fluid_data(scratch):
+    """A fluid experiment: symplectic Euler's front 5 % ahead of Martin and
+    Moyce at T = 2, implicit Euler's 10 % behind and twice as dear, explicit
+    Euler diverged, projective dynamics refused; two step limits."""
+    scratch.json("integrators.json", INTEGRATORS)
+    cols = ["task", "integrator", "dt", "t", "T", "Z", "kinetic", "gravity", "pressure", "total",
+            "viscous_work", "numerical", "compression"]
+    runs = ["task", "integrator", "dt", "substeps", "iterations", "status", "diverged_at",
+            "t_final", "steps", "force_evals", "newton_iterations", "wall_seconds",
+            "cpu_seconds", "cost_per_second", "Z_T2", "Z_T2_measured", "Z_T2_error", "front_speed_max",
+            "ritter_speed", "compression_max", "energy_initial", "viscous_work", "numerical",
+            "particles", "failure"]
+    limits = ["task", "sound", "c", "integrator", "particles", "h", "hydrostatic", "w_max",
+              "dt_theory",
+              "C_theory", "dt_max_stable", "lo", "hi", "v_max", "C_measured", "ratio", "outcome"]
+    scratch.json("fluid.json", {
+        "name": "fluid", "experiment": "fluid", "title": "Fluid",
+        "dam_break": {"a": 0.1, "g": 9.81, "spacing": 0.01, "speed_of_sound": 14.0,
+                      "water_particles": 200, "particles": 518, "energy_scale": 2.0,
+                      "time_scale": 14.0},
+        "reference": {"file": "reference/mm.csv", "source": "Martin and Moyce (1952): the surge"},
+        "tables": [{"file": "fluid.csv", "suffix": "", "columns": cols},
+                   {"file": "fluid-runs.csv", "suffix": "runs", "columns": runs},
+                   {"file": "fluid-reference.csv", "suffix": "reference", "columns": ["task", "T", "Z"]},
+                   {"file": "fluid-limits.csv", "suffix": "limits", "columns": limits}]})
+    rows, run_rows = [",".join(cols)], [",".join(runs)]
+    for task, (name, speed, work) in enumerate((("symplectic-euler", 1.1, 0.2),
+                                                ("implicit-euler", 1.0, 0.3))):
+        for k in range(11):
+            T = 0.3 * k
+            rows.append("%d,%s,0.001,%r,%r,%r,0,0,0,%r,%r,%r,0.01" % (
+                task, name, T / 14, T, 1 + speed * T, 10 - work * k, work * k, 0.0))
+    run_rows.append("0,symplectic-euler,0.0002,0,0,completed,,0.24,1200,1200,0,2,1.92,8.0,2.4684,"
+                    "2.3509,0.05,1.5,2.8,0.012,10,0.4,-0.02,518,")
+    run_rows.append("1,implicit-euler,0.001,0,0,completed,,0.24,240,900,600,4,3.84,16.0,2.1158,"
+                    "2.3509,-0.1,1.2,2.8,0.01,10,0.6,-0.2,518,")
+    run_rows.append("2,explicit-euler,5e-05,0,0,diverged,0.0125,0.0125,250,250,0,0.1,0.1,8,,2.3509,,"
+                    "0,2.8,0,10,0,0,518,")
+    run_rows.append("3,projective-dynamics,0.004,0,0,failed,0,0,0,0,0,0,0,,,2.3509,,0,2.8,0,10,0,0,"
+                    "518,projective-dynamics: fluid forces have no projective form")
+    ref_rows = ["task,T,Z", "0,0.41,1.11", "0,1.98,2.33", "0,2.2,2.56"]
+    lim_rows = [",".join(limits)]
+    for task, c in enumerate((7.0, 14.0)):
+        w = 1000.0 * c / 7.0
+        lim_rows.append("%d,%r,%r,symplectic-euler,250,0.026,%r,%r,%r,%r,%r,0,0,1.0,%r,%r,"
+                        "bracketed" % (task + 4, c / 1.4, c, 1.962 / c ** 2, w, 2 / w,
+                                       2 / w * c / 0.026, 1.8 / w, 1.8 / w * (c + 1) / 0.026, 0.9))
+    scratch.write("fluid.csv", "\n".join(rows) + "\n")
+    scratch.write("fluid-runs.csv", "\n".join(run_rows) + "\n")
+    scratch.write("fluid-reference.csv", "\n".join(ref_rows) + "\n")
+    scratch.write("fluid-limits.csv", "\n".join(lim_rows) + "\n")
+
+
+class FluidKind(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_sentences_follow_the_runs(self):
+        fluid_data(self.s)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        facts = [html.unescape(f) for f in re.findall(r"<li>([^<]*)</li>", page)]
+        self.assertIn("Refused at the start: projective-dynamics: fluid forces have no projective "
+                      "form.", facts)
+        self.assertIn("Stopped: explicit-euler at dt = 5e-05 s diverged at t = 0.0125 s "
+                      "(T = 0.175).", facts)
+        self.assertIn("At T = 2 Martin and Moyce measured Z = 2.35; the runs give "
+                      "symplectic-euler 2.47 (5 %), implicit-euler 2.12 (-10 %).", facts)
+        self.assertIn("The fastest front of any completed run is symplectic-euler's 1.5 m/s, "
+                      "below Ritter's bound 2√(2ga) = 2.8 m/s.", facts)
+        self.assertIn("Cost per simulated second: cheapest symplectic-euler at dt = 0.0002 s "
+                      "(8 s), dearest implicit-euler at dt = 0.001 s (16 s), 2 times as much.",
+                      facts)
+        self.assertIn("Energy at the end, in units of M g a (viscous work, then the integrator's "
+                      "own change E − E₀ + W_visc): implicit-euler 0.3 viscous, -0.1 numerical; "
+                      "symplectic-euler 0.2 viscous, -0.01 numerical.", facts)
+        self.assertIn("Largest stable step as the speed of sound grows: symplectic-euler from "
+                      "0.0018 s at c = 7 m/s to 0.0009 s at c = 14 m/s, 0.9 to 0.9 times the "
+                      "acoustic mode's (ωh)*/ω_max, C = dt (c + |v|max)/h from 0.519 to "
+                      "0.554.", facts)
+        self.assertIn("Meanwhile the compression at the column's foot at rest, g 2a / c², falls "
+                      "from 4 % to 1 %: the Tait law is stiff only in compression, and the "
+                      "linearization at rest takes the stiff side everywhere.", facts)
+        self.assertTrue((self.s.dir / "out" / "fluid.png").is_file())
+
+
 def solver_error_data(scratch):
     """A solver-error experiment: implicit Euler's discretization error 1e-3
     m; Newton below it, XPBD above it in solver error but closer to the true

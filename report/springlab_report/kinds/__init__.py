@@ -3,8 +3,8 @@ name in the settings file's "experiment"), TITLE, ABOUT (what theory says to
 look for) and render(experiment, context) -> HTML. The page shows the kinds
 in this order; adding a kind is one module and one line here."""
 
-from . import (cloth_showcase, contact, convergence, damping_budget, energy, mode, motion,
-               rigid, rotation, solver_error, spectral, stability, stability_region,
+from . import (cloth_showcase, contact, convergence, damping_budget, energy, fluid, mode,
+               motion, rigid, rotation, solver_error, spectral, stability, stability_region,
                step_energy, work_precision)
 
 KINDS = {m.KIND: m for m in (
@@ -21,6 +21,7 @@ KINDS = {m.KIND: m for m in (
     mode,
     rotation,
     rigid,
+    fluid,
     cloth_showcase,
     step_energy,
 )}
