@@ -8,6 +8,9 @@
 //   box-on-slope: a cube resting on a plane inclined at `angle` with
 //     friction mu: it sticks when tan(angle) < mu (creeping below the
 //     smoothing speed) and slides with a = g (sin - mu cos) otherwise;
+//   box-chain: n boxes hinged end to end by zero-length springs between
+//     body points (body_springs.h), the first to a fixed particle: a
+//     multiple pendulum released from horizontal;
 //   box-pile: n boxes dropped at different heights and tilts onto the
 //     ground, with friction. Bodies meet the planes only, not each other,
 //     so the boxes are spaced apart along x.
@@ -18,6 +21,7 @@
 #include <string>
 
 #include "models/bodies.h"
+#include "models/body_springs.h"
 #include "models/contact.h"
 #include "models/gravity.h"
 #include "models/scene.h"
@@ -116,6 +120,45 @@ Scene build_box_pile(const Values& p) {
   scene.block<Planes>().push_back(ground);
   Contact& contact = scene.block<Contact>();
   contact.stiffness = p.at("contact_stiffness");
+  return scene;
+}
+
+// Boxes of sides (length, width, width) laid end to end along +x from the
+// fixed particle at the origin; each joint a zero-length spring of stiffness
+// k between the end points (+-length/2, 0, 0) of neighbours (the first: the
+// particle and box 0's left end), a ball joint as stiff as k.
+Scene build_box_chain(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const double length = p.at("length"), width = p.at("width");
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Springs>();
+  Particle anchor;
+  anchor.fixed = true;
+  scene.particles.push_back(anchor);
+  const Eigen::Vector3d left(-0.5 * length, 0.0, 0.0), right(0.5 * length, 0.0, 0.0);
+  for (int b = 0; b < n; ++b) {
+    Body box;
+    box.shape = Body::Shape::kBox;
+    box.size = Eigen::Vector3d(length, width, width);
+    box.density = p.at("density");
+    box.rigidity = p.at("rigidity");
+    box.position = Eigen::Vector3d((b + 0.5) * length, 0.0, 0.0);
+    scene.block<Bodies>().push_back(box);
+    BodySpring joint;
+    joint.k = p.at("k");
+    joint.rest = 0.0;
+    if (b == 0) {
+      joint.i.particle = 0;
+    } else {
+      joint.i.body = b - 1;
+      joint.i.X = right;
+    }
+    joint.j.body = b;
+    joint.j.X = left;
+    scene.block<BodySprings>().push_back(joint);
+  }
   return scene;
 }
 

@@ -26,6 +26,7 @@ Scene build_slope(const std::map<std::string, double>& p);
 Scene build_tumbling_box(const std::map<std::string, double>& p);
 Scene build_box_on_slope(const std::map<std::string, double>& p);
 Scene build_box_pile(const std::map<std::string, double>& p);
+Scene build_box_chain(const std::map<std::string, double>& p);
 
 namespace {
 
@@ -419,6 +420,18 @@ const std::vector<Generator>& generators() {
           param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
                 Range::kPositive)},
          build_box_pile},
+        {{"box-chain",
+          "n boxes hinged end to end by stiff zero-length springs between body points, the "
+          "first to a fixed point, released from horizontal: a multiple pendulum",
+          {}},
+         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+          param("length", 0.2, "length of each box along the chain [m]", Range::kPositive),
+          param("width", 0.05, "its two other sides [m]", Range::kPositive),
+          param("k", 1e4, "stiffness of each joint's spring [N/m]", Range::kNonNegative),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny)},
+         build_box_chain},
     };
     for (Generator& g : list) {
       for (const ParameterSpec& spec : g.specs) g.info.parameters.push_back(spec.parameter);

@@ -25,6 +25,7 @@ const ElementKind& body_kind();            // bodies.cc
 const ElementKind& body_gravity_kind();    // body_forces.cc
 const ElementKind& body_contact_kind();    // body_forces.cc
 const ElementKind& body_friction_kind();   // body_forces.cc
+const ElementKind& body_spring_kind();     // body_springs.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -43,6 +44,7 @@ const std::vector<const ElementKind*>& element_kinds() {
       &body_gravity_kind(),
       &body_contact_kind(),
       &body_friction_kind(),
+      &body_spring_kind(),
   };
   return kinds;
 }

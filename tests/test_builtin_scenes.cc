@@ -105,7 +105,7 @@ INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin, ::testing::ValuesIn(builtin_scen
 
 TEST(BuiltinScenesTest, AreTheSpecsSortedByName) {
   EXPECT_EQ(names_of(builtin_scenes()),
-            (std::vector<std::string>{"beam", "block", "box-on-slope", "box-pile", "chain",
+            (std::vector<std::string>{"beam", "block", "box-chain", "box-on-slope", "box-pile", "chain",
                                       "cloth", "membrane", "oscillator", "slope", "spring",
                                       "tumbling-box"}));
   EXPECT_FALSE(is_builtin_scene("xyz"));
@@ -137,7 +137,7 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
 
 TEST(BuiltinScenesTest, ExactMessages) {
   EXPECT_EQ(build_error("xyz", {}),
-            "unknown built-in scene 'xyz' (built-in scenes: beam, block, box-on-slope, box-pile, chain, "
+            "unknown built-in scene 'xyz' (built-in scenes: beam, block, box-chain, box-on-slope, box-pile, chain, "
             "cloth, membrane, oscillator, slope, spring, tumbling-box)");
   EXPECT_EQ(build_error("chain", {{"foo", "1"}}),
             "scene 'chain': unknown parameter 'foo' (parameters: n, k, mass, length, drag, g, "
