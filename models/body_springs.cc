@@ -10,12 +10,14 @@
 // after every problem of the particle springs and bodies.)
 #include "models/body_springs.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <memory>
 #include <random>
 #include <string>
 
 #include "models/bodies.h"
+#include "models/contact.h"
 #include "models/element_kind.h"
 #include "models/springs.h"
 
@@ -201,7 +203,19 @@ void add_random_body_springs(Scene& scene, std::mt19937& rng, RandomStates state
     if (scene.get<Springs>().empty()) spring_kind().add_random(scene, rng, states);
     return;
   }
-  while (scene.get<Bodies>().size() < 2) add_random_body_with(scene, rng, states, false);
+  // A body added here is moved 5 m along the first plane (or z), away from
+  // the others: body-body contact (body_body_contact.cc) stays out of these
+  // instances, whose kDefinite states must have an exact definite part.
+  while (scene.get<Bodies>().size() < 2) {
+    add_random_body_with(scene, rng, states, false);
+    Eigen::Vector3d along = Eigen::Vector3d::UnitZ();
+    if (!scene.get<Planes>().empty()) {
+      const Eigen::Vector3d n = scene.get<Planes>().front().normal.normalized();
+      along = n.unitOrthogonal();
+    }
+    Body& added = scene.block<Bodies>().back();
+    added.position = *added.position + 5.0 * static_cast<double>(scene.get<Bodies>().size()) * along;
+  }
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto body_point = [&](int b) {
     const Body& body = scene.get<Bodies>()[static_cast<std::size_t>(b)];

@@ -407,12 +407,13 @@ const std::vector<Generator>& generators() {
           param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
          build_box_on_slope},
         {{"box-pile",
-          "n boxes dropped at different heights and tilts onto the ground with friction (they "
-          "meet the ground, not each other: spaced apart along x)",
+          "n boxes, each shrink times the one below, dropped onto one another and onto the "
+          "ground (friction on the ground, none between the boxes)",
           {}},
          {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
-          param("size", 0.2, "longest side of each box (sides size, 0.75 size, 0.5 size) [m]",
+          param("size", 0.2, "longest side of the bottom box (sides size, 0.75 size, 0.5 size) [m]",
                 Range::kPositive),
+          param("shrink", 0.8, "each box's sides over the one's below, in (0, 1]", Range::kPositive),
           param("density", 1000, "density [kg/m^3]", Range::kPositive),
           param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
           param("friction", 0.5, "Coulomb coefficient mu of the ground", Range::kNonNegative),

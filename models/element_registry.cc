@@ -26,6 +26,7 @@ const ElementKind& body_gravity_kind();    // body_forces.cc
 const ElementKind& body_contact_kind();    // body_forces.cc
 const ElementKind& body_friction_kind();   // body_forces.cc
 const ElementKind& body_spring_kind();     // body_springs.cc
+const ElementKind& body_body_contact_kind();  // body_body_contact.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -45,6 +46,7 @@ const std::vector<const ElementKind*>& element_kinds() {
       &body_contact_kind(),
       &body_friction_kind(),
       &body_spring_kind(),
+      &body_body_contact_kind(),
   };
   return kinds;
 }
