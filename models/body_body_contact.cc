@@ -28,7 +28,9 @@
 // the total linear and angular momentum. The face switches where two
 // |Z_i| / h_i are equal (a's centre over b's edge), where the force jumps.
 //
-// Left out, and said so in the docs: friction between bodies; a cylinder
+// Two bodies joined by a spring between their points (a joint,
+// body_springs.h) do not meet. Left out, and said so in the docs: friction
+// between bodies; a cylinder
 // or mesh as the body pushed into (only their vertices push into boxes);
 // edge-edge crossings with no vertex inside; the barrier model (with it
 // bodies do not meet each other).
@@ -38,9 +40,12 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <set>
+#include <utility>
 #include <vector>
 
 #include "models/bodies.h"
+#include "models/body_springs.h"
 #include "models/contact.h"
 #include "models/contact_potential.h"
 #include "models/element_kind.h"
@@ -108,9 +113,19 @@ class BodyBodyContactForce final : public ForceTerm {
       }
       bodies_.push_back(std::move(c));
     }
+    // Bodies joined by a spring (a joint) do not meet: a hinge's boxes
+    // touch at the joint, where contact would fight the spring.
+    std::set<std::pair<int, int>> joined;
+    for (const BodySpring& s : scene.get<BodySprings>()) {
+      if (s.i.is_body() && s.j.is_body()) {
+        joined.insert({std::min(s.i.body, s.j.body), std::max(s.i.body, s.j.body)});
+      }
+    }
     for (std::size_t a = 0; a < bodies_.size(); ++a) {
       for (std::size_t b = 0; b < bodies_.size(); ++b) {
         if (a == b || !bodies_[b].box) continue;
+        const int lo = static_cast<int>(std::min(a, b)), hi = static_cast<int>(std::max(a, b));
+        if (joined.count({lo, hi}) != 0) continue;
         if (bodies_[a].first < 0 && bodies_[b].first < 0) continue;
         pairs_.push_back({static_cast<int>(a), static_cast<int>(b), {}});
       }
