@@ -1,6 +1,8 @@
 // motion: the runs the report's player shows moving (docs/experiments-and-report.md "The report's
 // player"). Every integrator runs every case; each output frame records
-// every particle's position and the total energy. A run that diverges also
+// every particle's position, then every rigid body's surface vertices'
+// (vtk_bodies.h: x = p + A X, numbered after the particles), and the total
+// energy. A run that diverges also
 // records, from a rerun that only a non-finite state stops, its first frames
 // past the blow-up bound: the player draws the explosion until it leaves the
 // picture, then marks the run. One task per (case, integrator).
@@ -11,6 +13,7 @@
 
 #include "experiments/experiment.h"
 #include "experiments/experiment_support.h"
+#include "experiments/vtk_bodies.h"
 #include "models/element_kind.h"
 
 namespace springlab {
@@ -22,16 +25,21 @@ constexpr int kPastBlowupFrames = 3;
 class MotionRows final : public Observer {
  public:
   MotionRows(const ElasticModel& model, std::string prefix, TaskOutput& out)
-      : model_(model), prefix_(std::move(prefix)), out_(out) {}
+      : model_(model), bodies_(model.scene(), model.free_particle_count()),
+        prefix_(std::move(prefix)), out_(out) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     if (t < from_ || !x.allFinite() || !v.allFinite()) return;
     const Eigen::MatrixXd p = model_.scene_positions(x);
-    for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    Eigen::MatrixXd surface, unused;
+    bodies_.states(x, v, surface, unused);
+    auto add = [&](long i, const Eigen::MatrixXd& m, Eigen::Index k) {
       Row row;
-      row.raw(prefix_).add(t).add(past_blowup_).add(static_cast<long>(i));
-      for (int r = 0; r < 3; ++r) row.add(r < p.cols() ? p(i, r) : 0.0);
+      row.raw(prefix_).add(t).add(past_blowup_).add(i);
+      for (int r = 0; r < 3; ++r) row.add(r < m.cols() ? m(k, r) : 0.0);
       out_.rows[0].push_back(row.str());
-    }
+    };
+    for (Eigen::Index i = 0; i < p.rows(); ++i) add(static_cast<long>(i), p, i);
+    for (Eigen::Index k = 0; k < surface.rows(); ++k) add(static_cast<long>(p.rows() + k), surface, k);
     Row frame;
     frame.raw(prefix_).add(t).add(past_blowup_).add(model_.energies(x, v).total());
     out_.rows[1].push_back(frame.str());
@@ -44,6 +52,7 @@ class MotionRows final : public Observer {
 
  private:
   const ElasticModel& model_;
+  VtkBodies bodies_;
   std::string prefix_;
   TaskOutput& out_;
   double from_ = -std::numeric_limits<double>::infinity();
@@ -53,14 +62,17 @@ class MotionRows final : public Observer {
 class MotionExperiment final : public TimedCasesExperiment {
  public:
   explicit MotionExperiment(const DefinitionObject& d) : TimedCasesExperiment(d) {
-    // Every frame holds every particle: rows = frames x (particles + 1).
+    // Every frame holds every point (particles and bodies' surface
+    // vertices): rows = frames x (points + 1).
     const double integrators = static_cast<double>(definition_integrators(d, "integrators", "all").size());
     double rows = 0.0;
     for (std::size_t k = 0; k < cases().size(); ++k) {
       const TimedCase& c = cases()[k];
       const double steps = static_cast<double>(make_time_grid(c.dt, c.t_end).steps);
       const double frames = std::floor(steps / c.every) + 2.0 + kPastBlowupFrames;
-      rows += integrators * (frames * (static_cast<double>(c.scene.particles.size()) + 1.0) + 1.0);
+      const double points = static_cast<double>(c.scene.particles.size()) +
+                            VtkBodies(c.scene, 0).points();
+      rows += integrators * (frames * (points + 1.0) + 1.0);
       check_output_rows(d, "cases[" + std::to_string(k) + "]", rows);
     }
   }
@@ -104,13 +116,25 @@ class MotionExperiment final : public TimedCasesExperiment {
   nlohmann::json settings() const override {
     nlohmann::json s = TimedCasesExperiment::settings();
     // What the player draws of each case's scene: each element's particles
-    // (springs as lines, triangles, tetrahedra), and which are fixed.
+    // (springs as lines, triangles, tetrahedra), and which are fixed; with
+    // bodies, the number of points a frame has (particles, then the
+    // bodies' surface vertices) and the bodies' surface triangles ("faces",
+    // counter-clockwise seen from outside), drawn as filled polygons.
     for (std::size_t k = 0; k < cases().size(); ++k) {
+      const Scene& scene = cases()[k].scene;
       nlohmann::json cells = nlohmann::json::array();
-      for (const Cell& c : scene_cells(cases()[k].scene)) {
+      for (const Cell& c : scene_cells(scene)) {
         cells.push_back(std::vector<int>(c.nodes.begin(), c.nodes.begin() + c.size));
       }
       s["cases"][k]["cells"] = std::move(cells);
+      const VtkBodies bodies(scene, 0);
+      if (bodies.points() == 0) continue;
+      std::vector<Cell> triangles;
+      bodies.append_cells(static_cast<int>(scene.particles.size()), triangles);
+      nlohmann::json faces = nlohmann::json::array();
+      for (const Cell& c : triangles) faces.push_back({c.nodes[0], c.nodes[1], c.nodes[2]});
+      s["cases"][k]["points"] = static_cast<long>(scene.particles.size()) + bodies.points();
+      s["cases"][k]["faces"] = std::move(faces);
     }
     return s;
   }

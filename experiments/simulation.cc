@@ -154,7 +154,9 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
       if (stop_requested()) throw StopRequested();
       result.status = RunStatus::kFailed;
       result.failure = step.message;
-      result.diverged_at = t;
+      // A fixed-step method failed in the step ending at t; an adaptive one
+      // says how far it got (CVODE's t reached), which is where it failed.
+      result.diverged_at = integrator->t() > t_good ? integrator->t() : t;
       break;
     }
     const Vector& x = integrator->x();

@@ -8,9 +8,12 @@
 //   box-on-slope: a cube resting on a plane inclined at `angle` with
 //     friction mu: it sticks when tan(angle) < mu (creeping below the
 //     smoothing speed) and slides with a = g (sin - mu cos) otherwise;
-//   box-pile: n boxes dropped at different heights and tilts onto the
-//     ground, with friction. Bodies meet the planes only, not each other,
-//     so the boxes are spaced apart along x.
+//   box-chain: n boxes hinged end to end by zero-length springs between
+//     body points (body_springs.h), the first to a fixed particle: a
+//     multiple pendulum released from horizontal;
+//   box-pile: n boxes, each smaller than the one below, dropped onto one
+//     another and the ground (body-body contact, body_body_contact.cc),
+//     with friction on the ground.
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -18,6 +21,7 @@
 #include <string>
 
 #include "models/bodies.h"
+#include "models/body_springs.h"
 #include "models/contact.h"
 #include "models/gravity.h"
 #include "models/scene.h"
@@ -88,26 +92,38 @@ Scene build_box_on_slope(const Values& p) {
   return scene;
 }
 
+// Box i has sides (s, 0.75 s, 0.5 s) f^i (f = shrink), its shortest side
+// vertical, turned about the vertical by 0.15 i rad, and starts a quarter
+// of its height above the top of the box below (the ground for i = 0). Not
+// tilted: there is no friction between bodies, and a box landing on an
+// edge would be pushed sideways by the tilting box below and slide off. With f = 0.8 each box's corners lie
+// inside the top face of the one below (the corner (0.4, 0.3) s turned by
+// 0.15 rad is at (0.351, 0.356) s, inside (0.5, 0.375) s), which is what
+// vertex-in-box contact needs (docs/physics.md "Contact between bodies").
 Scene build_box_pile(const Values& p) {
   const int n = static_cast<int>(p.at("n"));
-  const double s = p.at("size");
+  const double s = p.at("size"), f = p.at("shrink");
+  if (!(f <= 1.0)) {
+    std::ostringstream message;
+    message << "scene 'box-pile': parameter 'shrink' must be in (0, 1] (got " << f << ")";
+    throw SceneError(message.str());
+  }
   Scene scene;
   scene.dimension = 3;
   scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
   scene.block<Springs>();
-  for (int i = 0; i < n; ++i) {
+  double top = 0.0;
+  double scale = 1.0;
+  for (int i = 0; i < n; ++i, scale *= f) {
     Body box;
     box.shape = Body::Shape::kBox;
-    box.size = Eigen::Vector3d(s, 0.75 * s, 0.5 * s);
+    box.size = scale * Eigen::Vector3d(s, 0.5 * s, 0.75 * s);
     box.density = p.at("density");
     box.rigidity = p.at("rigidity");
-    // Tilted about a skew axis by a different angle each, so each lands on
-    // an edge or a corner and tumbles.
-    const double angle = 0.3 + 0.4 * i;
-    const Eigen::Vector3d axis = Eigen::Vector3d(1.0, 0.5 * (i % 3), 0.7).normalized();
-    box.orientation = {angle * axis.x(), angle * axis.y(), angle * axis.z()};
-    box.position = Eigen::Vector3d(2.0 * s * i, s * (1.0 + 0.5 * i), 0.0);
-    box.omega = Eigen::Vector3d(0.0, 1.0 - 0.5 * (i % 3), 0.0);
+    box.orientation = {0.0, 0.15 * i, 0.0};  // about the vertical
+    const double height = box.size.y();
+    box.position = Eigen::Vector3d(0.0, top + 0.25 * height + 0.5 * height, 0.0);
+    top += 1.25 * height;
     scene.block<Bodies>().push_back(box);
   }
   Plane ground;
@@ -116,6 +132,45 @@ Scene build_box_pile(const Values& p) {
   scene.block<Planes>().push_back(ground);
   Contact& contact = scene.block<Contact>();
   contact.stiffness = p.at("contact_stiffness");
+  return scene;
+}
+
+// Boxes of sides (length, width, width) laid end to end along +x from the
+// fixed particle at the origin; each joint a zero-length spring of stiffness
+// k between the end points (+-length/2, 0, 0) of neighbours (the first: the
+// particle and box 0's left end), a ball joint as stiff as k.
+Scene build_box_chain(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const double length = p.at("length"), width = p.at("width");
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Springs>();
+  Particle anchor;
+  anchor.fixed = true;
+  scene.particles.push_back(anchor);
+  const Eigen::Vector3d left(-0.5 * length, 0.0, 0.0), right(0.5 * length, 0.0, 0.0);
+  for (int b = 0; b < n; ++b) {
+    Body box;
+    box.shape = Body::Shape::kBox;
+    box.size = Eigen::Vector3d(length, width, width);
+    box.density = p.at("density");
+    box.rigidity = p.at("rigidity");
+    box.position = Eigen::Vector3d((b + 0.5) * length, 0.0, 0.0);
+    scene.block<Bodies>().push_back(box);
+    BodySpring joint;
+    joint.k = p.at("k");
+    joint.rest = 0.0;
+    if (b == 0) {
+      joint.i.particle = 0;
+    } else {
+      joint.i.body = b - 1;
+      joint.i.X = right;
+    }
+    joint.j.body = b;
+    joint.j.X = left;
+    scene.block<BodySprings>().push_back(joint);
+  }
   return scene;
 }
 

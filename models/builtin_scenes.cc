@@ -32,6 +32,7 @@ Scene build_tank(const std::map<std::string, double>& p);
 Scene build_sloshing(const std::map<std::string, double>& p);
 double dam_break_particles(const std::map<std::string, double>& p);
 double tank_particles(const std::map<std::string, double>& p);
+Scene build_box_chain(const std::map<std::string, double>& p);
 
 namespace {
 
@@ -448,12 +449,13 @@ const std::vector<Generator>& generators() {
               fluid_params(0.0125, 0.02)),
          build_sloshing, tank_counts, "spacing"},
         {{"box-pile",
-          "n boxes dropped at different heights and tilts onto the ground with friction (they "
-          "meet the ground, not each other: spaced apart along x)",
+          "n boxes, each shrink times the one below, dropped onto one another and onto the "
+          "ground (friction on the ground, none between the boxes)",
           {}},
          {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
-          param("size", 0.2, "longest side of each box (sides size, 0.75 size, 0.5 size) [m]",
+          param("size", 0.2, "longest side of the bottom box (sides size, 0.75 size, 0.5 size) [m]",
                 Range::kPositive),
+          param("shrink", 0.8, "each box's sides over the one's below, in (0, 1]", Range::kPositive),
           param("density", 1000, "density [kg/m^3]", Range::kPositive),
           param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
           param("friction", 0.5, "Coulomb coefficient mu of the ground", Range::kNonNegative),
@@ -461,6 +463,18 @@ const std::vector<Generator>& generators() {
           param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
                 Range::kPositive)},
          build_box_pile},
+        {{"box-chain",
+          "n boxes hinged end to end by stiff zero-length springs between body points, the "
+          "first to a fixed point, released from horizontal: a multiple pendulum",
+          {}},
+         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+          param("length", 0.2, "length of each box along the chain [m]", Range::kPositive),
+          param("width", 0.05, "its two other sides [m]", Range::kPositive),
+          param("k", 1e4, "stiffness of each joint's spring [N/m]", Range::kNonNegative),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny)},
+         build_box_chain},
     };
     for (Generator& g : list) {
       for (const ParameterSpec& spec : g.specs) g.info.parameters.push_back(spec.parameter);

@@ -27,6 +27,8 @@ const ElementKind& body_contact_kind();    // body_forces.cc
 const ElementKind& body_friction_kind();   // body_forces.cc
 const ElementKind& fluid_kind();           // fluid_kind.cc
 const ElementKind& fluid_viscosity_kind(); // fluid_viscosity_force.cc
+const ElementKind& body_spring_kind();     // body_springs.cc
+const ElementKind& body_body_contact_kind();  // body_body_contact.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -47,6 +49,8 @@ const std::vector<const ElementKind*>& element_kinds() {
       &body_friction_kind(),
       &fluid_kind(),
       &fluid_viscosity_kind(),
+      &body_spring_kind(),
+      &body_body_contact_kind(),
   };
   return kinds;
 }

@@ -78,11 +78,16 @@ std::optional<std::pair<std::size_t, std::size_t>> first_duplicate(const Springs
   return found;
 }
 
+// `file_index[s]`: the place of springs[s] in the file's "springs", where
+// springs with a body end (left to body_springs.cc) sit among them; empty:
+// the same place.
 void check_no_duplicate(const Reporter& r, const Springs& springs, std::size_t count,
-                        std::size_t particle_count) {
+                        std::size_t particle_count,
+                        const std::vector<std::size_t>& file_index = {}) {
   if (const auto dup = first_duplicate(springs, count, particle_count)) {
     const Spring& s = springs[dup->first];
-    r.fail(element("springs", dup->first), "duplicates " + element("springs", dup->second) +
+    auto place = [&](std::size_t k) { return file_index.empty() ? k : file_index[k]; };
+    r.fail(element("springs", place(dup->first)), "duplicates " + element("springs", place(dup->second)) +
                                                " (both join particles " +
                                                std::to_string(std::min(s.i, s.j)) + " and " +
                                                std::to_string(std::max(s.i, s.j)) + ")");
@@ -94,16 +99,24 @@ void check_no_duplicate(const Reporter& r, const Springs& springs, std::size_t c
 // it is reported: the user always sees the first problem in the file.
 template <typename CheckOne>
 void check_springs_in_order(const Reporter& r, const Springs& springs, std::size_t spring_count,
-                            std::size_t particle_count, CheckOne check) {
+                            std::size_t particle_count, CheckOne check,
+                            const std::vector<std::size_t>& file_index = {}) {
   for (std::size_t s = 0; s < spring_count; ++s) {
     try {
       check(s);
     } catch (const SceneError&) {
-      check_no_duplicate(r, springs, std::min(s, springs.size()), particle_count);
+      check_no_duplicate(r, springs, std::min(s, springs.size()), particle_count, file_index);
       throw;
     }
   }
-  check_no_duplicate(r, springs, springs.size(), particle_count);
+  check_no_duplicate(r, springs, springs.size(), particle_count, file_index);
+}
+
+// A spring with an end {"body": b, "X": [...]} instead of a particle index:
+// the body-spring kind's (body_springs.cc), read once the bodies are.
+bool is_body_spring(const Json& j) {
+  return j.is_object() && ((j.contains("i") && j.at("i").is_object()) ||
+                           (j.contains("j") && j.at("j").is_object()));
 }
 
 Spring read_spring(const Reporter& r, const std::string& where, const Json& j,
@@ -137,9 +150,22 @@ void read_springs(const Json& document, const Reporter& r, Scene& scene) {
   require_array(r, "springs", springs);
   Springs& out = scene.block<Springs>();
   out.reserve(springs.size());
-  check_springs_in_order(r, out, springs.size(), scene.particles.size(), [&](std::size_t s) {
-    out.push_back(read_spring(r, element("springs", s), springs[s], scene.particles));
-  });
+  std::vector<std::size_t> file_index;
+  bool body_springs = false;
+  check_springs_in_order(
+      r, out, springs.size(), scene.particles.size(),
+      [&](std::size_t s) {
+        if (is_body_spring(springs[s])) {
+          body_springs = true;
+          return;
+        }
+        if (body_springs && file_index.empty()) {
+          for (std::size_t k = 0; k < out.size(); ++k) file_index.push_back(k);
+        }
+        if (body_springs) file_index.push_back(s);
+        out.push_back(read_spring(r, element("springs", s), springs[s], scene.particles));
+      },
+      file_index);
 }
 
 void validate_springs(const Scene& scene, const Reporter& r) {

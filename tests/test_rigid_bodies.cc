@@ -310,6 +310,46 @@ TEST(RigidBodies, SymplecticEulerEnergyStaysBounded) {
   EXPECT_LT(late, 1e-2);
 }
 
+// Explicit Euler's energy grows: on an undamped mode of frequency w its step
+// is the matrix [[1, h], [-w^2 h, 1]], which in the energy norm (w x, v) is
+// sqrt(1 + (w h)^2) times a rotation, so the mode's energy grows by exactly
+// |1 + i w h|^2 = 1 + (w h)^2 per step (docs/integrators.md). The tumbling
+// box (as built in, spinning) starts with a_3, the axis of least J, stretched
+// by e = 1e-3: the rigidity's fastest mode, w^2 = 8 kappa V / J_3
+// (docs/physics.md "The rigidity's fastest mode"; 3098 rad/s here). At
+// w h = 0.1, 200 steps multiply the energy above the spin's kinetic energy
+// by (1.01)^200 = 7.32; measured 7.27, within 2 % (the mode's amplitude grows to
+// 2.7e-3, whose nonlinearity shifts w by O(e); the spin at w_s h = 2e-4
+// adds 200 (w_s h)^2 = 8e-6 of its 0.99 J).
+TEST(RigidBodies, ExplicitEulersEnergyGrowsByOnePlusWHSquaredPerStep) {
+  Scene scene = make_builtin_scene("tumbling-box");
+  Body& box = scene.block<Bodies>()[0];
+  const double e = 1e-3;
+  box.affine = Eigen::Vector3d(1.0, 1.0, 1.0 + e).asDiagonal();
+  const RigidBody rb = rigid_body(box);
+  const double w = std::sqrt(8.0 * box.rigidity * rb.mass.volume / rb.mass.J.minCoeff());
+  const double h = 0.1 / w;
+  const int steps = 200;
+  const ElasticModel model(scene);
+  const Energies start = model.energies(model.initial_positions(), model.initial_velocities());
+  const double spin = start.kinetic();
+  Recorder rec;
+  const RunResult r = run(scene, "explicit-euler", h, steps * h, &rec);
+  ASSERT_NE(r.status, RunStatus::kFailed) << r.failure;
+  ASSERT_EQ(rec.xs.size(), static_cast<std::size_t>(steps + 1));
+  double previous = start.total() - spin;
+  for (std::size_t k = 1; k < rec.xs.size(); ++k) {  // strictly growing, step by step
+    const double excess = model.energies(rec.xs[k], rec.vs[k]).total() - spin;
+    EXPECT_GT(excess, previous) << "step " << k;
+    previous = excess;
+  }
+  const double growth = previous / (start.total() - spin);
+  const double theory = std::pow(1.0 + (w * h) * (w * h), steps);
+  EXPECT_NEAR(growth / theory, 1.0, 0.02) << "measured " << growth << ", theory " << theory;
+  RecordProperty("explicit_euler_growth", std::to_string(growth));
+  RecordProperty("explicit_euler_growth_theory", std::to_string(theory));
+}
+
 // The Dzhanibekov flip: spun about its middle axis (y), the box turns over:
 // its y axis a_2 points against the spin (a_2 . y < -0.9) within 4 s.
 TEST(RigidBodies, TumblingBoxFlipsUnderRk4) {

@@ -26,15 +26,62 @@
 
   // Orthographic camera. A planar scene is seen face on (x right, the
   // gravity axis up); a 3-D one turned 30 degrees about the vertical and
-  // looked at 20 degrees from above.
+  // looked at 20 degrees from above. With (a, b, c) the two horizontal axes
+  // and the vertical, the screen axes are u = (cy, -sy, 0) and
+  // v = (sy sp, cy sp, cp); the third value returned is the depth toward the
+  // viewer along u x v = (-sy cp, -cy cp, sp) (larger: nearer).
   function camera(data) {
     var up = data.up, h = [0, 1, 2].filter(function (a) { return a !== up; });
     var yaw = data.planar ? 0 : 0.52, pitch = data.planar ? 0 : 0.35;
     var cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
     return function (x, y, z) {
       var p = [x, y, z], a = p[h[0]], b = p[h[1]], c = p[up];
-      return [cy * a - sy * b, c * cp + (sy * a + cy * b) * sp];
+      return [cy * a - sy * b, c * cp + (sy * a + cy * b) * sp, -sy * cp * a - cy * cp * b + sp * c];
     };
+  }
+
+  // The bodies' surface triangles (data.faces) as filled polygons, far ones
+  // first (painter's order by mean depth), each shaded by how squarely it
+  // faces the viewer (|n . view| of its projected area over its area) and
+  // outlined in the panel's colour. A frame past the blow-up bound is only
+  // outlined (its huge triangles would fill the panel).
+  function drawFaces(g, faces, X, base, screen, project, colour, outline) {
+    if (!faces || !faces.length) return;
+    var list = [];
+    faces.forEach(function (f) {
+      var pts = [], depth = 0, ok = true, P = [];
+      for (var m = 0; m < 3; m++) {
+        var i = base + 3 * f[m], q = project(X[i], X[i + 1], X[i + 2]);
+        if (!isFinite(q[0] + q[1] + q[2])) { ok = false; break; }
+        pts.push(screen(X[i], X[i + 1], X[i + 2]));
+        P.push([X[i], X[i + 1], X[i + 2]]);
+        depth += q[2];
+      }
+      if (!ok) return;
+      var e1 = [0, 1, 2].map(function (a) { return P[1][a] - P[0][a]; });
+      var e2 = [0, 1, 2].map(function (a) { return P[2][a] - P[0][a]; });
+      var n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+      var area = Math.hypot(n[0], n[1], n[2]);
+      var shown = Math.abs((pts[1][0] - pts[0][0]) * (pts[2][1] - pts[0][1]) -
+                           (pts[1][1] - pts[0][1]) * (pts[2][0] - pts[0][0]));
+      list.push({pts: pts, depth: depth, shade: area > 0 ? shown : 0, area: area});
+    });
+    var largest = list.reduce(function (m, f) { return Math.max(m, f.area > 0 ? f.shade / f.area : 0); }, 1e-30);
+    list.sort(function (a, b) { return a.depth - b.depth; });
+    g.lineWidth = 1; g.strokeStyle = colour;
+    list.forEach(function (f) {
+      var light = f.area > 0 ? f.shade / f.area / largest : 0;
+      g.beginPath();
+      g.moveTo(f.pts[0][0], f.pts[0][1]); g.lineTo(f.pts[1][0], f.pts[1][1]); g.lineTo(f.pts[2][0], f.pts[2][1]);
+      g.closePath();
+      var keep = g.globalAlpha;
+      if (!outline) {
+        g.fillStyle = '#fff'; g.fill();
+        g.globalAlpha = keep * (0.25 + 0.5 * light); g.fillStyle = colour; g.fill();
+        g.globalAlpha = keep;
+      }
+      g.stroke();
+    });
   }
 
   // Unique edges of the cells (a spring, a triangle's sides, a tetrahedron's).
@@ -132,6 +179,7 @@
         g.moveTo(a[0], a[1]); g.lineTo(b[0], b[1]);
       }
       g.stroke();
+      drawFaces(g, data.faces, X, base, screen, project, p.colour, p.past[k] === 1);
       g.fillStyle = '#000';
       data.fixed.forEach(function (f) {
         var q = screen(X[base + 3 * f], X[base + 3 * f + 1], X[base + 3 * f + 2]);

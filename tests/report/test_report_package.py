@@ -264,6 +264,41 @@ class Motion(unittest.TestCase):
                       "-0.2 E_s", page)
 
 
+class MotionBodies(unittest.TestCase):
+    """A case with rigid bodies: its settings give the points per frame
+    (particles, then the bodies' surface vertices) and the surface
+    triangles, which reach the player as data["particles"] and data["faces"]."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def settings(self, points, faces):
+        d = json.loads((self.s.dir / "motion.json").read_text(encoding="utf-8"))
+        d["cases"][0]["points"] = points
+        d["cases"][0]["faces"] = faces
+        self.s.json("motion.json", d)
+
+    def test_points_and_faces_reach_the_player(self):
+        motion_data(self.s)
+        self.settings(2, [[0, 1, 1]])
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        found = re.search(r'<script type="application/json" class="player-data">(.*?)</script>',
+                          page, re.S)
+        data = json.loads(found.group(1))
+        self.assertEqual(data["particles"], 2)
+        self.assertEqual(data["faces"], [[0, 1, 1]])
+
+    def test_points_set_the_frame_size(self):
+        motion_data(self.s)  # 2 rows a frame
+        self.settings(3, [])
+        status, _ = render(self.s)
+        self.assertNotEqual(status, 0)
+
+
 def contact_data(scratch):
     """A contact experiment: the slide case (theory a = 2) over three steps,
     implicit Euler within 1 % at every step, symplectic Euler only at the

@@ -87,8 +87,12 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
     name = scene.get("name")
     dt = case.get("dt")
     particles = scene.get("particles") or []
-    n = len(particles)
+    # A frame's points: the particles, then the bodies' surface vertices
+    # ("points" in the settings when the scene has bodies), whose triangles
+    # are the case's "faces".
+    n = case.get("points") if isinstance(case.get("points"), int) else len(particles)
     cells = case.get("cells") or []
+    faces = case.get("faces") or []
     fixed = [j for j, p in enumerate(particles) if isinstance(p, dict) and p.get("fixed") is True]
     g = scene.get("gravity")
     up = 1
@@ -155,7 +159,8 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
         if len(axes) == 1 and len(point) >= 2:
             planes.append({"axis": axes[0], "at": float(point[axes[0]])})
     return {"id": "player-%s-%d" % (exp.name, case_index), "scene": name, "dt": dt, "planes": planes,
-            "every": case.get("every", 1), "thinned": every, "particles": n, "cells": cells, "fixed": fixed,
+            "every": case.get("every", 1), "thinned": every, "particles": n, "cells": cells,
+            "faces": faces, "fixed": fixed,
             "up": up, "planar": flat, "bounds": [[float(a) for a in lo], [float(b) for b in hi]],
             "t_end": case.get("t_end"), "panels": panels}
 
