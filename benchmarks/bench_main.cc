@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   sb::register_element_benchmarks();
   sb::register_vtk_benchmarks();
   sb::register_fast_reference_benchmarks();
+  sb::register_fluid_benchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -70,5 +70,6 @@ void register_newton_benchmarks();
 void register_element_benchmarks();
 void register_vtk_benchmarks();
 void register_fast_reference_benchmarks();
+void register_fluid_benchmarks();
 
 }  // namespace springlab::bench

@@ -47,7 +47,7 @@ constexpr double kPatternSkin = 0.25;
 
 class FluidPressureForce final : public ForceTerm {
  public:
-  FluidPressureForce(std::vector<SphParticles> fluids, int dim, int free_particles,
+  FluidPressureForce(std::vector<std::shared_ptr<SphParticles>> fluids, int dim, int free_particles,
                      std::vector<double> x_all)
       : fluids_(std::move(fluids)), dim_(dim), free_(free_particles), x_all0_(std::move(x_all)) {
     follow(x_all0_.data());
@@ -57,7 +57,9 @@ class FluidPressureForce final : public ForceTerm {
   // (fluid_density_projection.cc) instead of the pressure force.
   bool projects_positions() const override { return true; }
   std::unique_ptr<PositionProjection> position_projection() const override {
-    return make_fluid_density_projection(fluids_, x_all0_, dim_, free_);
+    std::vector<SphParticles> own;  // the projection's own copies: it searches elsewhere
+    for (const auto& fluid : fluids_) own.push_back(*fluid);
+    return make_fluid_density_projection(std::move(own), x_all0_, dim_, free_);
   }
   bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
     why = "fluid forces have no projective form (xpbd runs them as position-based fluids)";
@@ -73,7 +75,8 @@ class FluidPressureForce final : public ForceTerm {
 
   double potential_energy(const Configuration& c) const override {
     double sum = 0.0;
-    for (SphParticles& fluid : fluids_) {
+    for (const auto& shared : fluids_) {
+      SphParticles& fluid = *shared;
       fluid.update(c.x);
       for (int a = 0; a < fluid.size(); ++a) {
         sum += fluid.mass(a) * fluid.eos().energy(fluid.density()[static_cast<std::size_t>(a)]);
@@ -84,7 +87,7 @@ class FluidPressureForce final : public ForceTerm {
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
     for (std::size_t f = 0; f < fluids_.size(); ++f) {
-      const SphParticles& fluid = fluids_[f];
+      const SphParticles& fluid = *fluids_[f];
       for (const auto& [a, b] : pattern_[f].pairs()) {
         declare_pair_blocks(builder, fluid.index(a), fluid.index(b), free_);
       }
@@ -95,7 +98,7 @@ class FluidPressureForce final : public ForceTerm {
   bool pattern_varies() const override { return true; }
   bool pattern_holds(const Configuration& c) const override {
     for (std::size_t f = 0; f < fluids_.size(); ++f) {
-      const SphParticles& fluid = fluids_[f];
+      const SphParticles& fluid = *fluids_[f];
       const double limit = 0.5 * kPatternSkin * fluid.kernel().support();
       const std::vector<double>& x0 = pattern_x_[f];
       for (int a = 0; a < fluid.size(); ++a) {
@@ -124,7 +127,7 @@ class FluidPressureForce final : public ForceTerm {
     pattern_.assign(fluids_.size(), NeighbourGrid());
     pattern_x_.assign(fluids_.size(), {});
     for (std::size_t f = 0; f < fluids_.size(); ++f) {
-      const SphParticles& fluid = fluids_[f];
+      const SphParticles& fluid = *fluids_[f];
       std::vector<double>& x0 = pattern_x_[f];
       x0.resize(static_cast<std::size_t>(fluid.size() * dim_));
       for (int a = 0; a < fluid.size(); ++a) {
@@ -139,7 +142,8 @@ class FluidPressureForce final : public ForceTerm {
 
   template <int D>
   void add_force_d(const Configuration& c, double* f) const {
-    for (SphParticles& fluid : fluids_) {
+    for (const auto& shared : fluids_) {
+      SphParticles& fluid = *shared;
       fluid.update(c.x);
       a_.resize(static_cast<std::size_t>(fluid.size()));
       for (int k = 0; k < fluid.size(); ++k) {
@@ -171,7 +175,8 @@ class FluidPressureForce final : public ForceTerm {
 
   template <int D>
   void add_stiffness_d(const Configuration& c, double* values, bool definite) const {
-    for (SphParticles& fluid : fluids_) {
+    for (const auto& shared : fluids_) {
+      SphParticles& fluid = *shared;
       fluid.update(c.x);
       const int n = fluid.size();
       const auto& pairs = fluid.pairs();
@@ -273,7 +278,8 @@ class FluidPressureForce final : public ForceTerm {
     }
   }
 
-  mutable std::vector<SphParticles> fluids_;
+  // Shared with the viscosity (ParticleOrder::sph).
+  std::vector<std::shared_ptr<SphParticles>> fluids_;
   int dim_, free_;
   // The pairs declared in the pattern and the positions they were found at.
   std::vector<NeighbourGrid> pattern_;
@@ -288,10 +294,11 @@ class FluidPressureForce final : public ForceTerm {
 std::unique_ptr<ForceTerm> make_fluid_pressure_force(const Scene& scene, const ParticleOrder& order) {
   const Fluids* fluids = scene.find<Fluids>();
   if (fluids == nullptr || fluids->empty()) return nullptr;
-  std::vector<SphParticles> particles;
-  for (const Fluid& f : *fluids) {
-    particles.push_back(make_sph_particles(scene, f, order.internal_of_scene));
+  std::vector<std::shared_ptr<SphParticles>> particles;
+  for (std::size_t k = 0; k < fluids->size(); ++k) {
+    particles.push_back(shared_sph_particles(scene, k, order));
   }
+
   // All particles' initial positions in the internal order.
   const int dim = order.dim;
   std::vector<double> x(order.scene_of_internal.size() * static_cast<std::size_t>(dim), 0.0);

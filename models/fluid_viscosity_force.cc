@@ -38,7 +38,8 @@ constexpr double kEta2 = 0.01;         // eta^2 / h^2
 
 class FluidViscosityForce final : public ForceTerm {
  public:
-  FluidViscosityForce(std::vector<SphParticles> fluids, std::vector<double> nu, int dim,
+  FluidViscosityForce(std::vector<std::shared_ptr<SphParticles>> fluids, std::vector<double> nu,
+                      int dim,
                       int free_particles, const double* x_all)
       : fluids_(std::move(fluids)), nu_(std::move(nu)), dim_(dim), free_(free_particles) {
     follow(x_all);
@@ -51,7 +52,7 @@ class FluidViscosityForce final : public ForceTerm {
 
   void add_force(const Configuration& c, double* f) const override {
     for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      SphParticles& fluid = fluids_[k];
+      SphParticles& fluid = *fluids_[k];
       fluid.update(c.x);
       const auto& pairs = fluid.pairs();
       for (std::size_t e = 0; e < pairs.size(); ++e) {
@@ -72,7 +73,7 @@ class FluidViscosityForce final : public ForceTerm {
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
     for (std::size_t k = 0; k < fluids_.size(); ++k) {
       for (const auto& [a, b] : pattern_[k].pairs()) {
-        declare_pair_blocks(builder, fluids_[k].index(a), fluids_[k].index(b), free_);
+        declare_pair_blocks(builder, fluids_[k]->index(a), fluids_[k]->index(b), free_);
       }
     }
   }
@@ -80,7 +81,7 @@ class FluidViscosityForce final : public ForceTerm {
   bool pattern_varies() const override { return true; }
   bool pattern_holds(const Configuration& c) const override {
     for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      const SphParticles& fluid = fluids_[k];
+      const SphParticles& fluid = *fluids_[k];
       const double limit = 0.5 * kPatternSkin * fluid.kernel().support();
       for (int a = 0; a < fluid.size(); ++a) {
         double d2 = 0.0;
@@ -105,7 +106,7 @@ class FluidViscosityForce final : public ForceTerm {
     pattern_.assign(fluids_.size(), NeighbourGrid());
     pattern_x_.assign(fluids_.size(), {});
     for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      const SphParticles& fluid = fluids_[k];
+      const SphParticles& fluid = *fluids_[k];
       std::vector<double>& x0 = pattern_x_[k];
       x0.resize(static_cast<std::size_t>(fluid.size() * dim_));
       for (int a = 0; a < fluid.size(); ++a) {
@@ -120,7 +121,7 @@ class FluidViscosityForce final : public ForceTerm {
 
   // C = -2 nu m_a m_b / rho0.
   double coefficient(std::size_t k, int a, int b) const {
-    const SphParticles& fluid = fluids_[k];
+    const SphParticles& fluid = *fluids_[k];
     return -2.0 * nu_[k] * fluid.mass(a) * fluid.mass(b) / fluid.eos().rho0;
   }
   // phi(r) and phi'(r).
@@ -142,7 +143,7 @@ class FluidViscosityForce final : public ForceTerm {
   template <int D>
   void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
     for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      SphParticles& fluid = fluids_[k];
+      SphParticles& fluid = *fluids_[k];
       fluid.update(c.x);
       const auto& pairs = fluid.pairs();
       for (std::size_t e = 0; e < pairs.size(); ++e) {
@@ -177,7 +178,9 @@ class FluidViscosityForce final : public ForceTerm {
     }
   }
 
-  mutable std::vector<SphParticles> fluids_;
+  // Shared with the pressure (ParticleOrder::sph): one search per
+  // configuration for both.
+  std::vector<std::shared_ptr<SphParticles>> fluids_;
   std::vector<double> nu_;
   int dim_, free_;
   std::vector<NeighbourGrid> pattern_;
@@ -191,12 +194,12 @@ std::unique_ptr<ForceTerm> make_fluid_viscosity_force(const Scene& scene,
                                                       const ParticleOrder& order) {
   const Fluids* fluids = scene.find<Fluids>();
   if (fluids == nullptr) return nullptr;
-  std::vector<SphParticles> particles;
+  std::vector<std::shared_ptr<SphParticles>> particles;
   std::vector<double> nu;
-  for (const Fluid& f : *fluids) {
-    if (!(f.viscosity > 0.0)) continue;
-    particles.push_back(make_sph_particles(scene, f, order.internal_of_scene));
-    nu.push_back(f.viscosity);
+  for (std::size_t k = 0; k < fluids->size(); ++k) {
+    if (!((*fluids)[k].viscosity > 0.0)) continue;
+    particles.push_back(shared_sph_particles(scene, k, order));
+    nu.push_back((*fluids)[k].viscosity);
   }
   if (particles.empty()) return nullptr;
   const int dim = order.dim;

@@ -24,6 +24,8 @@
 
 namespace springlab {
 
+class SphParticles;
+
 // How scene particle indices map to the model's internal order (free first).
 struct ParticleOrder {
   int dim = 2;
@@ -34,6 +36,12 @@ struct ParticleOrder {
   // body, at internal indices [free_particles, free_particles +
   // body_particles): after the free particles, before the fixed ones.
   int body_particles = 0;
+  // The fluids' particles as SPH sees them (sph_particles.h), one slot per
+  // fluid of the scene, shared by the terms of one model that read them
+  // (a fluid's pressure and its viscosity: one neighbour search per
+  // configuration, not one per term); the first term to need one makes it
+  // (shared_sph_particles).
+  mutable std::vector<std::shared_ptr<SphParticles>> sph;
 };
 
 // A read-only view of the configuration at which forces are evaluated.

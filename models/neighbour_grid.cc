@@ -14,7 +14,9 @@ std::size_t NeighbourGrid::bucket(std::int64_t cx, std::int64_t cy, std::int64_t
 
 void NeighbourGrid::build(const double* x, int count, int dim, double radius) {
   const std::size_t n = static_cast<std::size_t>(count);
+  const std::size_t pairs_before = pairs_.size();
   pairs_.clear();
+  pairs_.reserve(pairs_before);
   first_.assign(n + 1, 0);
   cell_.assign(3 * n, 0);
   std::size_t table = 16;
@@ -23,7 +25,8 @@ void NeighbourGrid::build(const double* x, int count, int dim, double radius) {
   // A point that is not finite, or so far out that its cell does not fit
   // in 62 bits, gets no cell (no partners).
   constexpr double kFar = 4e18;
-  std::vector<char> binned(n, 1);
+  std::vector<char>& binned = binned_;
+  binned.assign(n, 1);
   for (std::size_t p = 0; p < n; ++p) {
     for (int r = 0; r < dim; ++r) {
       const double c = std::floor(x[p * dim + r] / radius);
@@ -36,7 +39,8 @@ void NeighbourGrid::build(const double* x, int count, int dim, double radius) {
   }
   // Counting sort of the points by bucket.
   bucket_start_.assign(table + 1, 0);
-  std::vector<std::size_t> of(n, 0);
+  std::vector<std::size_t>& of = of_;
+  of.assign(n, 0);
   for (std::size_t p = 0; p < n; ++p) {
     if (!binned[p]) continue;
     of[p] = bucket(cell_[3 * p], cell_[3 * p + 1], cell_[3 * p + 2]);
@@ -44,7 +48,8 @@ void NeighbourGrid::build(const double* x, int count, int dim, double radius) {
   }
   for (std::size_t b = 0; b < table; ++b) bucket_start_[b + 1] += bucket_start_[b];
   order_.assign(static_cast<std::size_t>(bucket_start_[table]), 0);
-  std::vector<int> fill(bucket_start_.begin(), bucket_start_.end() - 1);
+  std::vector<int>& fill = fill_;
+  fill.assign(bucket_start_.begin(), bucket_start_.end() - 1);
   for (std::size_t p = 0; p < n; ++p) {
     if (binned[p]) order_[static_cast<std::size_t>(fill[of[p]]++)] = static_cast<int>(p);
   }

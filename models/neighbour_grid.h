@@ -36,6 +36,10 @@ class NeighbourGrid {
   std::vector<int> first_;
   std::vector<std::int64_t> cell_;       // 3 per point
   std::vector<int> bucket_start_, order_;  // counting sort: points by bucket
+  // Scratch kept between builds (a fluid searches at every evaluation).
+  std::vector<char> binned_;
+  std::vector<std::size_t> of_;
+  std::vector<int> fill_;
   std::size_t mask_ = 0;
 };
 

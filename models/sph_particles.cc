@@ -77,6 +77,17 @@ double lattice_mass(double rho0, double spacing, int dimension) {
   return rho0 / sum;
 }
 
+std::shared_ptr<SphParticles> shared_sph_particles(const Scene& scene, std::size_t k,
+                                                   const ParticleOrder& order) {
+  const Fluids& fluids = scene.get<Fluids>();
+  if (order.sph.size() != fluids.size()) order.sph.resize(fluids.size());
+  if (!order.sph[k]) {
+    order.sph[k] = std::make_shared<SphParticles>(
+        make_sph_particles(scene, fluids[k], order.internal_of_scene));
+  }
+  return order.sph[k];
+}
+
 FluidFields fluid_fields(const Scene& scene, const Fluid& fluid, const double* x) {
   std::vector<int> identity(scene.particles.size());
   for (std::size_t s = 0; s < identity.size(); ++s) identity[s] = static_cast<int>(s);

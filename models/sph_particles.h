@@ -10,10 +10,12 @@
 // comparison, not a search.
 #pragma once
 
+#include <memory>
 #include <utility>
 #include <vector>
 
 #include "models/fluids.h"
+#include "models/force_term.h"
 #include "models/neighbour_grid.h"
 #include "models/sph_kernel.h"
 
@@ -61,5 +63,11 @@ class SphParticles {
 // each scene index) with their masses.
 SphParticles make_sph_particles(const Scene& scene, const Fluid& fluid,
                                 const std::vector<int>& internal_of_scene);
+
+// Those of the scene's fluid number k for one model's terms: made on the
+// first call, then the same object (ParticleOrder::sph), so that terms
+// evaluated at one configuration share its search.
+std::shared_ptr<SphParticles> shared_sph_particles(const Scene& scene, std::size_t k,
+                                                   const ParticleOrder& order);
 
 }  // namespace springlab
