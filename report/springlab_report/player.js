@@ -24,6 +24,18 @@
     return out;
   }
 
+  // A fluid's speeds (data.fluid, panel.speed: base64 bytes, frame x fluid
+  // particle, 0..255 of data.speed_max) and the colour of a level: blue
+  // (slow) through green and yellow to red (fast).
+  function bytes(b64) {
+    var s = atob(b64), out = new Uint8Array(s.length);
+    for (var i = 0; i < s.length; i++) out[i] = s.charCodeAt(i);
+    return out;
+  }
+  function speedColour(level) {
+    return 'hsl(' + Math.round(240 * (1 - level / 255)) + ',85%,45%)';
+  }
+
   // Orthographic camera. A planar scene is seen face on (x right, the
   // gravity axis up); a 3-D one turned 30 degrees about the vertical and
   // looked at 20 degrees from above. With (a, b, c) the two horizontal axes
@@ -115,7 +127,8 @@
       var good = p.energy.filter(function (e, f) { return e !== null && !p.past[f]; });
       var rel = function (e) { return p.Es ? (e - p.E0) / p.Es : 0; };
       var span = good.reduce(function (m, e) { return Math.max(m, Math.abs(rel(e))); }, 1e-3);
-      return {p: p, x: decode(p.x, p.q, n), view: el.querySelector('.player-view'),
+      return {p: p, x: decode(p.x, p.q, n), speed: p.speed ? bytes(p.speed) : null,
+              view: el.querySelector('.player-view'),
               energy: el.querySelector('.player-energy'), value: el.querySelector('.player-value'),
               rel: rel, span: span};
     });
@@ -180,6 +193,15 @@
       }
       g.stroke();
       drawFaces(g, data.faces, X, base, screen, project, p.colour, p.past[k] === 1);
+      if (s.speed && data.fluid) {
+        var nf = data.fluid.length;
+        data.fluid.forEach(function (i, j) {
+          var q = screen(X[base + 3 * i], X[base + 3 * i + 1], X[base + 3 * i + 2]);
+          if (!isFinite(q[0] + q[1])) return;
+          g.fillStyle = speedColour(s.speed[k * nf + j]);
+          g.fillRect(q[0] - 1.5, q[1] - 1.5, 3, 3);
+        });
+      }
       g.fillStyle = '#000';
       data.fixed.forEach(function (f) {
         var q = screen(X[base + 3 * f], X[base + 3 * f + 1], X[base + 3 * f + 2]);

@@ -7,6 +7,7 @@ with report/ on PYTHONPATH. Each test builds a small data directory by hand,
 with known answers, and reads back the figures' labels or the page's
 sentences."""
 
+import base64
 import html
 import json
 import math
@@ -539,6 +540,35 @@ class RigidKind(unittest.TestCase):
                       "0.000652 s (slope -0.5), 1.01 to 1.01 times theory's. The fastest mode "
                       "found numerically matches ω_κ = √(8κV / min J_i) to 0 (relative).", facts)
         self.assertTrue((self.s.dir / "out" / "rigid.png").is_file())
+
+
+class FluidPlayer(unittest.TestCase):
+    """The player's fluid particles: which they are, their speed between
+    frames, and one byte scale for every panel."""
+
+    def test_speeds_between_frames_on_one_scale(self):
+        scene = {"particles": [{"x": [0, 0]}, {"x": [1, 0], "fixed": True}, {"x": [2, 0]},
+                               {"x": [3, 0]}],
+                 "fluids": [{"particles": [0, 3]}]}
+        self.assertEqual(motion.fluid_particles(scene, 4), [0, 2])
+        self.assertEqual(motion.fluid_particles({"particles": []}, 0), [])
+        xyz = np.zeros((3, 4, 3))
+        xyz[1:, 0, 0] = 0.3           # particle 0 moves 0.3 m in the first 0.1 s
+        xyz[2, 2, 1] = 0.4            # particle 2 moves 0.4 m in the second
+        speeds = motion.frame_speeds(xyz, np.array([0.0, 0.1, 0.2]), [0, 2])
+        np.testing.assert_allclose(speeds, [[0, 0], [3, 0], [0, 4]])
+        panels = [{"speed": speeds, "past": [0, 0, 0]},
+                  {"speed": 5 * speeds, "past": [0, 0, 1]}]
+        # The second panel's 20 m/s is past the blow-up bound: the scale is its 15 m/s.
+        self.assertAlmostEqual(motion.encode_speeds(panels), 15.0, places=12)
+        first = np.frombuffer(base64.b64decode(panels[0]["speed"]), dtype=np.uint8)
+        second = np.frombuffer(base64.b64decode(panels[1]["speed"]), dtype=np.uint8)
+        self.assertEqual(list(first), [0, 0, 51, 0, 0, 68])
+        self.assertEqual(list(second), [0, 0, 255, 0, 0, 255])
+        # A panel flagged for its energy gain does not set the scale.
+        panels = [{"speed": speeds, "past": [0, 0, 0]},
+                  {"speed": 5 * speeds, "past": [0, 0, 0], "gain": 2 * motion.GAIN_FLAG_ES}]
+        self.assertAlmostEqual(motion.encode_speeds(panels), 4.0, places=12)
 
 
 def fluid_data(scratch):

@@ -130,17 +130,25 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
             "E0": run.get("energy_initial"), "Es": run.get("energy_scale"),
             "gain": energy_gain(energy[~frame_past], run),
             "t": frame_t, "past": frame_past, "energy": energy, "x": xyz})
+    fluid = fluid_particles(scene, n)
     # Every k-th frame, k as small as keeps the positions within the budget
     # (base64: 4 characters per 3 bytes, 2 bytes a coordinate).
     chars = sum(len(p["t"]) for p in panels) * n * 3 * 2 * 4 / 3
     every = max(1, int(np.ceil(chars / PLAYER_BUDGET_CHARS)))
     for p in panels:
         keep = thinned(p["t"], p["past"], every)
+        if fluid:
+            p["speed"] = frame_speeds(p["x"][keep], p["t"][keep], fluid)
         p["x"], p["q"] = encode_frames(p["x"][keep])
         p["t"] = [float(v) for v in p["t"][keep]]
         p["energy"] = [None if not np.isfinite(e) else float(e) for e in p["energy"][keep]]
         p["past"] = [int(v) for v in p["past"][keep]]
+    speed_max = encode_speeds(panels) if fluid else None
     pts = np.concatenate(good) if good else np.zeros((1, 3))
+    if fluid and good:
+        # A fluid is seen in its box: the first frame (the walls and the
+        # water at rest), not the spray of a run that scattered it.
+        pts = good[0][:n]
     pts = pts[np.all(np.isfinite(pts), axis=1)]
     if len(pts) == 0:
         pts = np.zeros((1, 3))
@@ -160,9 +168,58 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
             planes.append({"axis": axes[0], "at": float(point[axes[0]])})
     return {"id": "player-%s-%d" % (exp.name, case_index), "scene": name, "dt": dt, "planes": planes,
             "every": case.get("every", 1), "thinned": every, "particles": n, "cells": cells,
-            "faces": faces, "fixed": fixed,
+            "faces": faces, "fixed": fixed, "fluid": fluid, "speed_max": speed_max,
             "up": up, "planar": flat, "bounds": [[float(a) for a in lo], [float(b) for b in hi]],
             "t_end": case.get("t_end"), "panels": panels}
+
+
+def fluid_particles(scene, n):
+    """The free particles of the scene's fluids (their "particles" ranges),
+    which the player draws as dots coloured by speed; [] without fluids."""
+    particles = scene.get("particles") or []
+    out = []
+    for f in scene.get("fluids") or []:
+        r = f.get("particles") if isinstance(f, dict) else None
+        if not (isinstance(r, list) and len(r) == 2):
+            continue
+        for i in range(int(r[0]), min(int(r[0]) + int(r[1]), n)):
+            p = particles[i] if i < len(particles) else {}
+            if not (isinstance(p, dict) and p.get("fixed") is True):
+                out.append(i)
+    return out
+
+
+def frame_speeds(xyz, t, fluid):
+    """Each fluid particle's speed in each frame, |x_k - x_(k-1)| / (t_k -
+    t_(k-1)) (the first frame: 0), as (frames, len(fluid)) floats; NaN
+    where a position is not finite."""
+    x = xyz[:, fluid, :]
+    out = np.zeros((len(t), len(fluid)))
+    if len(t) > 1:
+        dt = np.diff(np.asarray(t, dtype=float))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[1:] = np.linalg.norm(np.diff(x, axis=0), axis=2) / dt[:, None]
+    return out
+
+
+def encode_speeds(panels):
+    """Every panel's speeds as base64 bytes, 0..255 of one scale for all
+    panels: the largest finite speed of a frame within the blow-up bound of
+    a panel whose energy gain is not flagged (GAIN_FLAG_ES: a scattered
+    fluid's spray would make every other panel blue); faster ones drawn at
+    255. Returns that largest speed."""
+    top = 0.0
+    for p in panels:
+        if p.get("gain") is not None and p["gain"] > GAIN_FLAG_ES:
+            continue
+        good = p["speed"][~np.array(p["past"], dtype=bool)] if len(p["speed"]) else p["speed"]
+        finite = good[np.isfinite(good)]
+        if len(finite):
+            top = max(top, float(finite.max()))
+    for p in panels:
+        level = np.clip(np.nan_to_num(p["speed"], nan=0.0) / max(top, 1e-300) * 255.0, 0, 255)
+        p["speed"] = base64.b64encode(np.rint(level).astype(np.uint8).tobytes()).decode("ascii")
+    return top
 
 
 def energy_gain(energy, run):
@@ -295,9 +352,14 @@ def player_html(data):
             '<span class="player-time">t = 0 s</span></div>\n'
             '<div class="player-panels">%s</div>\n'
             '<figcaption>%s, dt = %s s: every %s step%s shown%s, %s panels on one clock and one '
-            'camera. Under each panel, (E - E(0)) / E_s over time; the dot is now.</figcaption>\n'
+            'camera. Under each panel, (E - E(0)) / E_s over time; the dot is now.%s</figcaption>\n'
             '<script type="application/json" class="player-data">%s</script>\n</figure>\n'
             % (esc(data["id"]), panels, esc(str(data["scene"])), fmt(data["dt"], 4),
                esc(str(shown)), "" if shown == 1 else "s", thinned,
                len(data["panels"]),
+               "" if not data.get("fluid") else
+               " Fluid particles coloured by speed, the distance between two shown frames over "
+               "their time, from 0 (blue) to %s m/s (red), the fastest of the frames within "
+               "the blow-up bound of any panel whose energy gain is not flagged." % fmt(
+                   data.get("speed_max"), 3),
                json.dumps(data, separators=(",", ":")).replace("</", "<\\/")))
