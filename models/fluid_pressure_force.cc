@@ -33,6 +33,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "models/fluid_forces.h"
@@ -261,18 +263,41 @@ class FluidPressureForce final : public ForceTerm {
           members.push_back(other);
           for (int r = 0; r < D; ++r) gradient.push_back(sign * fluid.mass(other) * g[k * D + r]);
         }
-        for (std::size_t s = 0; s < members.size(); ++s) {
-          const int ps = fluid.index(members[s]);
-          if (ps >= free_) continue;
-          for (std::size_t t = 0; t < members.size(); ++t) {
-            const int pt = fluid.index(members[t]);
-            if (pt >= free_) continue;
-            double B[D][D];
-            for (int i = 0; i < D; ++i) {
-              for (int l = 0; l < D; ++l) B[i][l] = gradient[s * D + i] * gradient[t * D + l];
-            }
-            add<D>(values, ps, pt, B, -weight);
-          }
+        add_rank_one<D>(values, fluid, members, gradient, -weight);
+      }
+    }
+  }
+
+  // values += s g g^T over the blocks (a, k) of the free members a, k (g:
+  // D entries per member). The members' rows are found in each column by
+  // one sweep in increasing order (a pattern of whole blocks has the same
+  // rows in every column of a block column), not by one search per block.
+  template <int D>
+  void add_rank_one(double* values, const SphParticles& fluid, const std::vector<int>& members,
+                    const std::vector<double>& g, double s) const {
+    order_.clear();
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      const int p = fluid.index(members[m]);
+      if (p < free_) order_.emplace_back(p, static_cast<int>(m));
+    }
+    std::sort(order_.begin(), order_.end());
+    const int* outer = pattern_matrix_->outerIndexPtr();
+    const int* inner = pattern_matrix_->innerIndexPtr();
+    for (const auto& [pt, t] : order_) {
+      const int* begin = inner + outer[pt * D];
+      const int* end = inner + outer[pt * D + 1];
+      const int* from = begin;
+      for (const auto& [ps, m] : order_) {
+        from = std::lower_bound(from, end, ps * D);
+        if (from == end || *from != ps * D) {
+          throw std::logic_error("fluid: a Jacobian block is not in the pattern");
+        }
+        const int rank = static_cast<int>(from - begin);
+        for (int c = 0; c < D; ++c) {
+          double* column = values + outer[pt * D + c] + rank;
+          const double gc = g[static_cast<std::size_t>(t * D + c)];
+          // (As add_block: s times the product, the same rounding.)
+          for (int r = 0; r < D; ++r) column[r] += s * (g[static_cast<std::size_t>(m * D + r)] * gc);
         }
       }
     }
@@ -287,6 +312,7 @@ class FluidPressureForce final : public ForceTerm {
   const SparseMatrix* pattern_matrix_ = nullptr;
   std::vector<double> x_all0_;  // every particle at the start, internal order
   mutable std::vector<double> a_;
+  mutable std::vector<std::pair<int, int>> order_;  // add_rank_one's (index, member)
 };
 
 }  // namespace

@@ -9,14 +9,22 @@ BlockSlot find_block_slot(const SparseMatrix& pattern, int dim, int a, int b) {
   BlockSlot slot;
   const int* outer = pattern.outerIndexPtr();
   const int* inner = pattern.innerIndexPtr();
+  // A pattern of whole blocks (ElasticModel::build_pattern) has the same
+  // rows in every column of a block column: the first column's search
+  // places the block in the others too, where one comparison confirms it
+  // (and a search runs only where it does not).
+  int rank = -1;  // the block's first row's place within its column
   for (int c = 0; c < dim; ++c) {
     const int col = b * dim + c;
     const int* begin = inner + outer[col];
     const int* end = inner + outer[col + 1];
-    const int* hit = std::lower_bound(begin, end, a * dim);
+    const int* hit = rank >= 0 && rank < end - begin && begin[rank] == a * dim
+                         ? begin + rank
+                         : std::lower_bound(begin, end, a * dim);
     if (hit == end || *hit != a * dim) {
       throw std::logic_error("find_block_slot: block not in the Jacobian pattern");
     }
+    rank = static_cast<int>(hit - begin);
     slot.offset[c] = static_cast<int>(hit - inner);
   }
   return slot;
