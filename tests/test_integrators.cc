@@ -22,7 +22,23 @@ using testing::damped_windy_chain;
 using testing::oscillator;
 using testing::swinging_spring;
 
+// The tests for every method; each suite after it applies to the methods
+// whose IntegratorInfo meets its condition, and is instantiated over those
+// only (tests/test_registry_coverage.cc checks that each method is in every
+// suite that applies to it).
 class EveryIntegrator : public testing::RegistryTest {};
+// Fixed step, one step the scalar map R(z) on y' = lambda y.
+class EveryIntegratorWithR : public testing::RegistryTest {};
+bool fixed_step_with_r(const IntegratorInfo& i) { return i.stability_function && !i.adaptive; }
+// Fixed step (an adaptive method's accuracy follows its tolerance:
+// AdaptiveIntegrator.ErrorFallsWithTolerance, tests/test_sundials.cc).
+class EveryFixedStepIntegrator : public testing::RegistryTest {};
+bool fixed_step(const IntegratorInfo& i) { return !i.adaptive; }
+class EverySymplecticIntegrator : public testing::RegistryTest {};
+bool symplectic(const IntegratorInfo& i) { return i.symplectic; }
+// Iterates Newton to --newton-tol.
+class EveryNewtonIntegrator : public testing::RegistryTest {};
+bool iterates_newton(const IntegratorInfo& i) { return i.iterates_to_tolerance; }
 
 double mechanical_energy(const ElasticModel& m, const Vector& x, const Vector& v) {
   return m.energies(x, v).total();
@@ -30,9 +46,8 @@ double mechanical_energy(const ElasticModel& m, const Vector& x, const Vector& v
 
 // On the undamped oscillator one step multiplies the energy by |R(i w h)|^2
 // exactly, for any method whose step is the scalar map R on y' = lambda y.
-TEST_P(EveryIntegrator, OscillatorEnergyFactorPerStepIsExact) {
+TEST_P(EveryIntegratorWithR, OscillatorEnergyFactorPerStepIsExact) {
   const IntegratorInfo i = info();
-  if (!i.stability_function || i.adaptive) GTEST_SKIP() << "no scalar stability function";
   const ElasticModel model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double wh : {0.1, 0.7, 2.5}) {
@@ -73,9 +88,8 @@ double observed_order(const std::string& name, int order, const Scene& scene, do
   return std::log2(error[0] / error[1]);
 }
 
-TEST_P(EveryIntegrator, ConvergenceOrderOnOscillatorMatchesTheory) {
+TEST_P(EveryFixedStepIntegrator, ConvergenceOrderOnOscillatorMatchesTheory) {
   const IntegratorInfo i = info();
-  if (i.adaptive) GTEST_SKIP() << "adaptive: tested by tolerance proportionality";
   const double k = 100.0, w = 10.0, rest = 0.0, amplitude = 0.1, t_end = 1.0;
   Vector x_exact(2), v_exact(2);
   x_exact << rest + amplitude * std::cos(w * t_end), 0.0;
@@ -94,9 +108,8 @@ RunResult reference_run(const Scene& scene, double t_end) {
   return simulate(model, s);
 }
 
-TEST_P(EveryIntegrator, ConvergenceOrderOnNonlinearScenesMatchesTheory) {
+TEST_P(EveryFixedStepIntegrator, ConvergenceOrderOnNonlinearScenesMatchesTheory) {
   const IntegratorInfo i = info();
-  if (i.adaptive) GTEST_SKIP() << "adaptive: tested by tolerance proportionality";
   for (const Scene& scene : {swinging_spring(), damped_windy_chain()}) {
     const RunResult ref = reference_run(scene, 0.5);
     ASSERT_EQ(ref.status, RunStatus::kCompleted);
@@ -106,9 +119,7 @@ TEST_P(EveryIntegrator, ConvergenceOrderOnNonlinearScenesMatchesTheory) {
 }
 
 // Symplectic methods: the energy error oscillates without drift.
-TEST_P(EveryIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
-  const IntegratorInfo i = info();
-  if (!i.symplectic) GTEST_SKIP() << "not symplectic";
+TEST_P(EverySymplecticIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
   for (const Scene& scene : {oscillator(), swinging_spring()}) {
     const ElasticModel model(scene);
     auto integrator = make_integrator(GetParam());
@@ -151,9 +162,8 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
 // Compressed springs: Newton's matrix is indefinite, Newton must still
 // converge (the line search keeps it on course), never crash. (A single
 // linearized step, Baraff-Witkin's, has no such guarantee: it diverges here.)
-TEST_P(EveryIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
+TEST_P(EveryNewtonIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
   const IntegratorInfo i = info();
-  if (!i.iterates_to_tolerance) GTEST_SKIP() << "does not iterate Newton to a tolerance";
   const ElasticModel model(testing::compressed_chain());
   const double h = 0.2;
   SparseMatrix dfdx;
@@ -425,6 +435,10 @@ TEST_P(EveryIntegrator, SameInputsGiveBitIdenticalResults) {
 
 INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegrator, ::testing::ValuesIn(integrator_names()),
                          testing::registry_test_name);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(EveryIntegratorWithR, fixed_step_with_r);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(EveryFixedStepIntegrator, fixed_step);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(EverySymplecticIntegrator, symplectic);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(EveryNewtonIntegrator, iterates_newton);
 
 }  // namespace
 }  // namespace springlab

@@ -17,6 +17,7 @@
 #include "models/materials/kinematics.h"
 #include "models/materials/material.h"
 #include "models/materials/tangent3.h"
+#include "registry_suite.h"
 
 namespace springlab {
 namespace {
@@ -40,6 +41,26 @@ std::string case_name(const ::testing::TestParamInfo<MaterialCase>& info) {
   std::string name(info.param.model->name);
   std::replace(name.begin(), name.end(), '-', '_');
   return name + "_" + std::to_string(info.param.rows) + "x" + std::to_string(info.param.cols);
+}
+
+void PrintTo(const MaterialCase& c, std::ostream* os) {
+  *os << c.model->name << ", " << c.rows << " x " << c.cols;
+}
+
+// The cases that meet `applies` (from the model's declared members and the
+// shape of F), for a suite whose tests apply to those only; recorded for
+// tests/test_registry_coverage.cc.
+std::vector<MaterialCase> cases_where(const std::string& suite,
+                                      bool (*applies)(const MaterialCase&)) {
+  std::vector<MaterialCase> out;
+  std::vector<std::string> names;
+  for (const MaterialCase& c : cases()) {
+    if (!applies(c)) continue;
+    out.push_back(c);
+    names.push_back(case_name({c, 0}));
+  }
+  testing::conditional_suites()[suite] = names;
+  return out;
 }
 
 // Rubber-like: E = 1e5 Pa, nu = 0.4.
@@ -69,6 +90,33 @@ class EveryMaterial : public ::testing::TestWithParam<MaterialCase> {
     return Q;
   }
 };
+
+// The suites below apply to the cases their condition selects.
+// A square F (2 x 2, 3 x 3): the linear model is not defined for membranes.
+class EveryMaterialSquareF : public EveryMaterial {};
+bool square(const MaterialCase& c) { return c.rows == c.cols; }
+bool solid(const MaterialCase& c) { return c.rows == 3 && c.cols == 3; }
+// 3 x 3, with the closed-form tangent blocks of the tetrahedra's fast path.
+class EveryMaterialClosedFormBlocks3 : public EveryMaterial {};
+bool solid_closed_form_blocks(const MaterialCase& c) {
+  return solid(c) && c.model->tangent_blocks3 != nullptr;
+}
+// 3 x 3, with a fixed-size P.
+class EveryMaterialFixedSizeStress3 : public EveryMaterial {};
+bool solid_fixed_size_stress(const MaterialCase& c) { return solid(c) && c.model->P3 != nullptr; }
+// 3 x 3, deriving something from F to keep between calls.
+class EveryMaterialDerived3 : public EveryMaterial {};
+bool solid_derives(const MaterialCase& c) {
+  const MaterialModel& m = *c.model;
+  return solid(c) && (m.derive3 != nullptr || m.Psi3_derived != nullptr ||
+                      m.P3_derived != nullptr || m.tangent_blocks3_derived != nullptr);
+}
+// 3 x 3, with functions for kLanes elements at once.
+class EveryMaterialLanes3 : public EveryMaterial {};
+bool solid_lanes(const MaterialCase& c) {
+  return solid(c) &&
+         (c.model->derive3_lanes != nullptr || c.model->tangent_blocks3_derived_lanes != nullptr);
+}
 
 TEST_P(EveryMaterial, RestIsStressFreeWithZeroEnergy) {
   EXPECT_NEAR(model().Psi(identity(), kLame), 0.0, 1e-9 * kLame.mu);
@@ -117,9 +165,7 @@ TEST_P(EveryMaterial, TangentIsTheDerivativeOfTheStress) {
 // A(d_i, d_j) for the rows of a random D) are the contraction of the tangent
 // assembled from dP, entry for entry, at random deformations and -- for
 // every model defined there -- inverted ones (J < 0).
-TEST_P(EveryMaterial, ClosedFormSolidTangentBlocksAreTheContractedTangent) {
-  if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
-  if (model().tangent_blocks3 == nullptr) GTEST_SKIP() << "no closed form: contracted from dP";
+TEST_P(EveryMaterialClosedFormBlocks3, ClosedFormSolidTangentBlocksAreTheContractedTangent) {
   std::mt19937 rng(19);
   std::uniform_real_distribution<double> entry(-1.0, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
@@ -136,9 +182,7 @@ TEST_P(EveryMaterial, ClosedFormSolidTangentBlocksAreTheContractedTangent) {
 
 // The fixed-size P of a 3 x 3 F (the tetrahedra's force) is P, inverted F
 // included.
-TEST_P(EveryMaterial, FixedSizeStressIsTheStress) {
-  if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
-  if (model().P3 == nullptr) GTEST_SKIP() << "no fixed-size instance: P";
+TEST_P(EveryMaterialFixedSizeStress3, FixedSizeStressIsTheStress) {
   std::mt19937 rng(23);
   for (int trial = 0; trial < 10; ++trial) {
     Mat F = deformed(rng);
@@ -154,12 +198,8 @@ TEST_P(EveryMaterial, FixedSizeStressIsTheStress) {
 // neo-Hookean: ln J) gives its energy, P and blocks with it passed in (the
 // tetrahedra keep it between calls at one state): given what it derives
 // from F itself, each is its plain counterpart, inverted F included.
-TEST_P(EveryMaterial, FunctionsOfWhatItDerivesAreThePlainOnes) {
-  if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
+TEST_P(EveryMaterialDerived3, FunctionsOfWhatItDerivesAreThePlainOnes) {
   const MaterialModel& m = model();
-  const bool any = m.derive3 != nullptr || m.Psi3_derived != nullptr ||
-                   m.P3_derived != nullptr || m.tangent_blocks3_derived != nullptr;
-  if (!any) GTEST_SKIP() << "derives nothing to keep";
   // All four or none: the tetrahedra take each when they keep it.
   ASSERT_TRUE(m.derive3 != nullptr && m.Psi3_derived != nullptr && m.P3_derived != nullptr &&
               m.tangent_blocks3_derived != nullptr);
@@ -190,12 +230,8 @@ TEST_P(EveryMaterial, FunctionsOfWhatItDerivesAreThePlainOnes) {
 // than the series' range of the polar decomposition allows), inverted ones
 // and strongly stretched ones side by side, each with its own D and
 // Lame parameters.
-TEST_P(EveryMaterial, LanesAreTheOneElementFunctionsBitForBit) {
-  if (GetParam().rows != 3 || GetParam().cols != 3) GTEST_SKIP() << "3 x 3 only";
+TEST_P(EveryMaterialLanes3, LanesAreTheOneElementFunctionsBitForBit) {
   const MaterialModel& m = model();
-  if (m.derive3_lanes == nullptr && m.tangent_blocks3_derived_lanes == nullptr) {
-    GTEST_SKIP() << "no lanes";
-  }
   // The blocks in lanes take what derive3 gives.
   ASSERT_NE(m.derive3, nullptr);
   ASSERT_NE(m.derive3_lanes, nullptr);
@@ -261,8 +297,7 @@ TEST_P(EveryMaterial, EnergyIsInvariantUnderRotationButLinearIsNot) {
 
 // Small strain: every model agrees with linear elasticity to first order,
 // so their stresses at F = I + eps G differ by O(eps^2).
-TEST_P(EveryMaterial, SmallStrainStressIsLinearElasticity) {
-  if (GetParam().rows != GetParam().cols) GTEST_SKIP() << "linear is not defined for membranes";
+TEST_P(EveryMaterialSquareF, SmallStrainStressIsLinearElasticity) {
   const Mat G = (Mat(GetParam().rows, GetParam().cols) << Mat::Random(GetParam().rows,
                                                                       GetParam().cols))
                     .finished();
@@ -277,6 +312,25 @@ TEST_P(EveryMaterial, SmallStrainStressIsLinearElasticity) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterial, ::testing::ValuesIn(cases()), case_name);
+INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialSquareF,
+                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialSquareF", square)),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialClosedFormBlocks3,
+                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialClosedFormBlocks3",
+                                                         solid_closed_form_blocks)),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialFixedSizeStress3,
+                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialFixedSizeStress3",
+                                                         solid_fixed_size_stress)),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialDerived3,
+                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialDerived3",
+                                                         solid_derives)),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialLanes3,
+                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialLanes3",
+                                                         solid_lanes)),
+                         case_name);
 
 TEST(Materials, LameParametersFromYoungAndPoisson) {
   const Lame m = lame(2.6e5, 0.3);

@@ -39,6 +39,44 @@ bool stiff_decay_stable(const IntegratorInfo& i) {
   return i.stability == StabilityKind::kAAlpha || stable_on_imaginary_axis(i);
 }
 
+// DeclaredStability checks every method's declaration; each suite below
+// checks a prediction that applies to the methods whose declaration meets
+// its condition, and is instantiated over those only
+// (tests/test_registry_coverage.cc checks that each method is in every suite
+// that applies to it, and has its declaration checked by a run).
+
+// Has a scalar R(z) (not partitioned, not adaptive).
+class DeclaredStabilityWithR : public testing::RegistryTest {};
+bool has_r(const IntegratorInfo& i) { return static_cast<bool>(i.stability_function); }
+// Fixed step and a claim on the imaginary axis (A(alpha) makes none near it).
+class DeclaredStabilityOnTheAxis : public testing::RegistryTest {};
+bool fixed_step_axis_claim(const IntegratorInfo& i) {
+  return !i.adaptive && i.stability != StabilityKind::kAAlpha;
+}
+class DeclaredLStability : public testing::RegistryTest {};
+bool fixed_step_l_stable(const IntegratorInfo& i) {
+  return !i.adaptive && i.stability == StabilityKind::kL;
+}
+// A finite, positive step limit.
+class DeclaredStepLimit : public testing::RegistryTest {};
+bool fixed_step_positive_limit(const IntegratorInfo& i) {
+  return !i.adaptive && i.stability == StabilityKind::kConditional && i.stability_limit != 0.0;
+}
+// No stable step without damping (limit 0: explicit Euler).
+class DeclaredNoStableStep : public testing::RegistryTest {};
+bool no_stable_step(const IntegratorInfo& i) {
+  return i.stability == StabilityKind::kConditional && i.stability_limit == 0.0;
+}
+// Fixed step, with a prediction for a damped stiff mode: a fast solver's
+// explicit damping, a region holding the negative real axis, or R(z); a
+// partitioned method has none of these (its limit is for undamped modes).
+class DeclaredStabilityFixedStepDecay : public testing::RegistryTest {};
+bool fixed_step_decay_prediction(const IntegratorInfo& i) {
+  return !i.adaptive && (i.jacobian_free || stiff_decay_stable(i) || i.stability_function);
+}
+class DeclaredStabilityAdaptiveDecay : public testing::RegistryTest {};
+bool adaptive(const IntegratorInfo& i) { return i.adaptive; }
+
 // k = 1e4, m = 1, drag 1e4: x'' = -1e4 x - 1e4 x', eigenvalues
 // lambda = -5e3 -+ sqrt(2.5e7 - 1e4): -9999.0 (fast) and -1.0001 (slow).
 constexpr double kFastRate = 9999.0;
@@ -76,9 +114,8 @@ TEST_P(DeclaredStability, EveryMethodDeclaresAConsistentProperty) {
 // The declaration against R(z): A-stable means |R| <= 1 on the closed left
 // half-plane, L-stable also R -> 0 far out, a limit c means |R(i y)| <= 1 up
 // to y = c and not beyond.
-TEST_P(DeclaredStability, StabilityFunctionHasTheDeclaredRegion) {
+TEST_P(DeclaredStabilityWithR, StabilityFunctionHasTheDeclaredRegion) {
   const IntegratorInfo i = info();
-  if (!i.stability_function) GTEST_SKIP() << "no scalar stability function";
   const auto R = [&](double re, double im) { return std::abs(i.stability_function({re, im})); };
   if (stable_on_imaginary_axis(i)) {
     for (double re : {0.0, -1e-3, -0.5, -3.0, -100.0, -1e6}) {
@@ -101,10 +138,8 @@ TEST_P(DeclaredStability, StabilityFunctionHasTheDeclaredRegion) {
   }
 }
 
-TEST_P(DeclaredStability, UndampedStiffOscillatorAtWh100) {
+TEST_P(DeclaredStabilityOnTheAxis, UndampedStiffOscillatorAtWh100) {
   const IntegratorInfo i = info();
-  if (i.adaptive) GTEST_SKIP() << "adaptive: the step is the error control's";
-  if (i.stability == StabilityKind::kAAlpha) GTEST_SKIP() << "A(alpha): no claim near the axis";
   const ElasticModel model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(100.0 / 10.0, 1000.0));
   if (stable_on_imaginary_axis(i)) {
@@ -115,20 +150,15 @@ TEST_P(DeclaredStability, UndampedStiffOscillatorAtWh100) {
   }
 }
 
-TEST_P(DeclaredStability, LStableMethodsDampAStiffModeInOneStep) {
-  const IntegratorInfo i = info();
-  if (i.adaptive || i.stability != StabilityKind::kL) GTEST_SKIP() << "not a fixed-step L-stable";
+TEST_P(DeclaredLStability, LStableMethodsDampAStiffModeInOneStep) {
   const ElasticModel model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(100.0 / 10.0, 10.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT(r.energy_final, 1e-2 * r.energy_initial);  // implicit Euler: 1 / (1 + 100^2)
 }
 
-TEST_P(DeclaredStability, ConditionalLimitHoldsJustBelowAndFailsJustAbove) {
+TEST_P(DeclaredStepLimit, ConditionalLimitHoldsJustBelowAndFailsJustAbove) {
   const IntegratorInfo i = info();
-  if (i.adaptive || i.stability != StabilityKind::kConditional || i.stability_limit == 0.0) {
-    GTEST_SKIP() << "no finite, positive step limit";
-  }
   const ElasticModel model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double factor : {0.99, 1.01}) {
@@ -140,11 +170,7 @@ TEST_P(DeclaredStability, ConditionalLimitHoldsJustBelowAndFailsJustAbove) {
 
 // Explicit Euler has no stable step without damping: it blows up, and the
 // run says when.
-TEST_P(DeclaredStability, NoStableStepWithoutDampingDivergesAsAResult) {
-  const IntegratorInfo i = info();
-  if (i.stability != StabilityKind::kConditional || i.stability_limit != 0.0) {
-    GTEST_SKIP() << "has a stable range";
-  }
+TEST_P(DeclaredNoStableStep, NoStableStepWithoutDampingDivergesAsAResult) {
   const ElasticModel model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(0.05, 100.0));
   ASSERT_EQ(r.status, RunStatus::kDiverged);
@@ -158,9 +184,8 @@ TEST_P(DeclaredStability, NoStableStepWithoutDampingDivergesAsAResult) {
 // mode leaves the region; partitioned methods (symplectic Euler, Verlet) have
 // none, and their declared limit is for undamped modes only (Verlet's closing
 // half-kick treats the drag implicitly: it survives this decay).
-TEST_P(DeclaredStability, FixedStepThroughAStiffDecayAtHLambda100) {
+TEST_P(DeclaredStabilityFixedStepDecay, FixedStepThroughAStiffDecayAtHLambda100) {
   const IntegratorInfo i = info();
-  if (i.adaptive) GTEST_SKIP() << "adaptive: see the next test";
   const ElasticModel model(overdamped_stiff_spring());
   const double h = 100.0 / kFastRate;
   const RunResult r = simulate(model, settings(h, 1.0));
@@ -173,18 +198,15 @@ TEST_P(DeclaredStability, FixedStepThroughAStiffDecayAtHLambda100) {
   } else if (stiff_decay_stable(i)) {
     ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
     EXPECT_LT(r.energy_final, r.energy_initial);
-  } else if (i.stability_function) {
+  } else {  // R(z): fixed_step_decay_prediction
     const double growth = std::abs(i.stability_function({-h * kFastRate, 0.0}));
     EXPECT_GT(growth, 1.0);
     EXPECT_EQ(r.status, RunStatus::kDiverged) << "|R(h lambda_fast)| = " << growth;
-  } else {
-    GTEST_SKIP() << "partitioned: no scalar region to predict a damped mode";
   }
 }
 
-TEST_P(DeclaredStability, AdaptiveStepsThroughAStiffDecay) {
+TEST_P(DeclaredStabilityAdaptiveDecay, AdaptiveStepsThroughAStiffDecay) {
   const IntegratorInfo i = info();
-  if (!i.adaptive) GTEST_SKIP() << "fixed step: see the previous test";
   const ElasticModel model(overdamped_stiff_spring());
   const double t_end = 20.0;
   RunSettings s = settings(1.0, t_end);
@@ -203,6 +225,14 @@ TEST_P(DeclaredStability, AdaptiveStepsThroughAStiffDecay) {
 
 INSTANTIATE_TEST_SUITE_P(Registry, DeclaredStability, ::testing::ValuesIn(integrator_names()),
                          testing::registry_test_name);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStabilityWithR, has_r);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStabilityOnTheAxis, fixed_step_axis_claim);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredLStability, fixed_step_l_stable);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStepLimit, fixed_step_positive_limit);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredNoStableStep, no_stable_step);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStabilityFixedStepDecay,
+                                             fixed_step_decay_prediction);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStabilityAdaptiveDecay, adaptive);
 
 }  // namespace
 }  // namespace springlab

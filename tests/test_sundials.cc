@@ -15,27 +15,14 @@
 #include "integrators/sundials_integrator.h"
 #include "models/builtin_scenes.h"
 #include "models/elastic_model.h"
+#include "registry_suite.h"
 #include "scenes_for_tests.h"
 
 namespace springlab {
 namespace {
 
-std::vector<std::string> adaptive_names(bool implicit_only) {
-  std::vector<std::string> names;
-  for (const std::string& name : integrator_names()) {
-    const IntegratorInfo i = make_integrator(name)->info();
-    if (i.adaptive && (!implicit_only || i.implicit)) names.push_back(name);
-  }
-  return names;
-}
-
-std::string test_name(const ::testing::TestParamInfo<std::string>& p) {
-  std::string name = p.param;
-  for (char& c : name) {
-    if (c == '-') c = '_';
-  }
-  return name;
-}
+bool is_adaptive(const IntegratorInfo& i) { return i.adaptive; }
+bool is_adaptive_implicit(const IntegratorInfo& i) { return i.adaptive && i.implicit; }
 
 RunSettings adaptive(const std::string& name, double rtol, double dt, double t_end) {
   RunSettings s;
@@ -340,10 +327,8 @@ TEST(SundialsFailure, FailureTimeIsWhereTheSolverStopped) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry, AdaptiveIntegrator, ::testing::ValuesIn(adaptive_names(false)),
-                         test_name);
-INSTANTIATE_TEST_SUITE_P(Registry, AdaptiveImplicitIntegrator,
-                         ::testing::ValuesIn(adaptive_names(true)), test_name);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(AdaptiveIntegrator, is_adaptive);
+SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(AdaptiveImplicitIntegrator, is_adaptive_implicit);
 
 // Two different solvers on two different formulations (CVODE on y' = f(y),
 // IDA on the residual form) and a tiny-step RK4 agree on the chain.
