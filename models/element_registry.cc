@@ -27,6 +27,7 @@ const ElementKind& body_contact_kind();    // body_forces.cc
 const ElementKind& body_friction_kind();   // body_forces.cc
 const ElementKind& body_spring_kind();     // body_springs.cc
 const ElementKind& body_body_contact_kind();  // body_body_contact.cc
+const ElementKind& body_body_friction_kind();  // body_body_friction.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -47,6 +48,7 @@ const std::vector<const ElementKind*>& element_kinds() {
       &body_friction_kind(),
       &body_spring_kind(),
       &body_body_contact_kind(),
+      &body_body_friction_kind(),
   };
   return kinds;
 }
