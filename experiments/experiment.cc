@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +27,9 @@ Row& Row::add(const std::string& text) {
 }
 
 Row& Row::add(double value) {
+  // A value that was not measured (NaN: a run that failed, a column that does
+  // not apply) is an empty field, as experiments/README.md says.
+  if (std::isnan(value)) return add_empty();
   separate();
   text_ += format_number(value);
   return *this;

@@ -367,6 +367,17 @@ EnergyCsv::EnergyCsv(const ElasticModel& model, OutputFile& file)
 
 void EnergyCsv::observe(double t, const Vector& x, const Vector& v) {
   model_.energies(x, v, energies_);
+  const std::vector<std::size_t>& works = model_.energy_layout().works;
+  work_.resize(works.size(), 0.0);
+  power_.resize(works.size(), 0.0);
+  for (std::size_t k = 0; k < works.size(); ++k) {
+    const double power = model_.column_power(works[k], t, x, v);
+    if (!first_) work_[k] -= 0.5 * (t - t_previous_) * (power + power_[k]);
+    power_[k] = power;
+    energies_.add(works[k], work_[k]);
+  }
+  t_previous_ = t;
+  first_ = false;
   std::string row = format_number(t);
   for (double value : energies_.values()) row += ',' + format_number(value);
   file_.write(row + '\n');

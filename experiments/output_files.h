@@ -93,6 +93,12 @@ class EnergyCsv final : public Observer {
   const ElasticModel& model_;
   OutputFile& file_;
   Energies energies_;
+  // The work columns (models/energies.h: viscous-work): the work done
+  // against their forces, -integral F.v dt, by the trapezoid rule over the
+  // rows written.
+  std::vector<double> work_, power_;
+  double t_previous_ = 0.0;
+  bool first_ = true;
 };
 
 // --trajectory: t,i,x,y[,z],vx,vy[,vz], one row per particle in scene order.

@@ -1,15 +1,15 @@
 #include "experiments/simulation.h"
 
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "experiments/divergence_check.h"
 #include "integrators/registry.h"
-#include "models/springs.h"
+#include "models/decimal_text.h"
 
 namespace springlab {
 
@@ -45,9 +45,7 @@ TimeGrid make_time_grid(double dt, double t_end) {
   grid.steps = std::max(grid.steps, 1L);
 
   // dt's shortest decimal, d x 10^e: "0.3" -> 3, -1; "2.5e-07" -> 25, -8.
-  char text[32];
-  const auto written = std::to_chars(text, text + sizeof text, dt);
-  const std::string decimal(text, written.ptr);
+  const std::string decimal = shortest_decimal(dt);
   const auto e_at = decimal.find('e');
   std::string mantissa = decimal.substr(0, e_at);
   int exponent = e_at == std::string::npos ? 0 : std::stoi(decimal.substr(e_at + 1));
@@ -74,111 +72,6 @@ std::vector<double> time_grid(double dt, double t_end) {
   for (long k = 1; k <= grid.steps; ++k) times.push_back(grid.at(k));
   return times;
 }
-
-namespace {
-
-// docs/command-line.md "The command line"'s divergence rule, checked after every step at the cost
-// of one pass over the state instead of an energy evaluation (a pass over every
-// spring with a square root each, as much as the force).
-//
-// The certificate. For a spring of stiffness k and rest length L between
-// particles i and j, with d = x_i - x_j, l = |d|, and any reference state
-// (d_ref, l_ref): |l - L| <= |l - l_ref| + |l_ref - L| <= |d - d_ref| +
-// |l_ref - L| (triangle inequality), so with (a + b)^2 <= 2 a^2 + 2 b^2
-//   k (l - L)^2 / 2 <= k |d - d_ref|^2 + k (l_ref - L)^2,
-// and |d - d_ref|^2 <= 2 |dx_i|^2 + 2 |dx_j|^2 (dx = x - x_ref). Summed over
-// the springs,
-//   U_spring(x) <= 2 U_spring(x_ref) + 2 kappa |x - x_ref|^2,
-// kappa the largest sum of the stiffnesses of one particle's springs. So
-//   T(v) + 2 U_spring(x_ref) + 2 kappa |x - x_ref|^2 <= blowup E_s
-// proves kinetic + spring energy within the bound; the left side takes one
-// pass over x and v, and it is not finite whenever the state is not (a
-// non-finite value fails the comparison). Only when it cannot prove the
-// state good is the energy evaluated (the exact rule, as before), and a good
-// state becomes the new reference. The decision is exactly the rule's at
-// every step (the certificate only ever says "good" when the rule does);
-// what changes is the cost: the reference moves every so many steps (after
-// a motion of about sqrt(blowup E_s / (4 kappa)) in the whole state), not
-// every step.
-class DivergenceCheck {
- public:
-  DivergenceCheck(const ElasticModel& model, double bound)
-      : model_(model), bound_(bound), mass_(model.mass()), energies_(model.energies(
-                                                              model.initial_positions(),
-                                                              model.initial_velocities())) {
-    // The certificate bounds the spring energy only: with other potentials
-    // that count with it (elements, contact) every state is checked exactly.
-    const EnergyLayout& layout = model.energy_layout();
-    const std::size_t spring = layout.find("spring");
-    certifies_ = layout.counts_with_spring.size() == 1 && layout.counts_with_spring[0] == spring;
-    x_ref_ = model.initial_positions();  // (read by the pass even when it certifies nothing)
-    if (!certifies_) return;
-    std::vector<double> kappa(static_cast<std::size_t>(model.particle_count()), 0.0);
-    if (const Springs* springs = model.scene().find<Springs>()) {
-      for (const Spring& s : *springs) {
-        kappa[static_cast<std::size_t>(s.i)] += s.k;
-        kappa[static_cast<std::size_t>(s.j)] += s.k;
-      }
-    }
-    for (double k : kappa) two_kappa_ = std::max(two_kappa_, 2.0 * k);
-    x_ref_ = model.initial_positions();
-    u_ref_ = energies_["spring"];
-  }
-
-  // True when (x, v) is not finite or its kinetic + spring energy exceeds
-  // the bound (with a bound of 0: only when it is not finite). The same pass
-  // copies (x, v) to (x_copy, v_copy): the driver's last good state.
-  bool diverged(const Vector& x, const Vector& v, Vector& x_copy, Vector& v_copy) {
-    const Eigen::Index n = x.size();
-    x_copy.resize(n);
-    v_copy.resize(n);
-    if (!(bound_ > 0.0)) {
-      x_copy = x;
-      v_copy = v;
-      return !x.allFinite() || !v.allFinite();
-    }
-    const double* px = x.data();
-    const double* pv = v.data();
-    const double* pr = x_ref_.data();
-    const double* pm = mass_.data();
-    double* cx = x_copy.data();
-    double* cv = v_copy.data();
-    double momentum2 = 0.0, drift2 = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const double xi = px[i], vi = pv[i];
-      cx[i] = xi;
-      cv[i] = vi;
-      momentum2 += pm[i] * vi * vi;
-      const double d = xi - pr[i];
-      drift2 += d * d;
-    }
-    // (Finite, as the rule asks of the state, also when the bound is not.)
-    if (certifies_) {
-      const double certificate = 0.5 * momentum2 + 2.0 * u_ref_ + two_kappa_ * drift2;
-      if (std::isfinite(certificate) && certificate <= bound_) return false;
-    }
-    if (!x.allFinite() || !v.allFinite()) return true;
-    model_.energies(x, v, energies_);
-    if (energies_.kinetic_and_spring() > bound_ || !std::isfinite(energies_.total())) return true;
-    if (certifies_) {
-      x_ref_ = x;
-      u_ref_ = energies_["spring"];
-    }
-    return false;
-  }
-
- private:
-  const ElasticModel& model_;
-  double bound_;
-  const Vector& mass_;
-  Energies energies_;
-  bool certifies_ = false;
-  double two_kappa_ = 0.0;
-  Vector x_ref_;
-  double u_ref_ = 0.0;
-};
-
-}  // namespace
 
 namespace {
 
@@ -261,7 +154,9 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
       if (stop_requested()) throw StopRequested();
       result.status = RunStatus::kFailed;
       result.failure = step.message;
-      result.diverged_at = t;
+      // A fixed-step method failed in the step ending at t; an adaptive one
+      // says how far it got (CVODE's t reached), which is where it failed.
+      result.diverged_at = integrator->t() > t_good ? integrator->t() : t;
       break;
     }
     const Vector& x = integrator->x();

@@ -1,5 +1,7 @@
 #include "experiments/vtk_series.h"
 
+#include "models/fluids.h"
+
 #include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -252,6 +254,34 @@ void VtkSeries::observe(double t, const Vector& x, const Vector& v) {
   };
   std::string fixed;
   for (unsigned char f : fixed_) fixed += f ? "1 " : "0 ";
+  // A scene with fluids: each point's SPH density and pressure
+  // (models/fluids.h; 0 for a point of no fluid).
+  std::string fluid_data;
+  if (const Fluids* fluids = model_.scene().find<Fluids>(); fluids != nullptr && !fluids->empty()) {
+    const Eigen::Index points = positions.rows();
+    std::vector<double> density(static_cast<std::size_t>(points), 0.0), pressure(density);
+    const int dim = model_.dimension();
+    std::vector<double> flat(static_cast<std::size_t>(model_.particle_count() * dim));
+    for (int s = 0; s < model_.particle_count(); ++s) {
+      for (int r = 0; r < dim; ++r) flat[static_cast<std::size_t>(s * dim + r)] = positions(s, r);
+    }
+    for (const Fluid& f : *fluids) {
+      const FluidFields fields = fluid_fields(model_.scene(), f, flat.data());
+      for (int a = 0; a < f.count; ++a) {
+        density[static_cast<std::size_t>(f.first + a)] = fields.density[static_cast<std::size_t>(a)];
+        pressure[static_cast<std::size_t>(f.first + a)] = fields.pressure[static_cast<std::size_t>(a)];
+      }
+    }
+    auto list = [](const std::vector<double>& values) {
+      std::string text;
+      for (double value : values) text += format_number(value) + ' ';
+      return text;
+    };
+    fluid_data = "        <DataArray type=\"Float64\" Name=\"density\" format=\"ascii\">" +
+                 list(density) + "</DataArray>\n" +
+                 "        <DataArray type=\"Float64\" Name=\"pressure\" format=\"ascii\">" +
+                 list(pressure) + "</DataArray>\n";
+  }
   // Straight into the temporary folder, which is ours and registered
   // (signals.h): no temporary of its own, and no listing of the folder per
   // frame (which made a series quadratic in its frames, issue 38.4).
@@ -268,7 +298,7 @@ void VtkSeries::observe(double t, const Vector& x, const Vector& v) {
           "        <DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">";
   text += triples(velocities);
   text += "</DataArray>\n        <DataArray type=\"UInt8\" Name=\"fixed\" format=\"ascii\">" + fixed +
-          "</DataArray>\n      </PointData>\n"
+          "</DataArray>\n" + fluid_data + "      </PointData>\n"
           "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">";
   text += triples(positions);
   text += "</DataArray>\n      </Points>\n";

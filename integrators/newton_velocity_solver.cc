@@ -65,7 +65,18 @@ StepResult ImplicitIntegrator::do_initialize() {
   jacobian_ = SparseMatrix();
   preconditioner_matrix_ = SparseMatrix();
   dfdv_ = SparseMatrix();  // the next system may not need it
+  jacobian_version_ = preconditioner_matrix_version_ = -1;
+  direct_version_ = preconditioner_version_ = -1;
   return StepResult::success();
+}
+
+bool ImplicitIntegrator::factorize_on(SparseDirectSolver& solver, long& analysed, long version,
+                                      const SparseMatrix& a, MatrixKind kind) {
+  if (analysed != version) {
+    solver.reset();  // a new pattern: a new symbolic analysis
+    analysed = version;
+  }
+  return solver.factorize(a, kind);
 }
 
 void ImplicitIntegrator::stage(double h, const VelocityImplicitScheme& s, const Vector& v) {
@@ -128,7 +139,10 @@ void ImplicitIntegrator::assemble(double t, const Vector& x, const Vector& v, do
   }
   // All three share the model's pattern: combine value by value.
   if (&out == &jacobian_) direct_current_ = false;
-  if (out.nonZeros() != dfdx_.nonZeros()) out = dfdx_;
+  const long version = system().pattern_version();
+  long& out_version = &out == &jacobian_ ? jacobian_version_ : preconditioner_matrix_version_;
+  if (out_version != version || out.nonZeros() != dfdx_.nonZeros()) out = dfdx_;
+  out_version = version;
   const Eigen::Index nnz = dfdx_.nonZeros();
   const double* px = dfdx_.valuePtr();
   double* pj = out.valuePtr();
@@ -152,8 +166,11 @@ bool ImplicitIntegrator::refresh_preconditioner(double t, const Vector& x, const
     a = &preconditioner_matrix_;
   }
   ++mutable_stats().factorizations;
-  preconditioner_valid_ = preconditioner_.factorize(*a, MatrixKind::kPositiveDefinite) &&
-                          preconditioner_.positive_definite();
+  preconditioner_valid_ =
+      factorize_on(preconditioner_, preconditioner_version_,
+                   a == &jacobian_ ? jacobian_version_ : preconditioner_matrix_version_, *a,
+                   MatrixKind::kPositiveDefinite) &&
+      preconditioner_.positive_definite();
   cg_slow_ = 0;
   if (!preconditioner_valid_ && preconditioner_.out_of_memory()) {
     error = out_of_memory_text(preconditioner_);
@@ -180,7 +197,7 @@ ImplicitIntegrator::LinearSolve ImplicitIntegrator::solve_linear(
     }
     ++mutable_stats().factorizations;
     direct_current_ = true;
-    if (!direct_.factorize(jacobian_, kind)) {
+    if (!factorize_on(direct_, direct_version_, jacobian_version_, jacobian_, kind)) {
       direct_current_ = false;
       error = direct_.out_of_memory() ? out_of_memory_text(direct_)
                                       : "the Newton matrix is singular (" + direct_.error() + ")";
@@ -272,8 +289,9 @@ bool ImplicitIntegrator::solve_linearized(double t, const Vector& x, const Vecto
     ++mutable_stats().linear_solves;
     ++mutable_stats().factorizations;
     direct_current_ = false;
-    if (!direct_.factorize(jacobian_, system().jacobian_symmetric() ? MatrixKind::kSymmetric
-                                                                    : MatrixKind::kGeneral)) {
+    if (!factorize_on(direct_, direct_version_, jacobian_version_, jacobian_,
+                      system().jacobian_symmetric() ? MatrixKind::kSymmetric
+                                                    : MatrixKind::kGeneral)) {
       error = direct_.out_of_memory() ? out_of_memory_text(direct_)
                                       : "the step's matrix is singular (" + direct_.error() + ")";
       return false;

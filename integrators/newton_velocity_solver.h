@@ -178,6 +178,16 @@ class ImplicitIntegrator : public Integrator {
   SparseMatrix dfdx_, dfdv_, jacobian_, preconditioner_matrix_;
   SparseDirectSolver direct_;          // factorizations of jacobian_ itself
   SparseDirectSolver preconditioner_;  // the kept Cholesky factor
+  // Which pattern (MechanicalSystem::pattern_version) each matrix holds and
+  // each solver analysed (-1: none yet): a system whose pattern varies
+  // (fluids) may hand a new one at any evaluation; a solver given a matrix
+  // of another pattern forgets its analysis first. With one pattern
+  // (springs, elements) these stay equal after the first matrix.
+  long jacobian_version_ = -1, preconditioner_matrix_version_ = -1;
+  long direct_version_ = -1, preconditioner_version_ = -1;
+  // factorize() of `solver` for a matrix of pattern `version`.
+  static bool factorize_on(SparseDirectSolver& solver, long& analysed, long version,
+                           const SparseMatrix& a, MatrixKind kind);
   bool preconditioner_valid_ = false;
   // Linearized steps (one solve each) left to start with a fresh factor.
   int fresh_steps_ = 0;

@@ -4,14 +4,10 @@
 #include <functional>
 #include <stdexcept>
 
-#include "integrators/arkode_ark.h"
-#include "integrators/arkode_erk.h"
 #include "integrators/bdf2.h"
-#include "integrators/cvode_integrator.h"
 #include "integrators/discrete_gradient.h"
 #include "integrators/explicit_euler.h"
 #include "integrators/generalized_alpha.h"
-#include "integrators/ida_integrator.h"
 #include "integrators/implicit_euler.h"
 #include "integrators/implicit_midpoint.h"
 #include "integrators/linear_implicit_euler.h"
@@ -23,6 +19,14 @@
 #include "integrators/verlet.h"
 #include "integrators/xpbd.h"
 #include "integrators/yoshida.h"
+// SUNDIALS's adaptive methods: absent from the web build (web/), which has
+// no SUNDIALS.
+#ifndef SPRINGLAB_NO_SUNDIALS
+#include "integrators/arkode_ark.h"
+#include "integrators/arkode_erk.h"
+#include "integrators/cvode_integrator.h"
+#include "integrators/ida_integrator.h"
+#endif
 
 namespace springlab {
 namespace {
@@ -38,22 +42,17 @@ Entry entry() {
   return {Method().name(), [] { return std::unique_ptr<Integrator>(new Method()); }};
 }
 
-// One line per method, sorted by name.
+// One line per method, sorted by name (hand-written methods, then SUNDIALS's;
+// integrator_names() sorts them all).
 const std::vector<Entry>& registry() {
   static const std::vector<Entry> entries = {
-      entry<ArkodeDirk>(),
-      entry<ArkodeErk>(),
-      entry<ArkodeImex>(),
       entry<Bdf2>(),
       entry<CentralDifference>(),
-      entry<CvodeAdams>(),
-      entry<CvodeBdf>(),
       entry<DiscreteGradient>(),
       entry<ExplicitEuler>(),
       entry<FoxGoodwin>(),
       entry<GeneralizedAlpha>(),
       entry<HhtAlpha>(),
-      entry<IdaIntegrator>(),
       entry<ImplicitEuler>(),
       entry<ImplicitMidpoint>(),
       entry<LinearAcceleration>(),
@@ -67,6 +66,14 @@ const std::vector<Entry>& registry() {
       entry<Xpbd>(),
       entry<Yoshida4>(),
       entry<Yoshida6>(),
+#ifndef SPRINGLAB_NO_SUNDIALS
+      entry<ArkodeDirk>(),
+      entry<ArkodeErk>(),
+      entry<ArkodeImex>(),
+      entry<CvodeAdams>(),
+      entry<CvodeBdf>(),
+      entry<IdaIntegrator>(),
+#endif
   };
   return entries;
 }

@@ -49,6 +49,7 @@
 namespace springlab {
 
 enum class MatrixKind { kPositiveDefinite, kSymmetric, kGeneral };
+class PositiveDefiniteFactor;
 
 // How a positive definite factor is used, which picks CHOLMOD's layout:
 //   - kRefactoredOften (Newton: a new factor every iteration or step, a few
@@ -137,8 +138,8 @@ class SparseDirectSolver {
   bool fits(const SparseMatrix& a);
   bool fail_out_of_memory(const SparseMatrix& a, const std::string& where);
 
-  struct Cholmod;  // CHOLMOD's common block and factor (cholmod.h stays in the .cc)
-  std::unique_ptr<Cholmod> cholmod_;
+  // LL^T: CHOLMOD natively, Eigen's in the web build (positive_definite_factor.h).
+  std::unique_ptr<PositiveDefiniteFactor> cholesky_;
   Eigen::SimplicialLDLT<SparseMatrix> ldlt_;
   Eigen::SparseLU<SparseMatrix> lu_;
   bool ldlt_analyzed_ = false;

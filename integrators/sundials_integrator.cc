@@ -122,6 +122,15 @@ StepResult SundialsIntegrator::do_initialize() {
   if (std::string why = check_options(options(), n()); !why.empty()) {
     return StepResult::failure(name() + ": " + why);
   }
+  if (method_.newton_matrix && system().pattern_varies()) {
+    // Its Newton matrix (first_order_jacobian.h) and KLU's analysis keep
+    // the pattern of the first step.
+    return StepResult::failure(
+        name() + ": this system's Jacobian pattern changes as its particles change neighbours "
+                 "(a fluid), and SUNDIALS' Newton matrices keep the pattern of the first step: "
+                 "use arkode-erk (adaptive, explicit), or implicit-euler, bdf2 or another "
+                 "implicit method of springlab's own");
+  }
   step_limit_ = sundials_step_limit(options(), 2 * n());
   try {
     if (!context_) {

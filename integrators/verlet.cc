@@ -13,6 +13,7 @@ VelocityVerlet::VelocityVerlet()
 StepResult VelocityVerlet::do_initialize() {
   have_acceleration_ = false;
   solver_.reset();  // the next system's matrix may have another pattern
+  solver_version_ = -1;
   return StepResult::success();
 }
 
@@ -50,6 +51,10 @@ StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half
     // M - h/2 dF/dv is symmetric positive definite: dF/dv of drag, wind and
     // spring damping is symmetric negative semidefinite.
     ++mutable_stats().factorizations;
+    if (solver_version_ != system().pattern_version()) {
+      solver_.reset();  // a system whose pattern varies handed a new one
+      solver_version_ = system().pattern_version();
+    }
     if (!solver_.factorize(lhs_, MatrixKind::kPositiveDefinite)) {
       return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
     }
@@ -78,6 +83,10 @@ StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vect
     lhs_.diagonal() += m;
     ++mutable_stats().newton_iterations;
     ++mutable_stats().factorizations;
+    if (solver_version_ != system().pattern_version()) {
+      solver_.reset();  // a system whose pattern varies handed a new one
+      solver_version_ = system().pattern_version();
+    }
     if (!solver_.factorize(lhs_, MatrixKind::kPositiveDefinite)) {
       return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
     }

@@ -47,6 +47,7 @@ class VelocityVerlet : public Integrator {
   Vector a_, f0_, rhs_, v_half_, dv_, v_try_, f_try_, r_try_;
   SparseMatrix dfdv_, lhs_;
   SparseDirectSolver solver_;
+  long solver_version_ = -1;  // the pattern solver_ analysed (a fluid's varies)
 };
 
 }  // namespace springlab

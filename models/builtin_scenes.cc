@@ -3,12 +3,12 @@
 #include "models/builtin_scenes.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <map>
 #include <optional>
 
 #include "models/contact.h"
+#include "models/decimal_text.h"
 #include "models/drag.h"
 #include "models/gravity.h"
 #include "models/springs.h"
@@ -26,6 +26,12 @@ Scene build_slope(const std::map<std::string, double>& p);
 Scene build_tumbling_box(const std::map<std::string, double>& p);
 Scene build_box_on_slope(const std::map<std::string, double>& p);
 Scene build_box_pile(const std::map<std::string, double>& p);
+// builtin_fluids.cc: the fluid scenes.
+Scene build_dam_break(const std::map<std::string, double>& p);
+Scene build_tank(const std::map<std::string, double>& p);
+Scene build_sloshing(const std::map<std::string, double>& p);
+double dam_break_particles(const std::map<std::string, double>& p);
+double tank_particles(const std::map<std::string, double>& p);
 Scene build_box_chain(const std::map<std::string, double>& p);
 
 namespace {
@@ -57,11 +63,7 @@ struct Generator {
   const char* size_parameter = nullptr;        // the parameter the counts grow with
 };
 
-std::string format_number(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
+std::string format_number(double value) { return shortest_decimal(value); }
 
 // The whole text must be one finite decimal number: "", "1x", "nan", "inf",
 // " 1" are refused (strtod would accept some of them, or a prefix).
@@ -70,8 +72,8 @@ std::optional<double> parse_number(const std::string& text) {
   const char* last = text.data() + text.size();
   if (first != last && *first == '+' && last - first > 1 && first[1] != '-') ++first;
   double value = 0.0;
-  const auto result = std::from_chars(first, last, value);
-  if (result.ec != std::errc() || result.ptr != last || !std::isfinite(value)) return std::nullopt;
+  const char* end = read_decimal(first, last, value);
+  if (end != last || !std::isfinite(value)) return std::nullopt;
   return value;
 }
 
@@ -226,6 +228,9 @@ Counts block_counts(const Values& p) {
 
 
 
+Counts dam_break_counts(const Values& p) { return {dam_break_particles(p), 0.0}; }
+Counts tank_counts(const Values& p) { return {tank_particles(p), 0.0}; }
+
 // Structural 2 n (n-1), shear 2 (n-1)^2, bend 2 n (n-2), as build_cloth makes them.
 Counts cloth_counts(const Values& p) {
   const double n = p.at("n");
@@ -235,6 +240,19 @@ Counts cloth_counts(const Values& p) {
 ParameterSpec param(const char* name, double value, const char* meaning, Range range,
                     double min = 0.0, double max = 0.0) {
   return {{name, value, meaning}, range, min, max};
+}
+
+// The fluid scenes' shared parameters (builtin_fluids.cc).
+std::vector<ParameterSpec> fluid_params(double spacing, double alpha) {
+  return {param("spacing", spacing, "particle spacing l [m] (smoothing length 1.3 l)",
+                Range::kPositive),
+          param("dimension", 2, "2: particles in the x-y plane, 3: in space", Range::kWhole, 2, 3),
+          param("density", 1000, "rest density rho0 [kg/m^3]", Range::kPositive),
+          param("sound", 10, "speed of sound as a multiple of sqrt(g H), H the water's height",
+                Range::kPositive),
+          param("alpha", alpha, "viscosity as Monaghan's alpha: nu = alpha h c / (2 (d + 2))",
+                Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kPositive)};
 }
 
 // The material parameters of the finite-element scenes.
@@ -406,6 +424,30 @@ const std::vector<Generator>& generators() {
                 Range::kPositive),
           param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
          build_box_on_slope},
+        {{"dam-break",
+          "a water column a wide and 2a high released against the wall of a box 5a long "
+          "(Martin and Moyce 1952), weakly compressible SPH with wall particles",
+          {}},
+         with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive)},
+              fluid_params(0.005, 0.02)),
+         build_dam_break, dam_break_counts, "spacing"},
+        {{"tank",
+          "water at rest in a box: it settles to hydrostatic pressure rho0 g depth",
+          {}},
+         with({param("width", 0.5, "width of the box (and 4x its depth along z in 3-D) [m]",
+                     Range::kPositive),
+               param("depth", 0.25, "depth of the water [m]", Range::kPositive)},
+              fluid_params(0.0125, 0.1)),
+         build_tank, tank_counts, "spacing"},
+        {{"sloshing",
+          "the first standing wave of a tank (period 2 pi / w, w^2 = g k tanh(k H), k = pi / "
+          "width), started from rest level with the mode's velocity",
+          {}},
+         with({param("amplitude", 0.01, "the wave's amplitude at the walls [m]", Range::kAny),
+               param("width", 0.5, "width of the box [m]", Range::kPositive),
+               param("depth", 0.25, "depth of the water [m]", Range::kPositive)},
+              fluid_params(0.0125, 0.02)),
+         build_sloshing, tank_counts, "spacing"},
         {{"box-pile",
           "n boxes, each shrink times the one below, turned and tilted, dropped onto one "
           "another and onto the ground, with friction",

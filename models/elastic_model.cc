@@ -90,23 +90,9 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     }
   }
 
-  // One pattern for dF/dx and dF/dv: the full diagonal plus every block a
-  // term declares. Values stay zero here; terms cache their slots in it.
-  JacobianPatternBuilder builder(dim);
-  for (int p = 0; p < unknown_particles; ++p) builder.add_block(p, p);
-  for (const auto& term : terms_) term->declare_jacobian_blocks(builder);
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(builder.blocks().size() * static_cast<std::size_t>(dim * dim));
-  for (const auto& [a, b] : builder.blocks()) {
-    for (int r = 0; r < dim; ++r)
-      for (int c = 0; c < dim; ++c) entries.emplace_back(a * dim + r, b * dim + c, 0.0);
-  }
-  pattern_.resize(n, n);
-  pattern_.setFromTriplets(entries.begin(), entries.end());
-  pattern_.makeCompressed();
-  std::fill(pattern_.valuePtr(), pattern_.valuePtr() + pattern_.nonZeros(), 0.0);
+  build_pattern();
   for (const auto& term : terms_) {
-    term->bind_jacobian(pattern_);
+    pattern_varies_ = pattern_varies_ || term->pattern_varies();
     symmetric_ = symmetric_ && term->symmetric_jacobians();
     derives_from_potentials_ = derives_from_potentials_ && term->derives_from_potentials();
     velocity_dependence_ = std::max(velocity_dependence_, term->velocity_dependence());
@@ -162,6 +148,29 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     if (bodies.first[b] >= 0) free_mass += bodies.bodies[b].mass.mass;
   }
   energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
+}
+
+// One pattern for dF/dx and dF/dv: the full diagonal plus every block a
+// term declares. Values stay zero here; terms cache their slots in it.
+void ElasticModel::build_pattern() const {
+  const int dim = order_.dim;
+  const int unknown_particles = order_.free_particles + order_.body_particles;
+  const Eigen::Index n = static_cast<Eigen::Index>(unknown_particles) * dim;
+  JacobianPatternBuilder builder(dim);
+  for (int p = 0; p < unknown_particles; ++p) builder.add_block(p, p);
+  for (const auto& term : terms_) term->declare_jacobian_blocks(builder);
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(builder.blocks().size() * static_cast<std::size_t>(dim * dim));
+  for (const auto& [a, b] : builder.blocks()) {
+    for (int r = 0; r < dim; ++r)
+      for (int c = 0; c < dim; ++c) entries.emplace_back(a * dim + r, b * dim + c, 0.0);
+  }
+  pattern_ = SparseMatrix();
+  pattern_.resize(n, n);
+  pattern_.setFromTriplets(entries.begin(), entries.end());
+  pattern_.makeCompressed();
+  std::fill(pattern_.valuePtr(), pattern_.valuePtr() + pattern_.nonZeros(), 0.0);
+  for (const auto& term : terms_) term->bind_jacobian(pattern_);
 }
 
 Configuration ElasticModel::stored_configuration(double t) const {
@@ -252,9 +261,28 @@ void ElasticModel::assemble_jacobians(ForcePart part, bool definite, double t, c
                                          const Vector& v, SparseMatrix* dfdx,
                                          SparseMatrix* dfdv) const {
   const Configuration c = configure(t, x, v);
+  if (pattern_varies_) {
+    // A term whose couplings moved past its declared blocks declares anew
+    // around c, and the pattern is rebuilt: a new version.
+    bool holds = true;
+    for (const auto& term : terms_) {
+      if (term->pattern_varies() && !term->pattern_holds(c)) holds = false;
+    }
+    if (!holds) {
+      for (const auto& term : terms_) {
+        if (term->pattern_varies()) term->follow_pattern(c);
+      }
+      build_pattern();
+      ++pattern_version_;
+    }
+  }
   for (SparseMatrix* m : {dfdx, dfdv}) {
     if (m == nullptr) continue;
-    if (m->nonZeros() != pattern_.nonZeros() || m->rows() != pattern_.rows()) *m = pattern_;
+    // (With a varying pattern an equal count does not mean an equal
+    // pattern: always the current one.)
+    if (pattern_varies_ || m->nonZeros() != pattern_.nonZeros() || m->rows() != pattern_.rows()) {
+      *m = pattern_;
+    }
     std::fill(m->valuePtr(), m->valuePtr() + m->nonZeros(), 0.0);
   }
   double* dx = dfdx != nullptr ? dfdx->valuePtr() : nullptr;
@@ -286,6 +314,16 @@ void ElasticModel::energies(const Vector& x, const Vector& v, Energies& e) const
     }
   }
   e.finish();
+}
+
+double ElasticModel::column_power(std::size_t column, double t, const Vector& x,
+                                  const Vector& v) const {
+  const Configuration c = configure(t, x, v);
+  f_all_.setZero();
+  for (std::size_t k = 0; k < terms_.size(); ++k) {
+    if (term_column_[k] == static_cast<long>(column)) terms_[k]->add_force(c, f_all_.data());
+  }
+  return f_all_.head(dofs()).dot(v);
 }
 
 double ElasticModel::nonconservative_power(double t, const Vector& x, const Vector& v) const {

@@ -42,6 +42,8 @@ class ElasticModel final : public MechanicalSystem {
   // rate at which they change the mechanical energy.
   double nonconservative_power(double t, const Vector& x, const Vector& v) const override;
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
+  bool pattern_varies() const override { return pattern_varies_; }
+  long pattern_version() const override { return pattern_version_; }
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
   bool has_forbidden_states() const override;
@@ -62,6 +64,9 @@ class ElasticModel final : public MechanicalSystem {
   int dimension() const { return order_.dim; }
   int particle_count() const { return static_cast<int>(order_.internal_of_scene.size()); }
   int free_particle_count() const { return order_.free_particles; }
+  // Which unknowns a scene particle has: internal index p (free when
+  // p < free_particle_count(), its coordinates at x[p * dim ..]).
+  const ParticleOrder& particle_order() const { return order_; }
   const Scene& scene() const { return scene_; }
 
   // Initial state of the free degrees of freedom.
@@ -73,6 +78,10 @@ class ElasticModel final : public MechanicalSystem {
   const EnergyLayout& energy_layout() const { return *energy_layout_; }
   const std::vector<std::string>& energy_columns() const { return energy_layout_->columns; }
   Energies energies(const Vector& x, const Vector& v) const;
+  // F.v of the forces whose kind reports in energy column `column` (a work
+  // column: viscous-work), at (t, x, v): its rate, which the time series
+  // accumulate (EnergyColumn::work).
+  double column_power(std::size_t column, double t, const Vector& x, const Vector& v) const;
   // The same into `out` (made by energies() once), without allocating.
   void energies(const Vector& x, const Vector& v, Energies& out) const;
 
@@ -104,7 +113,11 @@ class ElasticModel final : public MechanicalSystem {
   std::vector<long> term_column_;
   mutable Vector dx_all_;  // admissible_fraction's step, all particles
   std::shared_ptr<const EnergyLayout> energy_layout_;
-  SparseMatrix pattern_;
+  mutable SparseMatrix pattern_;
+  bool pattern_varies_ = false;
+  mutable long pattern_version_ = 0;
+  // Builds pattern_ from the terms' declared blocks and binds them to it.
+  void build_pattern() const;
   // What every term says now (friction's answers change while it lags).
   mutable bool symmetric_ = true;
   mutable bool derives_from_potentials_ = true;

@@ -25,6 +25,8 @@ const ElementKind& body_kind();            // bodies.cc
 const ElementKind& body_gravity_kind();    // body_forces.cc
 const ElementKind& body_contact_kind();    // body_forces.cc
 const ElementKind& body_friction_kind();   // body_forces.cc
+const ElementKind& fluid_kind();           // fluid_kind.cc
+const ElementKind& fluid_viscosity_kind(); // fluid_viscosity_force.cc
 const ElementKind& body_spring_kind();     // body_springs.cc
 const ElementKind& body_body_contact_kind();  // body_body_contact.cc
 const ElementKind& body_body_friction_kind();  // body_body_friction.cc
@@ -46,6 +48,8 @@ const std::vector<const ElementKind*>& element_kinds() {
       &body_gravity_kind(),
       &body_contact_kind(),
       &body_friction_kind(),
+      &fluid_kind(),
+      &fluid_viscosity_kind(),
       &body_spring_kind(),
       &body_body_contact_kind(),
       &body_body_friction_kind(),

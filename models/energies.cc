@@ -12,6 +12,7 @@ namespace {
 // Whether the scene has any element of this kind (an optional column is
 // reported only then).
 bool has_elements(const ElementKind& kind, const Scene& scene) {
+  if (kind.energy.present != nullptr) return kind.energy.present(scene);
   if (kind.has_elements != nullptr && kind.has_elements(scene)) return true;
   return std::any_of(kind.keys.begin(), kind.keys.end(), [&](const SceneKey& key) {
     return key.count != nullptr && key.count(scene) > 0;
@@ -28,7 +29,7 @@ std::size_t EnergyLayout::find(std::string_view column) const {
 EnergyLayout energy_layout(const Scene& scene) { return energy_layout({&scene}); }
 
 EnergyLayout energy_layout(const std::vector<const Scene*>& scenes) {
-  std::vector<const EnergyColumn*> always, present;
+  std::vector<const EnergyColumn*> always, present, works;
   auto add_once = [](std::vector<const EnergyColumn*>& list, const EnergyColumn& c) {
     const bool known = std::any_of(list.begin(), list.end(),
                                    [&](const EnergyColumn* seen) { return seen->name == c.name; });
@@ -37,7 +38,12 @@ EnergyLayout energy_layout(const std::vector<const Scene*>& scenes) {
   for (const ElementKind* kind : element_kinds()) {
     const EnergyColumn& c = kind->energy;
     if (c.name.empty()) continue;
-    if (c.always) {
+    if (c.work) {
+      if (std::any_of(scenes.begin(), scenes.end(),
+                      [&](const Scene* s) { return has_elements(*kind, *s); })) {
+        add_once(works, c);
+      }
+    } else if (c.always) {
       add_once(always, c);
     } else if (std::any_of(scenes.begin(), scenes.end(),
                            [&](const Scene* s) { return has_elements(*kind, *s); })) {
@@ -56,6 +62,10 @@ EnergyLayout energy_layout(const std::vector<const Scene*>& scenes) {
   layout.total = layout.columns.size();
   layout.columns.push_back("total");
   for (const EnergyColumn* c : present) add_potential(c);
+  for (const EnergyColumn* c : works) {
+    layout.works.push_back(layout.columns.size());
+    layout.columns.emplace_back(c->name);
+  }
   return layout;
 }
 

@@ -30,6 +30,15 @@ struct EnergyColumn {
   // in its energy scale E_s (spring; docs/physics.md "Finite elements", "Contact with planes":
   // elastic, contact); gravity does not.
   bool counts_with_spring = false;
+  // A work column (docs/physics.md "Energies": "viscous-work"): the work
+  // done against the kind's dissipative force since t = 0, a number of the
+  // run's history, not of its state. It is not a potential and not in the
+  // total; model.energies() leaves it 0 and the time series that report it
+  // (--energy) accumulate it with ElasticModel::column_power.
+  bool work = false;
+  // For a kind without keys of its own: whether a scene has its elements
+  // (the column is reported only then). nullptr: its keys say.
+  bool (*present)(const Scene& scene) = nullptr;
 };
 
 // The columns of one model's (or one table's) energy report.
@@ -40,6 +49,8 @@ struct EnergyLayout {
   std::vector<std::size_t> potentials;          // positions of the potential columns
   // The subset of docs/command-line.md "The command line"'s rule.
   std::vector<std::size_t> counts_with_spring;
+  // The work columns (EnergyColumn::work), after the potentials.
+  std::vector<std::size_t> works;
   // Position of `column`, or columns.size() when the layout has none.
   std::size_t find(std::string_view column) const;
 };

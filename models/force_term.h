@@ -139,6 +139,14 @@ class ForceTerm {
   virtual void declare_jacobian_blocks(JacobianPatternBuilder&) const {}
   virtual void bind_jacobian(const SparseMatrix& /*pattern*/) {}
   virtual void add_jacobians(const Configuration&, double* /*dfdx*/, double* /*dfdv*/) const {}
+  // A term whose couplings follow the state (a fluid's neighbour pairs)
+  // says so; its declared blocks then hold every coupling only near the
+  // configuration it declared them at. pattern_holds(c): they still hold
+  // at c. follow_pattern(c): declare around c from now on (the model then
+  // rebuilds the pattern, declare_jacobian_blocks and bind_jacobian again).
+  virtual bool pattern_varies() const { return false; }
+  virtual bool pattern_holds(const Configuration&) const { return true; }
+  virtual void follow_pattern(const Configuration&) {}
   // dF/dx made negative semidefinite where it is not (MechanicalSystem::
   // definite_jacobians); a term whose dF/dx always is one keeps the default.
   virtual void add_definite_stiffness(const Configuration& c, double* dfdx) const {

@@ -136,8 +136,20 @@ class MechanicalSystem {
   virtual double nonconservative_power(double t, const Vector& x, const Vector& v) const = 0;
 
   // The shared pattern (union of both Jacobians' entries plus the full
-  // diagonal), values all zero. Built once per scene.
+  // diagonal), values all zero. Built once per scene, except for a system
+  // whose pattern varies (below).
   virtual const SparseMatrix& jacobian_pattern() const = 0;
+
+  // Systems whose couplings change with the state (a fluid's particles
+  // change neighbours) have a pattern that varies: jacobians() and
+  // definite_jacobians() may then come back on a new pattern (and
+  // jacobian_pattern() is that one), and pattern_version() counts the
+  // patterns so far. A solver that keeps something made for one pattern
+  // (a symbolic factorization, a matrix combined value by value) keeps the
+  // version it was made for and starts again when a matrix has another.
+  // Springs and elements keep one pattern: version 0 throughout.
+  virtual bool pattern_varies() const { return false; }
+  virtual long pattern_version() const { return 0; }
 
   // True when both Jacobians are symmetric at every state (no spring damping:
   // its dF/dx is not symmetric). Lets implicit methods use LDL^T.

@@ -1,8 +1,9 @@
 #include "models/scene_io.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
+
+#include "models/decimal_text.h"
 
 namespace springlab {
 namespace {
@@ -17,11 +18,7 @@ std::string type_of(const Json& j) { return j.type_name(); }
 
 }  // namespace
 
-std::string shortest_text(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
+std::string shortest_text(double value) { return shortest_decimal(value); }
 
 std::string element(const std::string& array, std::size_t index) {
   return array + "[" + std::to_string(index) + "]";

@@ -21,8 +21,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <bit>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -431,11 +431,17 @@ class TetrahedronForce final : public ElementTerm {
   // memcmp's wide loads straddle those stores and wait for them to reach
   // the cache (a store-forwarding stall): 9 % of neo-Hookean's force +
   // dF/dx in perf (benchmarks/README).
+  // std::bit_cast<std::uint64_t>(x), which the web build's libc++ lacks:
+  // the same single 8-byte load.
+  static std::uint64_t bits_of(double x) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &x, sizeof bits);
+    return bits;
+  }
   static bool same_bits(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
     bool same = true;
     for (int k = 0; k < 9; ++k) {
-      same = same && std::bit_cast<std::uint64_t>(a.data()[k]) ==
-                         std::bit_cast<std::uint64_t>(b.data()[k]);
+      same = same && bits_of(a.data()[k]) == bits_of(b.data()[k]);
     }
     return same;
   }

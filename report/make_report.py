@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Render the springlab course experiments as one HTML page.
 
-    python3 report/make_report.py --data DIR --out OUTDIR [--bench FILE.json]
+    python3 report/make_report.py --data DIR --out OUTDIR [--bench FILE.json] [--lab LAB.html]
 
 Reads only what springlab writes (the data contract is experiments/README.md):
 each experiment's settings file <name>.json, which names its tables and their
@@ -12,7 +12,9 @@ benchmarks.json in DIR). Writes one PNG per figure into OUTDIR and
 OUTDIR/index.html with every figure embedded; the experiments' full tables
 and settings files are copied into OUTDIR/data/ and linked from the page,
 which shows summaries (docs/experiments-and-report.md "The report page and
-its data").
+its data"). With --lab build/web/lab.html (the WebAssembly lab page,
+docs/browser-lab.md) the page is copied to OUTDIR/lab.html and linked when it
+exists.
 
 The code is the package report/springlab_report/: data.py reads, one module
 per experiment kind in kinds/ draws (kinds/__init__.py is the registry),

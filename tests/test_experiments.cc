@@ -16,6 +16,7 @@
 #include <complex>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <nlohmann/json.hpp>
@@ -636,6 +637,10 @@ TEST(ExperimentRows, AnEmptyFirstFieldKeepsItsComma) {
   EXPECT_EQ(Row().add("").add("rk4").add(0.5).str(), ",rk4,0.5");
   EXPECT_EQ(Row().add_empty().add(2L).add_empty().str(), ",2,");
   EXPECT_EQ(Row().raw("a,b").add("c").str(), "a,b,c");
+  // A value not measured is an empty field, never "nan"; infinity is a value.
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(Row().add("x").add(std::numeric_limits<double>::quiet_NaN()).add(1.0).str(), "x,,1");
+  EXPECT_EQ(Row().add(inf).add(-inf).str(), "inf,-inf");
 }
 
 // contact: the closed form of each case is read off its scene (the slope's

@@ -41,12 +41,12 @@ const Json kBaseDt = {{"1", 1e-3}, {"2", 1e-2}, {"4", 1e-2}, {"6", 4e-2}};
 Json oscillator_convergence(const std::string& integrator) {
   return {{"experiment", "convergence"},
           {"name", "convergence"},
-          {"integrators", {integrator}},
+          {"integrators", Json::array({integrator})},
           {"newton_tol", 1e-12},
           {"base_dt", kBaseDt},
           {"halvings", 4},
           {"tolerances", {1e-4, 1e-8}},
-          {"cases", {{{"scene", "oscillator"}, {"t_end", 1}, {"reference", "exact"}}}}};
+          {"cases", Json::array({{{"scene", "oscillator"}, {"t_end", 1}, {"reference", "exact"}}})}};
 }
 
 // A short nonlinear chain (w_max about 190 rad/s) against a tight RK4 run.
@@ -140,7 +140,7 @@ INSTANTIATE_TEST_SUITE_P(ExperimentAccuracy, ExperimentAccuracyOrder,
 TEST(ExperimentAccuracyConvergence, ChainAgainstReferenceRun) {
   Json d = oscillator_convergence("verlet");
   d["integrators"] = {"symplectic-euler", "verlet", "rk4"};
-  d["cases"] = {chain_case()};
+  d["cases"] = Json::array({chain_case()});
   const LoadedExperiment loaded = testing::parse_definition(d);
   ASSERT_EQ(loaded.experiment->task_count(), 3u);
   const int expected[] = {1, 2, 4};
@@ -159,7 +159,7 @@ TEST(ExperimentAccuracyConvergence, DivergedPointsHaveNoErrorAndNoFit) {
   Json d = oscillator_convergence("explicit-euler");
   d["base_dt"] = {{"1", 0.05}};
   d["halvings"] = 2;
-  d["cases"] = {chain_case(1.0, 1e-4)};
+  d["cases"] = Json::array({chain_case(1.0, 1e-4)});
   const LoadedExperiment loaded = testing::parse_definition(d);
   const auto tables = testing::task_rows(loaded, 0);
   ASSERT_EQ(tables[0].size(), 2u);
@@ -180,7 +180,7 @@ TEST(ExperimentAccuracyConvergence, FailedReferenceRunIsAnError) {
   d["halvings"] = 2;
   Json c = chain_case(1.0);
   c["reference"] = {{"integrator", "explicit-euler"}, {"dt", 0.02}};
-  d["cases"] = {c};
+  d["cases"] = Json::array({c});
   const LoadedExperiment loaded = testing::parse_definition(d);
   try {
     loaded.experiment->run_task(0);
@@ -246,7 +246,7 @@ TEST(ExperimentAccuracyConvergence, DefinitionErrorsNameTheElement) {
             "\"dt\": 1e-5})");
 
   d = oscillator_convergence("rk4");
-  d["cases"] = {chain_case()};
+  d["cases"] = Json::array({chain_case()});
   d["cases"][0]["reference"]["dt"] = 1e-2;
   EXPECT_EQ(definition_error(d),
             "def.json: cases[0].reference.dt: must be below the smallest step of the sweep "

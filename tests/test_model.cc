@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "models/fluids.h"
 #include "models/builtin_scenes.h"
 #include "models/contact.h"
 #include "models/drag.h"
@@ -48,6 +49,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
   EXPECT_LT(damped.nonconservative_power(0.0, damped.initial_positions(),
                                          damped.initial_velocities()), 0.0);
   for (Spring& spring : s.block<Springs>()) spring.damping = 0.0;
+  for (Fluid& fluid : s.block<Fluids>()) fluid.viscosity = 0.0;  // a fluid's viscosity: no term
   const ElasticModel undamped(s);
   EXPECT_TRUE(undamped.jacobian_symmetric());
   EXPECT_EQ(undamped.velocity_dependence(), VelocityDependence::kDiagonal);

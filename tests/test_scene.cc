@@ -97,10 +97,10 @@ std::vector<BadScene> bad_scenes() {
        "scene.json: missing required key 'springs'"},
       {"UnknownTopLevelKey", two_particles(p, s, R"("gravty": [0, -9.81], )"),
        "scene.json: unknown key 'gravty' (allowed keys: name, dimension, gravity, drag, wind, "
-       "materials, contact, planes, particles, springs, triangles, tetrahedra, bodies)"},
+       "materials, contact, planes, particles, springs, triangles, tetrahedra, bodies, fluids)"},
       {"UnknownKeyIsEscaped", two_particles(p, s, R"("a\nb": 1, )"),
        "scene.json: unknown key 'a\\nb' (allowed keys: name, dimension, gravity, drag, wind, "
-       "materials, contact, planes, particles, springs, triangles, tetrahedra, bodies)"},
+       "materials, contact, planes, particles, springs, triangles, tetrahedra, bodies, fluids)"},
       {"UnknownParticleKey", two_particles(R"({"x": [0, -1], "vel": [0, 0]})"),
        "scene.json: particles[1]: unknown key 'vel' (allowed keys: x, X, v, mass, fixed)"},
       {"UnknownSpringKey", two_particles(p, R"([{"i": 0, "j": 1, "k": 1, "length": 1}])"),

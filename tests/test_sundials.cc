@@ -318,6 +318,28 @@ TEST(SundialsStop, StopRequestEndsALongIntervalAtOnce) {
   }
 }
 
+// A solver that gives up inside an output interval failed where it stopped,
+// not at the interval's end: with a 1 s output interval and 50 internal
+// steps allowed, CVODE's Adams method on a 1000 rad/s oscillator gets to
+// t ~ 1e-3, and that is the failure time the result (and every table) gives.
+TEST(SundialsFailure, FailureTimeIsWhereTheSolverStopped) {
+  const ElasticModel model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
+  for (const char* name : {"cvode-adams", "arkode-erk", "cvode-bdf"}) {
+    SCOPED_TRACE(name);
+    RunSettings s = adaptive(name, 1e-8, 1.0, 2.0);
+    s.options.max_steps = 50;
+    const RunResult r = simulate(model, s);
+    ASSERT_EQ(r.status, RunStatus::kFailed);
+    ASSERT_TRUE(r.diverged_at.has_value());
+    EXPECT_GT(*r.diverged_at, 0.0);
+    EXPECT_LT(*r.diverged_at, 0.5);
+    // The message's "failed at t = ..." is the same time.
+    const auto at = r.failure.find("failed at t = ");
+    ASSERT_NE(at, std::string::npos) << r.failure;
+    EXPECT_NEAR(std::stod(r.failure.substr(at + 14)), *r.diverged_at, 1e-5 * *r.diverged_at);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Registry, AdaptiveIntegrator, ::testing::ValuesIn(adaptive_names(false)),
                          test_name);
 INSTANTIATE_TEST_SUITE_P(Registry, AdaptiveImplicitIntegrator,

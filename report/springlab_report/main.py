@@ -2,6 +2,7 @@
 
 import argparse
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from .page import Context, DataFiles, attempt, integrators_html, page, section
 
 PROG = "make_report.py"
 INTEGRATORS_FILE = "integrators.json"
+LAB_FILE = "lab.html"  # the lab page's name next to index.html
 
 
 def collect_names(experiments, integrators):
@@ -34,6 +36,25 @@ def collect_names(experiments, integrators):
     return names
 
 
+def lab_html(lab, outdir, notes):
+    """The link to the lab page (docs/browser-lab.md) when `lab` is a file:
+    copied to OUTDIR/lab.html, so the report folder stays self-contained;
+    otherwise a note on how to build it."""
+    if not lab:
+        return ""
+    source = Path(lab)
+    if not source.is_file():
+        notes.append("The lab page (%s) is not built: `cmake --workflow --preset web` builds it; "
+                     "draw the report again to link it." % source)
+        (outdir / LAB_FILE).unlink(missing_ok=True)  # no stale copy
+        return ""
+    shutil.copyfile(source, outdir / LAB_FILE)
+    return ('<p class="lab-link"><a href="%s"><b>The lab</b></a>: the same models and '
+            "integrators live in the browser (WebAssembly), side by side, with the step size on "
+            "a slider and its stability limit marked; drag the cloth with the mouse.</p>\n"
+            % LAB_FILE)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog=PROG, description="Render the springlab course experiments "
                                  "as one HTML page.")
@@ -42,6 +63,8 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="output directory (index.html and PNGs)")
     ap.add_argument("--bench", help="Google Benchmark JSON file from springlab_bench (default: "
                     "%s in the data directory, when it is there)" % bench_section.BENCH_FILE)
+    ap.add_argument("--lab", help="the lab page (build/web/lab.html): copied next to index.html "
+                    "and linked from it when the file exists")
     args = ap.parse_args(argv)
 
     data_dir = Path(args.data)
@@ -112,6 +135,7 @@ def main(argv=None):
              "make_report.py</code>. Each section says what theory predicts, shows the figure, "
              "lists what the data shows (every such sentence is computed from the data), and the "
              "scene and settings that produced it.</p>\n" % esc(data_dir.resolve().name))
+    intro += lab_html(args.lab, outdir, notes)
     html = page("springlab — integrators on mass-spring systems", intro, notes, toc, body, errors)
     tmp = outdir / "index.html.tmp"
     tmp.write_text(html, encoding="utf-8")

@@ -86,6 +86,35 @@ def render(scratch):
     return status, page
 
 
+class LabLink(unittest.TestCase):
+    """--lab: the lab page copied next to index.html and linked, only when it exists."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_linked_when_built_noted_when_not(self):
+        t = [0.1 * k for k in range(20)]
+        energy_data(self.s, {"symplectic-euler": (t, [1.0] * len(t))})
+        out = self.s.dir / "out"
+        lab = self.s.dir / "built-lab.html"
+        lab.write_text("<!DOCTYPE html><title>lab</title>", encoding="utf-8")
+        self.assertEqual(report_main.main(["--data", str(self.s.dir), "--out", str(out),
+                                           "--lab", str(lab)]), 0)
+        page = (out / "index.html").read_text(encoding="utf-8")
+        self.assertIn('<a href="lab.html">', page)
+        self.assertEqual((out / "lab.html").read_bytes(), lab.read_bytes())
+        lab.unlink()
+        self.assertEqual(report_main.main(["--data", str(self.s.dir), "--out", str(out),
+                                           "--lab", str(lab)]), 0)
+        page = (out / "index.html").read_text(encoding="utf-8")
+        self.assertNotIn('href="lab.html"', page)
+        self.assertIn("The lab page (%s) is not built" % lab, page)
+        self.assertFalse((out / "lab.html").exists())
+
+
 class MarkerText(unittest.TestCase):
     """The integrators table shows a mathtext marker as the figures draw it."""
 

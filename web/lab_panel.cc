@@ -1,0 +1,73 @@
+#include "web/lab_panel.h"
+
+#include <cmath>
+
+#include "integrators/registry.h"
+#include "models/builtin_scenes.h"
+#include "models/modal_analysis.h"
+
+namespace springlab {
+
+LabPanel::LabPanel(const PanelSettings& settings) {
+  model_ = std::make_unique<ElasticModel>(make_builtin_scene(settings.scene, settings.params));
+  w_max_ = std::isnan(settings.w_max) ? max_angular_frequency(*model_) : settings.w_max;
+  cursor_ = std::make_unique<CursorSpring>(*model_, w_max_);
+  integrator_ = make_integrator(settings.integrator);
+  if (std::string why = integrator_->check_options(settings.options, model_->dofs());
+      !why.empty()) {
+    throw std::invalid_argument(why);
+  }
+  const StepResult start = integrator_->initialize(
+      *cursor_, 0.0, model_->initial_positions(), model_->initial_velocities(), settings.options);
+  if (!start.ok) throw RunRefused(start.message);
+  check_ = std::make_unique<DivergenceCheck>(*model_, settings.blowup * model_->energy_scale());
+  x_good_ = model_->initial_positions();
+  v_good_ = model_->initial_velocities();
+  energies_.emplace(model_->energies(x_good_, v_good_));
+  store_good_state();
+}
+
+void LabPanel::store_good_state() {
+  model_->energies(x_good_, v_good_, *energies_);
+  const Eigen::MatrixXd rows = model_->scene_positions(x_good_);
+  positions_.assign(static_cast<std::size_t>(rows.rows()) * 3, 0.0);
+  for (Eigen::Index s = 0; s < rows.rows(); ++s) {
+    for (Eigen::Index r = 0; r < rows.cols(); ++r) positions_[s * 3 + r] = rows(s, r);
+  }
+}
+
+long LabPanel::step(long steps, double dt) {
+  if (status_ != RunStatus::kCompleted || steps <= 0) return 0;
+  if (!(dt > 0.0)) throw std::invalid_argument("dt must be a positive number");
+  if (dt != dt_) {  // a new grid from here
+    t_base_ = t_;
+    k_ = 0;
+    dt_ = dt;
+  }
+  long taken = 0;
+  // The loop of simulate() (experiments/simulation.cc), one step at a time.
+  for (; taken < steps; ++taken) {
+    const double t = t_base_ + static_cast<double>(k_ + 1) * dt_;
+    const StepResult step = integrator_->advance_to(t);
+    if (!step.ok) {
+      status_ = RunStatus::kFailed;
+      failure_ = step.message;
+      diverged_at_ = t;
+      break;
+    }
+    if (check_->diverged(integrator_->x(), integrator_->v(), x_next_, v_next_)) {
+      status_ = RunStatus::kDiverged;
+      diverged_at_ = t;
+      break;
+    }
+    ++k_;
+    ++steps_;
+    t_ = t;
+    x_good_.swap(x_next_);
+    v_good_.swap(v_next_);
+  }
+  store_good_state();
+  return taken;
+}
+
+}  // namespace springlab
