@@ -311,6 +311,7 @@ void check_body(const Reporter& r, const std::string& where, const Body& b) {
   }
   check_positive(r, field(where, "density"), b.density);
   check_positive(r, field(where, "rigidity"), b.rigidity);
+  check_nonnegative(r, field(where, "friction"), b.friction);
   if (b.position) check_vector(r, field(where, "position"), *b.position, 3);
   check_vector(r, field(where, "v"), b.v, 3);
   check_vector(r, field(where, "omega"), b.omega, 3);
@@ -353,7 +354,7 @@ Body read_body(const Reporter& r, const std::string& where, const Json& j) {
   require_object(r, where, j);
   check_keys(r, where, j,
              {"vertices", "triangles", "shape", "size", "radius", "height", "segments", "density",
-              "position", "orientation", "affine", "v", "omega", "fixed", "rigidity"},
+              "position", "orientation", "affine", "v", "omega", "fixed", "rigidity", "friction"},
              {});
   Body b;
   const bool mesh = j.contains("vertices") || j.contains("triangles");
@@ -456,6 +457,9 @@ Body read_body(const Reporter& r, const std::string& where, const Json& j) {
   if (j.contains("v")) b.v = read_vector(r, field(where, "v"), j.at("v"), 3);
   if (j.contains("omega")) b.omega = read_vector(r, field(where, "omega"), j.at("omega"), 3);
   if (j.contains("fixed")) b.fixed = read_bool(r, field(where, "fixed"), j.at("fixed"));
+  if (j.contains("friction")) {
+    b.friction = read_number(r, field(where, "friction"), j.at("friction"));
+  }
   check_body(r, where, b);
   return b;
 }
@@ -531,7 +535,9 @@ void write_bodies(const Scene& scene, std::vector<std::pair<std::string, std::st
     if (!b.v.isZero()) text += ", \"v\": " + json_vector(b.v, 3);
     if (!b.omega.isZero()) text += ", \"omega\": " + json_vector(b.omega, 3);
     if (b.fixed) text += ", \"fixed\": true";
-    text += ", \"rigidity\": " + json_number(b.rigidity) + "}";
+    text += ", \"rigidity\": " + json_number(b.rigidity);
+    if (b.friction != 0.0) text += ", \"friction\": " + json_number(b.friction);
+    text += "}";
     lines.add(text);
   }
   entries.emplace_back("bodies", lines.str());

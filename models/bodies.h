@@ -52,6 +52,9 @@ struct Body {
   Eigen::Vector3d omega = Eigen::Vector3d::Zero();  // angular velocity, world frame [rad/s]
   bool fixed = false;
   double rigidity = kDefaultRigidity;  // kappa [Pa]
+  // Coulomb mu against other bodies (a pair uses sqrt(mu_a mu_b);
+  // body_body_friction.cc); the planes' friction is the plane's own.
+  double friction = 0.0;
 };
 using Bodies = std::vector<Body>;
 

@@ -12,8 +12,9 @@
 //     body points (body_springs.h), the first to a fixed particle: a
 //     multiple pendulum released from horizontal;
 //   box-pile: n boxes, each smaller than the one below, dropped onto one
-//     another and the ground (body-body contact, body_body_contact.cc),
-//     with friction on the ground.
+//     another and the ground (body-body contact and friction,
+//     body_body_contact.cc, body_body_friction.cc).
+#include <Eigen/Geometry>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -93,10 +94,12 @@ Scene build_box_on_slope(const Values& p) {
 }
 
 // Box i has sides (s, 0.75 s, 0.5 s) f^i (f = shrink), its shortest side
-// vertical, turned about the vertical by 0.15 i rad, and starts a quarter
-// of its height above the top of the box below (the ground for i = 0). Not
-// tilted: there is no friction between bodies, and a box landing on an
-// edge would be pushed sideways by the tilting box below and slide off. With f = 0.8 each box's corners lie
+// vertical, turned about the vertical by 0.15 i rad and tilted by 0.05 rad
+// (i > 0), and starts a quarter of its height above the top of the box
+// below (the ground for i = 0). Every box has the ground's friction mu
+// against the others (body_body_friction.cc): a tilted box lands on an
+// edge, and without friction the push of the box below, tilting under it,
+// would slide it off. With f = 0.8 each box's corners lie
 // inside the top face of the one below (the corner (0.4, 0.3) s turned by
 // 0.15 rad is at (0.351, 0.356) s, inside (0.5, 0.375) s), which is what
 // vertex-in-box contact needs (docs/physics.md "Contact between bodies").
@@ -120,7 +123,12 @@ Scene build_box_pile(const Values& p) {
     box.size = scale * Eigen::Vector3d(s, 0.5 * s, 0.75 * s);
     box.density = p.at("density");
     box.rigidity = p.at("rigidity");
-    box.orientation = {0.0, 0.15 * i, 0.0};  // about the vertical
+    // Turned about the vertical, then tilted about x by 0.05 rad (i > 0).
+    const Eigen::AngleAxisd turn(Eigen::AngleAxisd(0.15 * i, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(i > 0 ? 0.05 : 0.0, Eigen::Vector3d::UnitX()));
+    const Eigen::Vector3d r = turn.angle() * turn.axis();
+    box.orientation = {r.x(), r.y(), r.z()};
+    box.friction = p.at("friction");
     const double height = box.size.y();
     box.position = Eigen::Vector3d(0.0, top + 0.25 * height + 0.5 * height, 0.0);
     top += 1.25 * height;

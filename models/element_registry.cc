@@ -29,6 +29,7 @@ const ElementKind& fluid_kind();           // fluid_kind.cc
 const ElementKind& fluid_viscosity_kind(); // fluid_viscosity_force.cc
 const ElementKind& body_spring_kind();     // body_springs.cc
 const ElementKind& body_body_contact_kind();  // body_body_contact.cc
+const ElementKind& body_body_friction_kind();  // body_body_friction.cc
 
 const std::vector<const ElementKind*>& element_kinds() {
   static const std::vector<const ElementKind*> kinds = {
@@ -51,6 +52,7 @@ const std::vector<const ElementKind*>& element_kinds() {
       &fluid_viscosity_kind(),
       &body_spring_kind(),
       &body_body_contact_kind(),
+      &body_body_friction_kind(),
   };
   return kinds;
 }
