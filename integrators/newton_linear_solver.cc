@@ -15,8 +15,8 @@ std::string out_of_memory_text(const SparseDirectSolver& solver) {
          "unknowns), or a method that factors none (rk4, xpbd, projective-dynamics)";
 }
 
-void NewtonLinearSolver::reset(const CountedModel& model) {
-  model_ = &model;
+void NewtonLinearSolver::reset(IntegratorStats& stats) {
+  stats_ = &stats;
   direct_.reset();
   preconditioner_.reset();
   preconditioner_valid_ = false;
@@ -27,8 +27,10 @@ void NewtonLinearSolver::reset(const CountedModel& model) {
   preconditioner_matrix_ = SparseMatrix();
 }
 
-SparseMatrix& NewtonLinearSolver::matrix(bool definite, DefiniteMatrixSource& source) {
+SparseMatrix& NewtonLinearSolver::matrix(bool definite, bool symmetric,
+                                         DefiniteMatrixSource& source) {
   definite_ = definite;
+  symmetric_ = symmetric;
   source_ = &source;
   direct_current_ = false;
   return jacobian_;
@@ -41,13 +43,13 @@ NewtonLinearSolver::Start NewtonLinearSolver::begin_first_solve() {
     --fresh_steps_;
     cg_slow_ = 1;  // refresh before the first solve
   }
-  start.factorizations = model_->stats().factorizations;
+  start.factorizations = stats_->factorizations;
   return start;
 }
 
 void NewtonLinearSolver::end_first_solve(const Start& start) {
   // The kept factor failed at a step's start: fresh ones for the next steps.
-  if (start.probe && model_->stats().factorizations > start.factorizations) {
+  if (start.probe && stats_->factorizations > start.factorizations) {
     fresh_steps_ = kFreshSteps;
   }
 }
@@ -70,7 +72,7 @@ bool NewtonLinearSolver::refresh_preconditioner(std::string& error) {
     source_->assemble_definite(preconditioner_matrix_);
     a = &preconditioner_matrix_;
   }
-  ++model_->stats().factorizations;
+  ++stats_->factorizations;
   preconditioner_valid_ = preconditioner_.factorize(*a, MatrixKind::kPositiveDefinite) &&
                           preconditioner_.positive_definite();
   cg_slow_ = 0;
@@ -88,7 +90,7 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_factored(MatrixKind kind, c
   Result out;
   // The same matrix as the last direct solve's (a second right-hand side).
   if (!(direct_current_ && direct_.has_factor())) {
-    ++model_->stats().factorizations;
+    ++stats_->factorizations;
     direct_current_ = true;
     if (!direct_.factorize(jacobian_, kind)) {
       direct_current_ = false;
@@ -109,9 +111,9 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_with_limit(const Vector& rh
                                                                 const Tolerance& tolerance,
                                                                 Vector& d, std::string& error,
                                                                 int max_iterations) {
-  ++model_->stats().linear_solves;
+  ++stats_->linear_solves;
   // Spring damping makes the Jacobian non-symmetric: no CG, LU.
-  if (!model_->system().jacobian_symmetric()) {
+  if (!symmetric_) {
     return solve_factored(MatrixKind::kGeneral, rhs, d, error);
   }
   auto no_preconditioner = [&] {
@@ -131,7 +133,7 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_with_limit(const Vector& rh
                                                 limit, d, minres_)
                         : preconditioned_cg(jacobian_, preconditioner_, rhs, tolerance.rtol,
                                             tolerance.atol, limit, d, cg_);
-    model_->stats().linear_iterations += k.iterations;
+    stats_->linear_iterations += k.iterations;
     return k;
   };
   CgResult cg = krylov(max_iterations);
@@ -158,11 +160,11 @@ bool NewtonLinearSolver::solve_directly(const Vector& rhs, Vector& d, std::strin
   // The exact stiffness: the matrix may be indefinite (compressed springs),
   // so LDL^T (LU without symmetry); MINRES with the definite factor needs
   // tens of products on cloth 64.
-  ++model_->stats().linear_solves;
-  ++model_->stats().factorizations;
+  ++stats_->linear_solves;
+  ++stats_->factorizations;
   direct_current_ = false;
   const MatrixKind kind =
-      model_->system().jacobian_symmetric() ? MatrixKind::kSymmetric : MatrixKind::kGeneral;
+      symmetric_ ? MatrixKind::kSymmetric : MatrixKind::kGeneral;
   if (!direct_.factorize(jacobian_, kind)) {
     error = direct_.out_of_memory() ? out_of_memory_text(direct_)
                                     : "the step's matrix is singular (" + direct_.error() + ")";

@@ -51,12 +51,14 @@ class NewtonLinearSolver {
     bool converged = false;
   };
 
-  // A new run: forget the symbolic analyses and the kept factorization.
-  void reset(const CountedModel& model);
+  // A new run: forget the symbolic analyses and the kept factorization;
+  // count in `stats`.
+  void reset(IntegratorStats& stats);
   // The matrix J of the next solves, for the caller to assemble (with
-  // `definite`: whether it is the definite matrix; `source`: where the
-  // definite matrix of the same point is, for a fresh preconditioner).
-  SparseMatrix& matrix(bool definite, DefiniteMatrixSource& source);
+  // `definite`: whether it is the definite matrix; `symmetric`: whether J
+  // is; `source`: where the definite matrix of the same point is, for a
+  // fresh preconditioner). The pattern is the same from call to call.
+  SparseMatrix& matrix(bool definite, bool symmetric, DefiniteMatrixSource& source);
   // The next solve is a nonlinear solve's first (see above).
   void start_nonlinear_solve() { first_solve_ = true; }
   // d ~ J^-1 rhs. False `ok`, with `error`, when J (or the definite matrix)
@@ -86,9 +88,10 @@ class NewtonLinearSolver {
   Start begin_first_solve();
   void end_first_solve(const Start& start);
 
-  const CountedModel* model_ = nullptr;
+  IntegratorStats* stats_ = nullptr;
   DefiniteMatrixSource* source_ = nullptr;
-  bool definite_ = false;  // jacobian_ is the definite matrix
+  bool definite_ = false;   // jacobian_ is the definite matrix
+  bool symmetric_ = false;  // jacobian_ is symmetric
   bool first_solve_ = false;
   SparseMatrix jacobian_, preconditioner_matrix_;
   SparseDirectSolver direct_;          // factorizations of jacobian_ itself

@@ -42,6 +42,7 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, NewtonPolicy& policy,
       return fail(no_convergence_text());
     }
     policy.begin_iteration(mode_, it);
+    // 1-2. The matrix at v (r is the iterate's) and the update dv ~ -J^-1 r.
     if (!compute_update(problem, linear, v, error)) return fail(error);
     const double update = dv_.lpNorm<Eigen::Infinity>();
     // The slope of the potential along dv (negative: CG's iterates descend
@@ -50,13 +51,16 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, NewtonPolicy& policy,
     const LineSearch::Line line{v, dv_, r_.norm(), phi_, magnitude_, slope, update,
                                 mode_.minimize};
     search_.begin_line();
+    // 3. Stop when the update is below the tolerance.
     double alpha = 1.0;
-    bool accepted = false;
+    bool accepted = false;  // a longer step along negative curvature
     if (converged(problem, line, alpha, accepted)) {
       ++stats.newton_iterations;
       v += dv_;
       return StepResult::success();
     }
+    // 4. A step the merit accepts; where there is none, the policy's
+    // fallback from the same iterate.
     if (!accepted && mode_.minimize && !(slope < 0.0)) {
       if (policy.retry_not_descending(mode_)) continue;
       return fail("the Newton update does not descend the incremental potential");

@@ -34,7 +34,7 @@ StepResult VelocityImplicitMethod::do_initialize() {
   model_ = CountedModel(system(), mutable_stats());
   matrix_.bind(model_);
   matrix_.reset();
-  linear_.reset(model_);
+  linear_.reset(mutable_stats());
   step_.bind(model_, matrix_);
   return StepResult::success();
 }
@@ -150,7 +150,7 @@ bool VelocityImplicitMethod::solve_linearized(double t, const Vector& x, const V
                                               const Vector& f, double h, double b, double c,
                                               bool definite, Vector& dv, std::string& error) {
   matrix_.set_point({.t = t, .x = &x, .v = &v, .h = h, .b = b, .c = c});
-  matrix_.assemble(definite, linear_.matrix(definite, matrix_));
+  matrix_.assemble(definite, linear_.matrix(definite, system().jacobian_symmetric(), matrix_));
   rhs_.noalias() = matrix_.dfdx() * v;
   rhs_ = h * (f + h * rhs_);  // the right-hand side
   if (!definite) return linear_.solve_directly(rhs_, dv, error);

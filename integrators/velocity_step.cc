@@ -95,7 +95,8 @@ void VelocityStep::matrix(const Vector& v, bool definite, NewtonLinearSolver& li
   // The Newton matrix's coefficients of dF/dx (h^2 w b) and dF/dv (h w c).
   matrix_->set_point({.t = t, .x = &xs_, .v = &vs_, .h = h, .b = s.weight * s.b,
                       .c = s.weight * s.c});
-  SparseMatrix& jacobian = linear.matrix(definite, *matrix_);
+  SparseMatrix& jacobian =
+      linear.matrix(definite, model_->system().jacobian_symmetric(), *matrix_);
   matrix_->assemble(definite, jacobian);
   // The discrete gradient's correction c D (c = correction_) has the
   // derivative (h^2/2) (c I + D (w - 2 c D)^T / |D|^2) with respect to v,
