@@ -21,15 +21,18 @@ constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();
 
 }  // namespace
 
-StepResult NewtonLoop::solve(NewtonProblem& problem, NewtonPolicy& policy,
-                             NewtonLinearSolver& linear, const Settings& settings,
-                             const Context& context, IntegratorStats& stats, Vector& v) {
+StepResult NewtonLoop::solve(NewtonProblem& problem, const Pieces& pieces,
+                             const Settings& settings, const Context& context,
+                             IntegratorStats& stats, Vector& v) {
   auto fail = [&](const std::string& why) {
     std::ostringstream message;
     message << context.method << ": Newton failed at t = " << context.t << " (h = " << context.h
             << "): " << why;
     return StepResult::failure(message.str());
   };
+  NewtonPolicy& policy = pieces.policy;
+  NewtonLinearSolver& linear = pieces.linear;
+  search_ = &pieces.search;
   settings_ = settings;
   policy.start(problem.has_potential(), mode_);
   start(problem, v);
@@ -50,7 +53,7 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, NewtonPolicy& policy,
     const double slope = mode_.minimize ? r_.dot(dv_) : 0.0;
     const LineSearch::Line line{v, dv_, r_.norm(), phi_, magnitude_, slope, update,
                                 mode_.minimize};
-    search_.begin_line();
+    search_->begin_line();
     // 3. Stop when the update is below the tolerance.
     double alpha = 1.0;
     bool accepted = false;  // a longer step along negative curvature
@@ -65,7 +68,7 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, NewtonPolicy& policy,
       if (policy.retry_not_descending(mode_)) continue;
       return fail("the Newton update does not descend the incremental potential");
     }
-    if (!accepted && !search_.search(problem, line, solved_.negative_curvature, mode_.definite,
+    if (!accepted && !search_->search(problem, line, solved_.negative_curvature, mode_.definite,
                                      alpha)) {
       if (policy.retry_search_failed(mode_, problem, it)) continue;
       return fail(mode_.minimize ? "the line search could not decrease the incremental "
@@ -78,7 +81,7 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, NewtonPolicy& policy,
     policy.step_taken(mode_, alpha);
     ++stats.newton_iterations;
     ++iteration;
-    LineSearch::Trial& trial = search_.trial();
+    LineSearch::Trial& trial = search_->trial();
     v.swap(trial.v);
     r_.swap(trial.r);
     phi_ = trial.phi;
@@ -93,7 +96,7 @@ void NewtonLoop::start(NewtonProblem& problem, Vector& v) {
   // gap closed, an element inverted): the problem's other start.
   if (!r_.allFinite() && problem.fallback_start(v)) problem.residual(v, r_);
   magnitude_ = 0.0;
-  search_.reset();
+  search_->reset();
   phi_ = mode_.minimize ? problem.potential(v, magnitude_) : 0.0;
   r_start_ = r_.norm();
   previous_update_ = 0.0;
@@ -156,7 +159,7 @@ bool NewtonLoop::converged(NewtonProblem& problem, const LineSearch::Line& line,
   // buckling cloth), the step's equations have lower solutions nearby:
   // leave along that direction if the potential visibly falls.
   alpha = update > 0.0 ? settings_.tol / update : 1.0;
-  if (!solved_.negative_curvature || !search_.expand(problem, line, alpha)) return true;
+  if (!solved_.negative_curvature || !search_->expand(problem, line, alpha)) return true;
   last_why_ = "the incremental potential kept falling beyond it (negative curvature)";
   escaping = true;
   return false;

@@ -66,11 +66,16 @@ class NewtonLoop {
     const std::string& method;
     double t, h;
   };
+  // The strategies the loop is given.
+  struct Pieces {
+    NewtonPolicy& policy;        // the matrix and the fallbacks
+    NewtonLinearSolver& linear;  // the update
+    LineSearch& search;          // the step along it
+  };
   // Solves problem's r(v) = 0 from problem.start(); v holds the solution on
   // success. Counts Newton iterations in `stats`.
-  StepResult solve(NewtonProblem& problem, NewtonPolicy& policy, NewtonLinearSolver& linear,
-                   const Settings& settings, const Context& context, IntegratorStats& stats,
-                   Vector& v);
+  StepResult solve(NewtonProblem& problem, const Pieces& pieces, const Settings& settings,
+                   const Context& context, IntegratorStats& stats, Vector& v);
 
  private:
   void start(NewtonProblem& problem, Vector& v);
@@ -86,7 +91,7 @@ class NewtonLoop {
   Settings settings_;
   NewtonMode mode_;
   NewtonLinearSolver::Result solved_;
-  LineSearch search_;
+  LineSearch* search_ = nullptr;
   Vector r_, rhs_, dv_, q_;
   double phi_ = 0.0, magnitude_ = 0.0, r_start_ = 0.0;
   double previous_update_ = 0.0;  // ||dv||_inf of the last full update

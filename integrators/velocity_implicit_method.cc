@@ -46,10 +46,10 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, Vecto
   const bool symmetric = system().jacobian_symmetric();
   if (step_.scheme().discrete_gradient) {
     DiscreteGradientPhases policy(matrices, symmetric, step_);
-    return newton_.solve(step_, policy, linear_, settings, context, mutable_stats(), v);
+    return newton_.solve(step_, {policy, linear_, search_}, settings, context, mutable_stats(), v);
   }
   NewtonPolicy policy(matrices, symmetric);
-  return newton_.solve(step_, policy, linear_, settings, context, mutable_stats(), v);
+  return newton_.solve(step_, {policy, linear_, search_}, settings, context, mutable_stats(), v);
 }
 
 StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplicitScheme& s,

@@ -76,6 +76,7 @@ class VelocityImplicitMethod : public Integrator {
   CountedModel model_;
   NewtonMatrix matrix_;
   NewtonLinearSolver linear_;
+  LineSearch search_;
   VelocityStep step_;
   NewtonLoop newton_;
   Lbfgs lbfgs_;

@@ -81,8 +81,9 @@ class VelocityStep final : public NewtonProblem {
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
 
-  // The discrete gradient's correction coefficient (discrete_gradient_phases.h):
-  // frozen (Phi then includes c |D|^2, r its gradient) or not, and its value.
+  // The discrete gradient's correction coefficient (DiscreteGradientPhases,
+  // newton_policy.h): frozen (Phi then includes c |D|^2, r its gradient) or
+  // not, and its value.
   void freeze(bool frozen) { frozen_ = frozen; }
   bool frozen() const { return frozen_; }
   void set_frozen_coefficient(double c) { frozen_c_ = c; }

@@ -87,9 +87,10 @@ StepResult solve(SmallProblem& problem, IntegratorStats& stats, Vector& v) {
   NewtonLinearSolver linear;
   linear.reset(stats);
   NewtonPolicy policy(NewtonPolicy::Matrices::kAlternating, problem.symmetric());
+  LineSearch search;
   NewtonLoop loop;
   const std::string method = "test";
-  return loop.solve(problem, policy, linear, {.tol = 1e-13, .max_iterations = 50},
+  return loop.solve(problem, {policy, linear, search}, {.tol = 1e-13, .max_iterations = 50},
                     {.method = method, .t = 0.0, .h = 1.0}, stats, v);
 }
 
@@ -126,11 +127,13 @@ TEST(NewtonLoop, ReportsTheIterationCapWithTheLastUpdate) {
   NewtonLinearSolver linear;
   linear.reset(stats);
   NewtonPolicy policy(NewtonPolicy::Matrices::kAlternating, true);
+  LineSearch search;
   NewtonLoop loop;
   Vector v;
   const std::string method = "test";
-  const StepResult result = loop.solve(problem, policy, linear, {.tol = 1e-13, .max_iterations = 3},
-                                       {.method = method, .t = 0.5, .h = 0.25}, stats, v);
+  const StepResult result =
+      loop.solve(problem, {policy, linear, search}, {.tol = 1e-13, .max_iterations = 3},
+                 {.method = method, .t = 0.5, .h = 0.25}, stats, v);
   ASSERT_FALSE(result.ok);
   EXPECT_EQ(result.message.rfind("test: Newton failed at t = 0.5 (h = 0.25): no convergence in 3 "
                                  "iterations (last update ",
