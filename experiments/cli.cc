@@ -30,7 +30,7 @@
 #include "experiments/signals.h"
 #include "experiments/simulation.h"
 #include "experiments/stability.h"
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 #include "integrators/registry.h"
 #include "integrators/sparse_direct_solver.h"
 #include "integrators/xpbd.h"
@@ -287,7 +287,7 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const ElasticModel& model,
 std::unique_ptr<Integrator> prepare_or_refuse(const ElasticModel& model, const RunSettings& run,
                                               const std::string& scene_arg) {
   std::unique_ptr<Integrator> integrator = prepare_or_refuse_pairing(model, run, scene_arg);
-  if (dynamic_cast<const ImplicitIntegrator*>(integrator.get()) != nullptr &&
+  if (dynamic_cast<const VelocityImplicitMethod*>(integrator.get()) != nullptr &&
       run.options.solver != Solver::kQuasiNewton) {
     const std::string why = factor_fit_error(model.jacobian_pattern());
     if (!why.empty()) {

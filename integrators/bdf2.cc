@@ -3,7 +3,7 @@
 namespace springlab {
 
 Bdf2::Bdf2()
-    : ImplicitIntegrator({.name = "bdf2",
+    : VelocityImplicitMethod({.name = "bdf2",
                           .scheme = "y' = 4/3 y - 1/3 y_prev + 2/3 h f(t + h, y'), y = (x, v); "
                                     "first step implicit Euler",
                           .order = 2,
@@ -15,7 +15,7 @@ Bdf2::Bdf2()
 
 StepResult Bdf2::do_initialize() {
   have_previous_ = false;
-  return ImplicitIntegrator::do_initialize();
+  return VelocityImplicitMethod::do_initialize();
 }
 
 StepResult Bdf2::do_step(double h) {

@@ -9,7 +9,7 @@
 // c0 = w^2 / (1 + 2 w), b = (1 + w) / (1 + 2 w) (w = 1: the familiar
 // x_{n+1} = 4/3 x_n - 1/3 x_{n-1} + 2/3 h v_{n+1}). The first step is one
 // implicit Euler step. Each step is the velocity-implicit system of
-// newton_velocity_solver.h with weight b, inertial centre
+// velocity_step.h with weight b, inertial centre
 // v_n + c0 (v_n - v_{n-1}) and offset c0 (x_n - x_{n-1}): where the forces
 // derive from potentials, the minimum of an incremental potential, solved by
 // the same Newton as implicit Euler (--newton-tol, --max-newton).
@@ -22,11 +22,11 @@
 #include <string>
 #include <vector>
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
-class Bdf2 final : public ImplicitIntegrator {
+class Bdf2 final : public VelocityImplicitMethod {
  public:
   Bdf2();
 

@@ -3,7 +3,7 @@
 namespace springlab {
 
 DiscreteGradient::DiscreteGradient()
-    : ImplicitIntegrator(
+    : VelocityImplicitMethod(
           {.name = "discrete-gradient",
            .scheme = "x' = x + h (v + v')/2,  M (v' - v) = -h grad_d V(x, x') + h F_nc(t + h/2, "
                      "(x + x')/2, (v + v')/2)",

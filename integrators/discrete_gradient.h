@@ -31,20 +31,25 @@
 // V(y) - V(x) (tiny steps, equilibrium): there it is noise, and the midpoint
 // rule's own energy error is smaller still.
 //
-// Newton (newton_velocity_solver.h) uses the midpoint rule's matrix
-// M - h/2 dF/dv - h^2/4 dF/dx at the midpoint, which omits the derivative of
-// the correction (small: the correction is O(|D|^2)), and a line search on
-// ||r||: the residual is not the gradient of a potential. Order 2 (as the
+// Newton (newton_loop.h) solves the step with the DiscreteGradientPhases
+// policy (newton_policy.h). The residual is not the gradient of a
+// potential, but with the correction's coefficient frozen it is that of the
+// midpoint's potential plus c |D|^2: where the forces derive from potentials
+// Newton first minimizes that (robust far from the solution), then, once a
+// full update is taken, iterates on r with the exact matrix -- the midpoint
+// rule's M - h/2 dF/dv - h^2/4 dF/dx plus the correction's derivative, a
+// diagonal shift and a rank-one term solved by Sherman and Morrison -- and a
+// line search on ||r|| (quadratic near the solution). Order 2 (as the
 // midpoint rule: the correction is O(h^3) per step); A-stable, and on the
 // linear oscillator (V quadratic: the correction vanishes) it is the
 // midpoint rule, R(z) = (1 + z/2) / (1 - z/2).
 #pragma once
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
-class DiscreteGradient final : public ImplicitIntegrator {
+class DiscreteGradient final : public VelocityImplicitMethod {
  public:
   DiscreteGradient();
 

@@ -3,7 +3,7 @@
 namespace springlab {
 
 ImplicitEuler::ImplicitEuler()
-    : ImplicitIntegrator({.name = "implicit-euler",
+    : VelocityImplicitMethod({.name = "implicit-euler",
                           .scheme = "v' = v + h M^-1 F(t + h, x + h v', v'),  x' = x + h v'",
                           .order = 1,
                           .implicit = true,
@@ -14,7 +14,7 @@ ImplicitEuler::ImplicitEuler()
                               [](std::complex<double> z) { return 1.0 / (1.0 - z); }}) {}
 
 StepResult ImplicitEuler::do_initialize() {
-  StepResult base = ImplicitIntegrator::do_initialize();
+  StepResult base = VelocityImplicitMethod::do_initialize();
   if (!base.ok || options().solver != Solver::kQuasiNewton) return base;
   if (!prepare_quasi_newton()) {
     return StepResult::failure(

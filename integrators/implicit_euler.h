@@ -8,7 +8,7 @@
 // incremental potential |v - v_n|^2_M / 2 + V(x_n + h v) + h W(v). Solved by
 // Newton-Raphson with J = M - h dF/dv - h^2 dF/dx, CG preconditioned by a
 // kept Cholesky factor and a line search, to --newton-tol (m/s) in at most
-// --max-newton iterations (newton_velocity_solver.h). A Newton failure ends
+// --max-newton iterations (newton_loop.h). A Newton failure ends
 // the run as a result.
 //
 // --solver quasi-newton minimizes the same potential by L-BFGS with the
@@ -22,11 +22,11 @@
 #include <string>
 #include <vector>
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
-class ImplicitEuler final : public ImplicitIntegrator {
+class ImplicitEuler final : public VelocityImplicitMethod {
  public:
   ImplicitEuler();
   std::vector<std::string> options_read() const override;

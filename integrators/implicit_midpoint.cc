@@ -3,7 +3,7 @@
 namespace springlab {
 
 ImplicitMidpoint::ImplicitMidpoint()
-    : ImplicitIntegrator({.name = "implicit-midpoint",
+    : VelocityImplicitMethod({.name = "implicit-midpoint",
                           .scheme = "y' = y + h f(t + h/2, (y + y')/2)",
                           .order = 2,
                           .implicit = true,

@@ -19,11 +19,11 @@
 // (up to the Newton tolerance) at every step size, while the phase lags.
 #pragma once
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
-class ImplicitMidpoint final : public ImplicitIntegrator {
+class ImplicitMidpoint final : public VelocityImplicitMethod {
  public:
   ImplicitMidpoint();
 

@@ -5,7 +5,7 @@
 namespace springlab {
 
 LinearImplicitEuler::LinearImplicitEuler()
-    : ImplicitIntegrator({.name = "linear-implicit-euler",
+    : VelocityImplicitMethod({.name = "linear-implicit-euler",
                           .scheme = "(M - h D - h^2 K) dv = h (F0 + h K v),  v' = v + dv,  x' = x + h v'",
                           .order = 1,
                           .implicit = true,

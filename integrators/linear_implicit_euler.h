@@ -21,14 +21,14 @@
 // alternate with growing amplitude until the run blows up (the step-energy
 // experiment). The definite matrix is at least M. Solved by LDL^T (exact: the matrix may be
 // indefinite) or by CG preconditioned by a kept Cholesky factor (definite;
-// newton_velocity_solver.h).
+// newton_linear_solver.h).
 #pragma once
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
-class LinearImplicitEuler final : public ImplicitIntegrator {
+class LinearImplicitEuler final : public VelocityImplicitMethod {
  public:
   LinearImplicitEuler();
   std::vector<std::string> options_read() const override { return {"stiffness"}; }

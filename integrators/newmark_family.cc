@@ -28,7 +28,7 @@ std::vector<std::string> NewmarkFamily::options_read() const {
 }
 
 StepResult NewmarkFamily::do_initialize() {
-  StepResult base = ImplicitIntegrator::do_initialize();
+  StepResult base = VelocityImplicitMethod::do_initialize();
   if (!base.ok) return base;
   if (std::string why = check_options(options(), x_.size()); !why.empty()) {
     return StepResult::failure(why);

@@ -19,7 +19,7 @@
 //   x* = x_n + (1 - alpha_f) (h ((1 - beta/gamma) v_n + beta/gamma v_{n+1}) + h^2 kappa a_n),
 //   kappa = 1/2 - beta - beta (1 - gamma) / gamma,   v* = alpha_f v_n + (1 - alpha_f) v_{n+1},
 //
-// the velocity-implicit step of newton_velocity_solver.h with a weight, an
+// the velocity-implicit step of velocity_step.h with a weight, an
 // inertial centre and an offset: solved by the same Newton (minimizing the
 // same kind of incremental potential where the forces derive from one).
 // With beta = 0 (the central difference) x_{n+1} is explicit, and so is the
@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
@@ -52,7 +52,7 @@ NewmarkParameters generalized_alpha_parameters(double rho_inf);
 // gamma = (1 - 2 alpha)/2, beta = (1 - alpha)^2 / 4; rho_inf = (1 + alpha)/(1 - alpha).
 NewmarkParameters hht_parameters(double alpha);
 
-class NewmarkFamily : public ImplicitIntegrator {
+class NewmarkFamily : public VelocityImplicitMethod {
  public:
   std::vector<std::string> options_read() const override;
 
@@ -61,7 +61,7 @@ class NewmarkFamily : public ImplicitIntegrator {
   virtual NewmarkParameters parameters(const IntegratorOptions& options) const = 0;
 
  protected:
-  using ImplicitIntegrator::ImplicitIntegrator;
+  using VelocityImplicitMethod::VelocityImplicitMethod;
   StepResult do_initialize() override;
   StepResult do_step(double h) override;
   // The options this method takes beyond Newton's (e.g. "beta", "gamma").

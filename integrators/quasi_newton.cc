@@ -1,5 +1,5 @@
 // implicit-euler --solver quasi-newton (docs/integrators.md "Fast solvers"): the step's
-// incremental potential Phi(v) (newton_velocity_solver.h) minimized by
+// incremental potential Phi(v) (velocity_step.h) minimized by
 // L-BFGS instead of Newton (Liu, Bouaziz and Kavan, "Quasi-Newton methods
 // for real-time simulation of hyperelastic materials", ACM TOG 2017).
 //
@@ -43,11 +43,12 @@
 // from H0 alone, or the search fails, or --max-newton iterations pass,
 // L-BFGS has stalled: the step is then solved by Newton from its start (the
 // "fall-back to Newton where it stalls").
+#include "integrators/quasi_newton.h"
+
 #include <cmath>
 #include <limits>
 
 #include "integrators/fast_solver.h"
-#include "integrators/newton_velocity_solver.h"
 
 namespace springlab {
 namespace {
@@ -61,158 +62,175 @@ constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();  // a
 
 }  // namespace
 
-bool ImplicitIntegrator::prepare_quasi_newton() {
+bool Lbfgs::prepare(const MechanicalSystem& system) {
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
-  const int dim = system().dimension_of_state();
-  if (dim < 1 || !system().laplacian_form(constraints, elements)) return false;
-  const Eigen::Index n = system().dofs() / dim;
-  qn_.dim = dim;
-  qn_.particle_mass.resize(n);
-  for (Eigen::Index i = 0; i < n; ++i) qn_.particle_mass[i] = system().mass()[i * dim];
-  qn_.laplacian = constraint_laplacian(constraints, elements, n);
-  qn_.factor.reset();
-  qn_.factored_h = 0.0;
+  const int dim = system.dimension_of_state();
+  if (dim < 1 || !system.laplacian_form(constraints, elements)) return false;
+  const Eigen::Index n = system.dofs() / dim;
+  dim_ = dim;
+  particle_mass_.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) particle_mass_[i] = system.mass()[i * dim];
+  laplacian_ = constraint_laplacian(constraints, elements, n);
+  factor_.reset();
+  factored_h_ = 0.0;
   return true;
 }
 
-bool ImplicitIntegrator::quasi_newton(double h, const VelocityImplicitScheme& s, Vector& v) {
-  QuasiNewtonState& q = qn_;
-  const int dim = q.dim;
-  const Eigen::Index n = q.particle_mass.size();
-  // H0 = M + h^2 b L (x) I: Phi's v-Hessian is M + h^2 b K.
-  if (!(std::abs(h - q.factored_h) <= 1e-12 * h)) {
-    SparseMatrix a = (h * h * s.b) * q.laplacian;
-    for (Eigen::Index i = 0; i < n; ++i) a.coeffRef(i, i) += q.particle_mass[i];
-    ++mutable_stats().factorizations;
-    if (!q.factor.factorize(a, MatrixKind::kPositiveDefinite)) return false;
-    q.factored_h = h;
-  }
-  // z = H0^-1 q.q: the coordinates as the columns of an n x dim matrix,
-  // solved together with the one factor.
-  auto apply_h0_inverse = [&]() {
-    q.columns = Eigen::Map<const Eigen::MatrixXd>(q.q.data(), dim, n).transpose();
-    mutable_stats().linear_solves += dim;
-    if (!q.factor.solve(q.columns, q.solved)) return false;
-    q.z.resize(q.q.size());
-    Eigen::Map<Eigen::MatrixXd>(q.z.data(), dim, n) = q.solved.transpose();
-    return true;
-  };
+bool Lbfgs::apply_h0_inverse(IntegratorStats& stats) {
+  const Eigen::Index n = particle_mass_.size();
+  columns_ = Eigen::Map<const Eigen::MatrixXd>(q_.data(), dim_, n).transpose();
+  stats.linear_solves += dim_;
+  if (!factor_.solve(columns_, solved_)) return false;
+  z_.resize(q_.size());
+  Eigen::Map<Eigen::MatrixXd>(z_.data(), dim_, n) = solved_.transpose();
+  return true;
+}
 
-  q.s.clear();
-  q.y.clear();
-  q.rho.clear();
-  const double tol = options().newton_tol;
+bool Lbfgs::factor_h0(double h, double b, IntegratorStats& stats) {
+  // H0 = M + h^2 b L (x) I: Phi's v-Hessian is M + h^2 b K.
+  if (std::abs(h - factored_h_) <= 1e-12 * h) return true;
+  const Eigen::Index n = particle_mass_.size();
+  SparseMatrix a = (h * h * b) * laplacian_;
+  for (Eigen::Index i = 0; i < n; ++i) a.coeffRef(i, i) += particle_mass_[i];
+  ++stats.factorizations;
+  if (!factor_.factorize(a, MatrixKind::kPositiveDefinite)) return false;
+  factored_h_ = h;
+  return true;
+}
+
+bool Lbfgs::direction(IntegratorStats& stats, double& slope) {
+  // The two-loop recursion: d = -H r.
+  q_ = r_;
+  const std::size_t m = s_.size();
+  std::vector<double> alpha(m);
+  for (std::size_t k = m; k-- > 0;) {
+    alpha[k] = rho_[k] * s_[k].dot(q_);
+    q_ -= alpha[k] * y_[k];
+  }
+  if (!apply_h0_inverse(stats)) return false;
+  for (std::size_t k = 0; k < m; ++k) {
+    const double beta = rho_[k] * y_[k].dot(z_);
+    z_ += (alpha[k] - beta) * s_[k];
+  }
+  d_ = -z_;
+  slope = r_.dot(d_);
+  if (!(slope < 0.0) && m > 0) {  // the history misleads: H0 alone
+    s_.clear();
+    y_.clear();
+    rho_.clear();
+    q_ = r_;
+    if (!apply_h0_inverse(stats)) return false;
+    d_ = -z_;
+    slope = r_.dot(d_);
+  }
+  return true;
+}
+
+bool Lbfgs::search(VelocityStep& step, const Vector& v, double phi, double magnitude,
+                   double slope, double& step_length, double& phi_try, double& a_star) {
+  // Armijo on Phi, halving from the full step.
+  step_length = 1.0;
+  phi_try = 0.0;
+  bool accepted = false;
+  for (int k = 0; k <= kHalvings; ++k, step_length *= 0.5) {
+    v_try_ = v + step_length * d_;
+    step.residual(v_try_, r_try_);
+    if (!r_try_.allFinite()) continue;
+    phi_try = step.potential(v_try_, magnitude_try_);
+    if (!std::isfinite(phi_try)) continue;
+    const double noise = 1e3 * std::numeric_limits<double>::epsilon() *
+                         std::max(magnitude, magnitude_try_);
+    if (phi_try - phi <= kArmijo * step_length * slope ||
+        (step_length * -slope <= noise && r_try_.norm() < r_.norm())) {
+      accepted = true;
+      break;
+    }
+  }
+  if (!accepted) return false;
+  // Where the full step still descends at its end, the minimum on the
+  // line lies beyond it: a* from the secant of the slope.
+  a_star = 1.0;
+  if (step_length != 1.0) return true;
+  const double slope_end = r_try_.dot(d_);
+  if (slope_end < 0.0) a_star = slope / (slope - slope_end);
+  if (a_star < kExtrapolateFrom) return true;
+  const double longer = std::min(a_star, kLongestStep);
+  v_long_ = v + longer * d_;
+  step.residual(v_long_, r_long_);
+  double magnitude_long = 0.0;
+  const double phi_long = r_long_.allFinite() ? step.potential(v_long_, magnitude_long) : phi_try;
+  if (phi_long < phi_try) {
+    step_length = longer;
+    v_try_.swap(v_long_);
+    r_try_.swap(r_long_);
+    phi_try = phi_long;
+    magnitude_try_ = magnitude_long;
+  }
+  return true;
+}
+
+void Lbfgs::remember(double step_length) {
+  // The new pair, kept where it has positive curvature (y . s > 0).
+  Vector s_new = step_length * d_;
+  Vector y_new = r_try_ - r_;
+  const double ys = y_new.dot(s_new);
+  if (!(ys > 1e-12 * y_new.norm() * s_new.norm())) return;
+  if (static_cast<int>(s_.size()) == kHistory) {
+    s_.erase(s_.begin());
+    y_.erase(y_.begin());
+    rho_.erase(rho_.begin());
+  }
+  s_.push_back(std::move(s_new));
+  y_.push_back(std::move(y_new));
+  rho_.push_back(1.0 / ys);
+}
+
+bool Lbfgs::solve(VelocityStep& step, const CountedModel& model, const Vector& inv_mass,
+                  double tol, int max_iterations, Vector& v) {
+  const double h = step.h();
+  const Vector& v_n = step.start();
+  IntegratorStats& stats = model.stats();
+  if (!factor_h0(h, step.scheme().b, stats)) return false;
+  s_.clear();
+  y_.clear();
+  rho_.clear();
   // Start from projective dynamics' inertial prediction: v_n plus what the
   // forces other than the distance constraints' (gravity, ...) add.
-  system().external_force(t_, x_, v_, q.q);
-  v = v_ + h * q.q.cwiseProduct(inv_mass());
-  residual(h, s, v, r_);
-  if (!r_.allFinite() && s.b > 0.0) {
-    v = (-s.a / s.b) * v_;  // as Newton: a state the last step accepted
-    residual(h, s, v, r_);
+  model.system().external_force(step.t(), step.x(), v_n, q_);
+  v = v_n + h * q_.cwiseProduct(inv_mass);
+  step.residual(v, r_);
+  if (!r_.allFinite() && step.fallback_start(v)) {
+    step.residual(v, r_);  // as Newton: a state the last step accepted
   }
-  double magnitude = 0.0, magnitude_try = 0.0;
-  double phi = potential(h, s, v, magnitude);
+  double magnitude = 0.0;
+  magnitude_try_ = 0.0;
+  double phi = step.potential(v, magnitude);
   if (!std::isfinite(phi) || !r_.allFinite()) return false;
 
   double previous_update = 0.0;
-  for (int it = 0; it < options().max_newton; ++it) {
-    ++mutable_stats().newton_iterations;
-    // The two-loop recursion: d = -H r.
-    q.q = r_;
-    const std::size_t m = q.s.size();
-    std::vector<double> alpha(m);
-    for (std::size_t k = m; k-- > 0;) {
-      alpha[k] = q.rho[k] * q.s[k].dot(q.q);
-      q.q -= alpha[k] * q.y[k];
-    }
-    if (!apply_h0_inverse()) return false;
-    for (std::size_t k = 0; k < m; ++k) {
-      const double beta = q.rho[k] * q.y[k].dot(q.z);
-      q.z += (alpha[k] - beta) * q.s[k];
-    }
-    q.d = -q.z;
-    double slope = r_.dot(q.d);
-    if (!(slope < 0.0) && m > 0) {  // the history misleads: H0 alone
-      q.s.clear();
-      q.y.clear();
-      q.rho.clear();
-      q.q = r_;
-      if (!apply_h0_inverse()) return false;
-      q.d = -q.z;
-      slope = r_.dot(q.d);
-    }
+  for (int it = 0; it < max_iterations; ++it) {
+    ++stats.newton_iterations;
+    double slope = 0.0, step_length = 1.0, phi_try = 0.0, a_star = 1.0;
+    if (!direction(stats, slope)) return false;
     if (!(slope < 0.0)) return r_.lpNorm<Eigen::Infinity>() == 0.0;
-    // Armijo on Phi, halving from the full step.
-    double step = 1.0, phi_try = 0.0;
-    bool accepted = false;
-    for (int k = 0; k <= kHalvings; ++k, step *= 0.5) {
-      q.v_try = v + step * q.d;
-      residual(h, s, q.v_try, q.r_try);
-      if (!q.r_try.allFinite()) continue;
-      phi_try = potential(h, s, q.v_try, magnitude_try);
-      if (!std::isfinite(phi_try)) continue;
-      const double noise = 1e3 * std::numeric_limits<double>::epsilon() *
-                           std::max(magnitude, magnitude_try);
-      if (phi_try - phi <= kArmijo * step * slope ||
-          (step * -slope <= noise && q.r_try.norm() < r_.norm())) {
-        accepted = true;
-        break;
-      }
-    }
-    if (!accepted) return false;
-    // Where the full step still descends at its end, the minimum on the
-    // line lies beyond it: a* from the secant of the slope.
-    double a_star = 1.0;
-    if (step == 1.0) {
-      const double slope_end = q.r_try.dot(q.d);
-      if (slope_end < 0.0) a_star = slope / (slope - slope_end);
-      if (a_star >= kExtrapolateFrom) {
-        const double longer = std::min(a_star, kLongestStep);
-        q.v_long = v + longer * q.d;
-        residual(h, s, q.v_long, q.r_long);
-        double magnitude_long = 0.0;
-        const double phi_long =
-            q.r_long.allFinite() ? potential(h, s, q.v_long, magnitude_long) : phi_try;
-        if (phi_long < phi_try) {
-          step = longer;
-          q.v_try.swap(q.v_long);
-          q.r_try.swap(q.r_long);
-          phi_try = phi_long;
-          magnitude_try = magnitude_long;
-        }
-      }
-    }
+    if (!search(step, v, phi, magnitude, slope, step_length, phi_try, a_star)) return false;
     // The update proposed (as Newton's full update, before its search: a
     // damped step is small without being near the solution), here the
     // estimated minimum on the line.
-    const double update = a_star * q.d.lpNorm<Eigen::Infinity>();
-    // The new pair, kept where it has positive curvature (y . s > 0).
-    Vector s_new = step * q.d;
-    Vector y_new = q.r_try - r_;
-    const double ys = y_new.dot(s_new);
-    if (ys > 1e-12 * y_new.norm() * s_new.norm()) {
-      if (static_cast<int>(q.s.size()) == kHistory) {
-        q.s.erase(q.s.begin());
-        q.y.erase(q.y.begin());
-        q.rho.erase(q.rho.begin());
-      }
-      q.s.push_back(std::move(s_new));
-      q.y.push_back(std::move(y_new));
-      q.rho.push_back(1.0 / ys);
-    }
-    v.swap(q.v_try);
-    r_.swap(q.r_try);
+    const double update = a_star * d_.lpNorm<Eigen::Infinity>();
+    remember(step_length);
+    v.swap(v_try_);
+    r_.swap(r_try_);
     phi = phi_try;
-    magnitude = magnitude_try;
+    magnitude = magnitude_try_;
     // Newton's rule: the update, or while converging linearly at an
     // observed rate q > 1/2, what remains after it, q / (1 - q) update.
     const double rate = previous_update > 0.0 ? update / previous_update : 0.0;
     const double remaining = rate > 0.5 && rate < 1.0 ? update * rate / (1.0 - rate) : update;
     // A tolerance below the round-off of v is met at that round-off.
     const double floor =
-        kRoundoff * (v.lpNorm<Eigen::Infinity>() + v_.lpNorm<Eigen::Infinity>());
+        kRoundoff * (v.lpNorm<Eigen::Infinity>() + v_n.lpNorm<Eigen::Infinity>());
     if (remaining <= tol || update <= floor) return true;
     previous_update = update;
   }

@@ -18,7 +18,7 @@ std::complex<double> tr_bdf2_function(std::complex<double> z) {
 }  // namespace
 
 TrBdf2::TrBdf2()
-    : ImplicitIntegrator({.name = "tr-bdf2",
+    : VelocityImplicitMethod({.name = "tr-bdf2",
                           .scheme = "trapezoidal to t + g h, then BDF2 through it, g = 2 - sqrt 2",
                           .order = 2,
                           .implicit = true,
@@ -29,7 +29,7 @@ TrBdf2::TrBdf2()
                           .spectral_radius_infinity = 0.0}) {}
 
 StepResult TrBdf2::do_initialize() {
-  StepResult base = ImplicitIntegrator::do_initialize();
+  StepResult base = VelocityImplicitMethod::do_initialize();
   if (!base.ok) return base;
   eval_acceleration(t_, x_, v_, a_);
   return base;

@@ -6,7 +6,7 @@
 //   y_{n+1} = y_n + c1 (y_g - y_n) + w h f_{n+1},
 //   g = 2 - sqrt(2),  c1 = 1 / (g (2 - g)),  w = (1 - g) / (2 - g).
 //
-// Both stages are velocity-implicit systems of newton_velocity_solver.h,
+// Both stages are velocity-implicit systems of velocity_step.h,
 // solved by the same Newton as implicit Euler (--newton-tol, --max-newton).
 // With this g both stages have the same Newton matrix M - (h w)^2 K for
 // forces independent of v (g h / 2 = w h). Bathe's composite method (2005)
@@ -16,11 +16,11 @@
 // trapezoidal R_T(s) = (1 + s/2)/(1 - s/2), goes to 0 as |z| -> infinity.
 #pragma once
 
-#include "integrators/newton_velocity_solver.h"
+#include "integrators/velocity_implicit_method.h"
 
 namespace springlab {
 
-class TrBdf2 final : public ImplicitIntegrator {
+class TrBdf2 final : public VelocityImplicitMethod {
  public:
   TrBdf2();
 
