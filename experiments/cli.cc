@@ -358,9 +358,12 @@ class ProgressLine final : public Observer {
     }
     last_ = now;
     shown_ = true;
-    std::fprintf(stderr, "\r[%s] t = %.6g of %.6g s (%d%%), %.0f s", label_.c_str(), t, t_end_,
-                 static_cast<int>(100.0 * t / t_end_),
-                 std::chrono::duration<double>(now - start_).count());
+    // The time left at the pace so far (issue 38.10: an adaptive method
+    // that creeps, arkode-dirk on a stiff block, says how long it will take).
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    std::fprintf(stderr, "\r\033[K[%s] t = %.6g of %.6g s (%d%%), %.0f s", label_.c_str(), t,
+                 t_end_, static_cast<int>(100.0 * t / t_end_), elapsed);
+    if (t > 0.0) std::fprintf(stderr, ", about %.0f s left", elapsed * (t_end_ - t) / t);
     std::fflush(stderr);
   }
 
