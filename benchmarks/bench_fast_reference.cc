@@ -11,12 +11,13 @@
 // reference_ms per step (the process's wall time / 120, start-up and scene
 // reading included), each the minimum over the iterations, and ratio =
 // springlab_ms / reference_ms; the same of the processes' CPU time (user +
-// system): springlab_cpu_ms, reference_cpu_ms, cpu_ratio; the runs' status is checked (both complete,
-// no divergence). Projective dynamics also compares the final positions
-// (one untimed run of each with the positions written): counter
-// max_difference_m, the largest distance between a particle's two final
-// positions; above kPdTolerance the benchmark fails (the two run the same
-// algorithm; only rounding and the factor's ordering differ).
+// system): springlab_cpu_ms, reference_cpu_ms, cpu_ratio. The runs' status
+// is checked (both complete, no divergence). Projective dynamics also
+// compares the final positions (one untimed run of each with the positions
+// written): counter max_difference_m, the largest distance between a
+// particle's two final positions; above kPdTolerance the benchmark fails
+// (the two run the same algorithm on the same factor; only rounding
+// differs, which the folding cloth amplifies: 2.9e-9 m on cloth 128).
 #include <sys/resource.h>
 #include <sys/time.h>
 #include <sys/wait.h>

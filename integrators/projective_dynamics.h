@@ -8,7 +8,8 @@
 // each of N iterations (--iterations, default 10)
 //   local:   p_c = L_c (x_a - x_b) / |x_a - x_b|        (each spring alone)
 //   global:  (M + h^2 L) x = M y + h^2 J p               (one linear solve
-//            per coordinate; L = sum_c k_c (e_a - e_b)(e_a - e_b)^T)
+//            per coordinate; L = sum_c k_c (e_a - e_b)(e_a - e_b)^T;
+//            with drag, h D and h D (x_n + h v_n) more: below)
 // lowers g; then v = (x - x_n)/h. The matrix is the same for x, y and z and
 // for every step of one h, so it is factored once (CHOLMOD, kept) and each
 // iteration is one solve with the three coordinates as three columns. The
