@@ -151,7 +151,8 @@ SPRINGLAB_LANES_INLINE void blocks_lanes(const Eigen::Matrix3d* const (&F)[kLane
                                          const Derived3* const (&d)[kLanes], const Lanes (&D)[9],
                                          const Lanes& mu, const Lanes& lambda, Lanes (&K)[81]) {
   if constexpr (BlocksOnArrays<Model>) {
-    Lanes f[9], R[9], log_J;
+    Lanes f[9], R[9];
+    Lanes log_J = {};  // (read only by a material that keeps ln J)
     for (int l = 0; l < kLanes; ++l) {
       for (int k = 0; k < 9; ++k) {
         f[k][l] = (*F[l])(k / 3, k % 3);
