@@ -11,8 +11,8 @@
 // A(a, b)_rs = sum_cd a_c (dP_rc/dF_sd) b_d the tangent contracted with two
 // rest-shape gradients, which the material's kernel gives (tet_kernel.h),
 // in closed form where the material has one, a few flops a block
-// (tangent3.h) instead of the 9 x 9 dPdF and two 9 x 9 products. Node 0's blocks follow from
-// g_0 = -(d_1 + d_2 + d_3):
+// (tangent3.h) instead of the 9 x 9 dPdF and two 9 x 9 products. Node 0's
+// blocks follow from g_0 = -(d_1 + d_2 + d_3):
 //   K_i0 = -sum_j K_ij,  K_0j = -sum_i K_ij,  K_00 = sum_ij K_ij.
 // Each pass takes the elements kLanes at a time (a Chunk, fill below), so
 // that a kernel that derives, or gives its blocks, in vector lanes
