@@ -189,8 +189,8 @@ MaterialModel model(decltype(TetKernel::blocks_lanes) blocks_lanes_clones) {
 
 // Registers the class Model as `const MaterialModel& NAME_material()`, the
 // function named by its line in material_registry.cc. The blocks in lanes
-// are compiled here, once per target (SPRINGLAB_LANES_CLONES, lanes.h: a
-// template cannot be cloned); where the class writes no blocks on arrays
+// are compiled here, once per target (SPRINGLAB_LANES_CLONES, lanes.h: Clang
+// clones no function template); where the class writes no blocks on arrays
 // the function is empty and the kernel has none.
 #define SPRINGLAB_MATERIAL(Model, NAME)                                                        \
   namespace {                                                                                  \
