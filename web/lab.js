@@ -9,7 +9,8 @@
 
 (function () {
   const DT_MIN = 1e-5, DT_MAX = 1e-1;    // the dt slider's ends [s]
-  const STEP_BUDGET_MS = 12;             // of a 16.7 ms frame, for stepping all panels
+  const STEP_BUDGET_MS = 10;             // of a 16.7 ms frame, for stepping all panels
+                                         // (drawing two cloth 32 panels takes ~4 ms more)
   const PLOT_SAMPLES = 600;              // energy samples kept per panel
   const VIEW_W = 440, VIEW_H = 360, PLOT_H = 90;
   const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
@@ -145,7 +146,10 @@
     const size = Math.max(hi[0] - lo[0], hi[1] - lo[1], 1e-3);
     const falls = p.info.gravity.some((g) => g !== 0) && p.info.planes.length === 0 &&
                   p.info.fluid.particles.length === 0;
-    const scale = Math.min(VIEW_W, VIEW_H) / ((falls ? 2.2 : 1.3) * size);
+    // A fluid stays in its box (walls included in the fit): fill the view.
+    const scale = p.info.fluid.particles.length > 0
+        ? Math.min(VIEW_W / (hi[0] - lo[0]), VIEW_H / (hi[1] - lo[1])) / 1.1
+        : Math.min(VIEW_W, VIEW_H) / ((falls ? 2.2 : 1.3) * size);
     const cx = (lo[0] + hi[0]) / 2, cyv = (lo[1] + hi[1]) / 2 - (falls ? 0.45 * size : 0);
     return { R, scale, cx, cy: cyv, size };
   }
@@ -197,7 +201,7 @@
   // The bodies' surface triangles, far ones first (painter's order by mean
   // view depth), each shaded by how squarely it faces the viewer
   // (|n . view| / |n|, n its normal) and outlined in the panel's colour.
-  function drawFaces(g, p, pos, pts, color) {
+  function drawFaces(g, p, pos, sx, sy, color) {
     const f = p.info.faces;
     if (f.length === 0) return;
     const R = lab.view.R, list = [];
@@ -211,32 +215,55 @@
     list.sort((a, b) => a.depth - b.depth);
     g.lineWidth = 1; g.strokeStyle = color;
     for (const face of list) {
-      const a = pts[f[face.k]], b = pts[f[face.k + 1]], c = pts[f[face.k + 2]];
-      g.beginPath(); g.moveTo(a[0], a[1]); g.lineTo(b[0], b[1]); g.lineTo(c[0], c[1]); g.closePath();
+      const a = f[face.k], b = f[face.k + 1], c = f[face.k + 2];
+      g.beginPath(); g.moveTo(sx[a], sy[a]); g.lineTo(sx[b], sy[b]); g.lineTo(sx[c], sy[c]); g.closePath();
       g.globalAlpha = 1; g.fillStyle = "#fff"; g.fill();
       g.globalAlpha = 0.25 + 0.5 * face.light; g.fillStyle = color; g.fill();
       g.globalAlpha = 1; g.stroke();
     }
   }
 
-  // Blue (at rest) through green and yellow to red (the fastest seen).
-  const speedColor = (s) => "hsl(" + Math.round(240 * (1 - Math.min(1, s / lab.speedMax))) + ",85%,45%)";
+  // Blue (at rest) through green and yellow to red (the fastest seen), in
+  // SPEED_LEVELS steps: one path per colour.
+  const SPEED_LEVELS = 24;
+  const speedColor = (level) => "hsl(" + Math.round(240 * (1 - level / (SPEED_LEVELS - 1))) + ",85%,45%)";
 
+  // Screen coordinates of every point into p.sx, p.sy (kept per panel: a
+  // frame allocates nothing per point).
+  function project(p, pos) {
+    const N = p.info.points, w = lab.view, R = w.R;
+    if (!p.sx || p.sx.length !== N) { p.sx = new Float64Array(N); p.sy = new Float64Array(N); }
+    const sx = p.sx, sy = p.sy, cx = VIEW_W / 2, cy = VIEW_H / 2;
+    for (let i = 0; i < N; ++i) {
+      const x = pos[3 * i], y = pos[3 * i + 1], z = pos[3 * i + 2];
+      sx[i] = cx + (R[0][0] * x + R[0][1] * y + R[0][2] * z - w.cx) * w.scale;
+      sy[i] = cy - (R[1][0] * x + R[1][1] * y + R[1][2] * z - w.cy) * w.scale;
+    }
+  }
+
+  // A panel is drawn again only when what it shows changed: its state (a
+  // step), the mouse's spring, the shared speed scale (paused: nothing).
   function drawPanel(p) {
+    const key = [p.state ? p.state.steps : -1, p.state ? p.state.status : "", !!lab.view,
+                 lab.drag ? lab.drag.screen.join() : "", lab.speedMax].join("|");
+    if (p.drawn === key) return;
+    p.drawn = key;
     const g = p.view.getContext("2d");
     g.clearRect(0, 0, VIEW_W, VIEW_H);
     if (!p.id || !lab.view) return;
-    const pos = positions(p), n = p.info.particles, points = p.info.points;
-    const pts = new Array(points);
-    for (let i = 0; i < points; ++i) pts[i] = toScreen(rotate(lab.view.R, pos, i));
+    const pos = positions(p), n = p.info.particles;
+    project(p, pos);
+    const sx = p.sx, sy = p.sy;
     const color = COLORS[p.index % COLORS.length];
     for (const plane of p.info.planes) drawPlane(g, plane);
+    if (!p.edgeList) p.edgeList = Int32Array.from(p.info.edges.flat());
+    const e = p.edgeList;
     g.strokeStyle = color; g.globalAlpha = 0.55; g.lineWidth = 1;
     g.beginPath();
-    for (const [a, b] of p.info.edges) { g.moveTo(pts[a][0], pts[a][1]); g.lineTo(pts[b][0], pts[b][1]); }
+    for (let k = 0; k < e.length; k += 2) { g.moveTo(sx[e[k]], sy[e[k]]); g.lineTo(sx[e[k + 1]], sy[e[k + 1]]); }
     g.stroke();
     g.globalAlpha = 1;
-    drawFaces(g, p, pos, pts, color);
+    drawFaces(g, p, pos, sx, sy, color);
     const fluid = p.info.fluid.particles;
     if (fluid.length > 0) {
       // Dots of the particle spacing's size, coloured by speed on one scale
@@ -245,27 +272,32 @@
       for (const i of fluid) lab.speedMax = Math.max(lab.speedMax, v[i]);
       if (!(lab.speedMax > 0)) lab.speedMax = 1e-9;
       const r = Math.max(1.5, 0.5 * p.info.fluid.spacing * lab.view.scale);
+      const paths = Array.from({ length: SPEED_LEVELS }, () => new Path2D());
       for (const i of fluid) {
-        g.fillStyle = speedColor(v[i]);
-        g.beginPath(); g.arc(pts[i][0], pts[i][1], r, 0, 2 * Math.PI); g.fill();
+        const level = Math.round((SPEED_LEVELS - 1) * Math.min(1, v[i] / lab.speedMax));
+        paths[level].moveTo(sx[i] + r, sy[i]);
+        paths[level].arc(sx[i], sy[i], r, 0, 2 * Math.PI);
       }
+      paths.forEach((path, level) => { g.fillStyle = speedColor(level); g.fill(path); });
     } else if (n > 0 && (p.info.edges.length === 0 || n <= 64)) {
       g.fillStyle = color;
-      for (let i = 0; i < n; ++i) g.fillRect(pts[i][0] - 2, pts[i][1] - 2, 4, 4);
+      for (let i = 0; i < n; ++i) g.fillRect(sx[i] - 2, sy[i] - 2, 4, 4);
     }
     // Fixed particles: black squares, or small grey ones when many (walls).
     const many = p.info.fixed.length > 64, w = many ? 2 : 6;
     g.fillStyle = many ? "#888" : "#000";
-    for (const f of p.info.fixed) g.fillRect(pts[f][0] - w / 2, pts[f][1] - w / 2, w, w);
+    g.beginPath();
+    for (const f of p.info.fixed) g.rect(sx[f] - w / 2, sy[f] - w / 2, w, w);
+    g.fill();
     if (lab.drag) {
-      const q = pts[lab.drag.particle], c = lab.drag.screen;
+      const i = lab.drag.particle, c = lab.drag.screen;
       g.strokeStyle = "#e67e22"; g.lineWidth = 2;
-      g.beginPath(); g.moveTo(q[0], q[1]); g.lineTo(c[0], c[1]); g.stroke();
+      g.beginPath(); g.moveTo(sx[i], sy[i]); g.lineTo(c[0], c[1]); g.stroke();
     }
     if (p.state.status !== "completed") {
       g.fillStyle = "rgba(192,57,43,0.12)"; g.fillRect(0, 0, VIEW_W, VIEW_H);
     }
-    p.markEl.textContent = p.mark;
+    if (p.markEl.textContent !== p.mark) p.markEl.textContent = p.mark;
     const s = p.state, lim = p.limit;
     const limit = lim === Infinity ? "no step limit" :
                   Number.isNaN(lim) ? "step limit: not one number" :

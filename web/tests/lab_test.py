@@ -33,6 +33,7 @@ import argparse
 import base64
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -138,25 +139,34 @@ class Chromium:
         return base64.b64decode(self.send("Page.captureScreenshot", {"format": "png"},
                                           session=True)["data"])
 
-    def cpu_seconds(self):
-        """CPU time (user + system) of Chromium and all its processes so far."""
-        parent, times = {}, {}
+    def cpu_seconds(self, renderer_main=False):
+        """CPU time (user + system) so far of Chromium and all its processes,
+        or of its renderers' main threads only (the page's JavaScript and
+        WebAssembly run there; a main thread's task id is its process id)."""
+        parent, times, renderer = {}, {}, set()
         for entry in os.listdir("/proc"):
             if not entry.isdigit():
                 continue
             try:
                 with open("/proc/%s/stat" % entry) as f:
                     fields = f.read().rsplit(")", 1)[1].split()
+                with open("/proc/%s/task/%s/stat" % (entry, entry)) as f:
+                    main = f.read().rsplit(")", 1)[1].split()
+                with open("/proc/%s/cmdline" % entry, "rb") as f:
+                    if b"--type=renderer" in f.read():
+                        renderer.add(int(entry))
             except OSError:
                 continue
             parent[int(entry)] = int(fields[1])
-            times[int(entry)] = int(fields[11]) + int(fields[12])  # utime, stime
+            # utime + stime of the process (all its threads) or of its main thread
+            times[int(entry)] = (int(main[11]) + int(main[12])) if renderer_main else \
+                (int(fields[11]) + int(fields[12]))
         total = 0
         for pid in times:
             p = pid
             while p in parent and p != self.proc.pid:
                 p = parent[p]
-            if p == self.proc.pid:
+            if p == self.proc.pid and (not renderer_main or pid in renderer):
                 total += times[pid]
         return total / os.sysconf("SC_CLK_TCK")
 
@@ -431,22 +441,24 @@ def frame_rate(browser, args):
              ("symplectic-euler", "projective-dynamics", None),
              ("symplectic-euler", "symplectic-euler", None)]
     browser.evaluate("window.springlab.setScene('cloth', {n: 32})")
+    browser.evaluate("window.springlab.setIntegrators(['symplectic-euler', 'symplectic-euler'])")
+    dt_limit = browser.evaluate("window.springlab.state()[0].dt_limit")
+    step_cpu = cpu_costs(browser, args, dt_limit)
     for a, b, dt in cases:
         browser.evaluate("window.springlab.setIntegrators(%s)" % json.dumps([a, b]))
         if dt is None:
-            if dt_limit is None:
-                dt_limit = browser.evaluate(
-                    "window.springlab.state().find(s => s.integrator == 'symplectic-euler').dt_limit")
             dt = 0.9 * dt_limit
         browser.evaluate("window.springlab.setDt(%r); window.springlab.play()" % dt)
         time.sleep(1.0)  # the step cost is measured, the budget settles
         samples = []
-        frames0, cpu0 = browser.evaluate("window.springlab.stats().framesTotal"), browser.cpu_seconds()
+        frames0 = browser.evaluate("window.springlab.stats().framesTotal")
+        cpu0, main0 = browser.cpu_seconds(), browser.cpu_seconds(renderer_main=True)
         for _ in range(int(args.seconds / 0.5)):
             time.sleep(0.5)
             samples.append(browser.evaluate("window.springlab.stats()"))
         frames = samples[-1]["framesTotal"] - frames0
         cpu_ms = 1000 * (browser.cpu_seconds() - cpu0) / max(frames, 1)
+        main_ms = 1000 * (browser.cpu_seconds(renderer_main=True) - main0) / max(frames, 1)
         fps = sum(s["fps"] for s in samples) / len(samples)
         per = sum(s["stepsPerFrame"] for s in samples) / len(samples)
         wanted = sum(s["wantedPerFrame"] for s in samples) / len(samples)
@@ -454,11 +466,49 @@ def frame_rate(browser, args):
         ms = sum(s["msPerStep"] for s in samples) / len(samples)
         step_ms = sum(s["stepMsPerFrame"] for s in samples) / len(samples)
         draw_ms = sum(s["drawMsPerFrame"] for s in samples) / len(samples)
+        # The page's thread less its steps' CPU: drawing and the browser's own work.
+        rest_ms = main_ms - per * (step_cpu[a] + step_cpu[b])
         print("cloth 32, %s + %s, dt %.3g s: %.1f frames/s, %.1f steps/frame of %.1f wanted, "
               "%.2f ms per step (both panels), per frame %.1f ms stepping + %.1f ms drawing, "
-              "%.0f%% of real time; Chromium's CPU time %.1f ms per frame; load average %.1f" % (
-                  a, b, dt, fps, per, wanted, ms, step_ms, draw_ms, 100 * speed, cpu_ms,
-                  os.getloadavg()[0]))
+              "%.0f%% of real time; CPU time per frame %.1f ms in the page's thread (%.1f ms of it not "
+              "stepping), %.1f ms in all of Chromium; load average %.1f" % (
+                  a, b, dt, fps, per, wanted, ms, step_ms, draw_ms, 100 * speed, main_ms, rest_ms,
+                  cpu_ms, os.getloadavg()[0]))
+
+
+def native_cpu_seconds(springlab, method, dt, steps):
+    """CPU seconds (user + system) of `springlab run cloth -p n=32` for `steps` steps."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    native_run(springlab, "cloth", {"n": 32}, method, dt, steps * dt * (1 + 1e-12))
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+
+
+def cpu_costs(browser, args, dt_limit):
+    """CPU time per step of one cloth 32 panel, which the machine's load does
+    not inflate as it does the wall clock: in the page (its renderer's main
+    thread, paused, stepped through the API) and natively (`springlab run`:
+    the difference of two run lengths, so that the setup cancels)."""
+    browser.evaluate("window.springlab.pause()")
+    cost = {}
+    for method, dt, steps in (("xpbd", 1.0 / 60.0, 40), ("projective-dynamics", 1.0 / 60.0, 40),
+                              ("symplectic-euler", 0.9 * dt_limit, 400)):
+        browser.evaluate("window.springlab.setIntegrators(%s)" % json.dumps([method, method]))
+        browser.evaluate("window.springlab.setDt(%r)" % dt)
+        browser.evaluate("window.springlab.step(2)")
+        main0 = browser.cpu_seconds(renderer_main=True)
+        browser.evaluate("window.springlab.step(%d)" % steps)
+        page = 1000 * (browser.cpu_seconds(renderer_main=True) - main0) / (2 * steps)
+        cost[method] = page
+        if args.springlab:
+            native = 1000 * (native_cpu_seconds(args.springlab, method, dt, 2 * steps) -
+                             native_cpu_seconds(args.springlab, method, dt, steps)) / steps
+            native_text = "%.3f ms natively" % native
+        else:
+            native_text = "native not measured (--springlab)"
+        print("cloth 32, %s at dt %.3g s: CPU per step of one panel %.3f ms in the page, %s; "
+              "load average %.1f" % (method, dt, page, native_text, os.getloadavg()[0]))
+    return cost
 
 
 def main(argv=None):
