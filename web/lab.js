@@ -304,7 +304,8 @@
                   lim === 0 ? "no stable step without damping" : "dt limit " + lim.toPrecision(3) + " s";
     p.status.textContent = "t = " + s.t.toFixed(4) + " s   E = " + fmt(s.total) + " J   " +
         "(E0 " + fmt(p.e0) + ")\n" + p.info.integrator.stability_text + "; " + limit +
-        (fluid.length > 0 ? "\ncolour: speed, blue 0 to red " + lab.speedMax.toPrecision(3) + " m/s" : "");
+        (fluid.length > 0 ? "\ncolour: speed, blue 0 to red " + lab.speedMax.toPrecision(3) + " m/s" : "") +
+        (s.failure ? "\n" + s.failure : "");
     drawPlot(p);
   }
   const fmt = (x) => (x === null ? "inf" : Math.abs(x) >= 1e4 || (Math.abs(x) < 1e-3 && x !== 0) ?
@@ -544,6 +545,7 @@
       t: p.state ? p.state.t : null, steps: p.state ? p.state.steps : null,
       status: p.state ? p.state.status : null,
       diverged_at: p.state ? p.state.diverged_at : null,
+      failure: p.state ? p.state.failure : null,
       mark: p.markEl.textContent, total: p.state ? p.state.total : null,
       w_max: p.info ? p.info.w_max : null, dt_limit: p.info ? p.limit : null,
     }));
