@@ -185,7 +185,8 @@
   // the square is seen edge on, a line.
   function drawPlane(g, plane) {
     const n = plane.normal, c = plane.point, h = 0.6 * lab.view.size;
-    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                             a[0] * b[1] - a[1] * b[0]];
     const unit = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
     const t1 = unit(cross(n, Math.abs(n[2]) < 0.9 ? [0, 0, 1] : [1, 0, 0])), t2 = cross(n, t1);
     const corner = (a, b) => toScreen(rotate(lab.view.R,
@@ -207,16 +208,20 @@
     const R = lab.view.R, list = [];
     for (let k = 0; k < f.length; k += 3) {
       const v = [f[k], f[k + 1], f[k + 2]].map((i) => rotate(R, pos, i));
-      const e1 = [0, 1, 2].map((a) => v[1][a] - v[0][a]), e2 = [0, 1, 2].map((a) => v[2][a] - v[0][a]);
+      const e1 = [0, 1, 2].map((a) => v[1][a] - v[0][a]);
+      const e2 = [0, 1, 2].map((a) => v[2][a] - v[0][a]);
       const nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2];
       const nz = e1[0] * e2[1] - e1[1] * e2[0], area = Math.hypot(nx, ny, nz);
-      list.push({ k, depth: v[0][2] + v[1][2] + v[2][2], light: area > 0 ? Math.abs(nz) / area : 0 });
+      list.push({ k, depth: v[0][2] + v[1][2] + v[2][2],
+                  light: area > 0 ? Math.abs(nz) / area : 0 });
     }
     list.sort((a, b) => a.depth - b.depth);
     g.lineWidth = 1; g.strokeStyle = color;
     for (const face of list) {
       const a = f[face.k], b = f[face.k + 1], c = f[face.k + 2];
-      g.beginPath(); g.moveTo(sx[a], sy[a]); g.lineTo(sx[b], sy[b]); g.lineTo(sx[c], sy[c]); g.closePath();
+      g.beginPath();
+      g.moveTo(sx[a], sy[a]); g.lineTo(sx[b], sy[b]); g.lineTo(sx[c], sy[c]);
+      g.closePath();
       g.globalAlpha = 1; g.fillStyle = "#fff"; g.fill();
       g.globalAlpha = 0.25 + 0.5 * face.light; g.fillStyle = color; g.fill();
       g.globalAlpha = 1; g.stroke();
@@ -226,7 +231,8 @@
   // Blue (at rest) through green and yellow to red (the fastest seen), in
   // SPEED_LEVELS steps: one path per colour.
   const SPEED_LEVELS = 24;
-  const speedColor = (level) => "hsl(" + Math.round(240 * (1 - level / (SPEED_LEVELS - 1))) + ",85%,45%)";
+  const speedColor = (level) =>
+      "hsl(" + Math.round(240 * (1 - level / (SPEED_LEVELS - 1))) + ",85%,45%)";
 
   // Screen coordinates of every point into p.sx, p.sy (kept per panel: a
   // frame allocates nothing per point).
@@ -260,7 +266,9 @@
     const e = p.edgeList;
     g.strokeStyle = color; g.globalAlpha = 0.55; g.lineWidth = 1;
     g.beginPath();
-    for (let k = 0; k < e.length; k += 2) { g.moveTo(sx[e[k]], sy[e[k]]); g.lineTo(sx[e[k + 1]], sy[e[k + 1]]); }
+    for (let k = 0; k < e.length; k += 2) {
+      g.moveTo(sx[e[k]], sy[e[k]]); g.lineTo(sx[e[k + 1]], sy[e[k + 1]]);
+    }
     g.stroke();
     g.globalAlpha = 1;
     drawFaces(g, p, pos, sx, sy, color);
@@ -304,7 +312,8 @@
                   lim === 0 ? "no stable step without damping" : "dt limit " + lim.toPrecision(3) + " s";
     p.status.textContent = "t = " + s.t.toFixed(4) + " s   E = " + fmt(s.total) + " J   " +
         "(E0 " + fmt(p.e0) + ")\n" + p.info.integrator.stability_text + "; " + limit +
-        (fluid.length > 0 ? "\ncolour: speed, blue 0 to red " + lab.speedMax.toPrecision(3) + " m/s" : "") +
+        (fluid.length > 0 ?
+         "\ncolour: speed, blue 0 to red " + lab.speedMax.toPrecision(3) + " m/s" : "") +
         (s.failure ? "\n" + s.failure : "");
     drawPlot(p);
   }
@@ -373,7 +382,8 @@
       stats.speed = stats.simS / stats.realS;
       stats.slowed = stats.steps < stats.wanted;
       showSpeed();
-      Object.assign(stats, { frames: 0, steps: 0, wanted: 0, stepMs: 0, drawMs: 0, realS: 0, simS: 0 });
+      Object.assign(stats, { frames: 0, steps: 0, wanted: 0, stepMs: 0, drawMs: 0,
+                             realS: 0, simS: 0 });
     }
     const t0 = performance.now();
     drawAll();

@@ -397,7 +397,8 @@ def drawn_scenes(browser, args):
     problems = []
     browser.evaluate("window.springlab.pause()")
     for scene, params, methods, dt, steps in DRAWN_SCENES:
-        browser.evaluate("window.springlab.setScene(%s, %s)" % (json.dumps(scene), json.dumps(params)))
+        browser.evaluate("window.springlab.setScene(%s, %s)"
+                         % (json.dumps(scene), json.dumps(params)))
         browser.evaluate("window.springlab.setIntegrators(%s)" % json.dumps(methods))
         browser.evaluate("window.springlab.setDt(%r)" % dt)
         before = browser.evaluate(CANVAS_PIXELS)
