@@ -22,7 +22,7 @@ LabPanel::LabPanel(const PanelSettings& settings) {
     points_ += bodies_->points();
   }
   // Above a few hundred unknowns, by power iteration: the dense eigensolver
-  // (n^3) took 8-14 s in the page for the fluid scenes' 1600-2000 unknowns.
+  // (n^3) took 8-14 s in the page for the default fluid scenes' 1600 unknowns.
   w_max_ = std::isnan(settings.w_max) ? max_angular_frequency(*model_, kPageDenseUnknowns)
                                       : settings.w_max;
   cursor_ = std::make_unique<CursorSpring>(*model_, w_max_);
