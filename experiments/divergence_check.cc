@@ -3,10 +3,59 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 
+#include "models/materials/lanes.h"
 #include "models/springs.h"
 
 namespace springlab {
+namespace {
+
+// The certificate's two sums, sum_i m_i v_i^2 and sum_i (x_i - r_i)^2, in
+// kLanes running sums (entry i adds to sum i mod kLanes), added up at the
+// end: with one running sum every entry waits on the addition before it;
+// in lanes one instruction adds eight entries (models/materials/lanes.h;
+// four SSE2 instructions on the default target). Another order of
+// summation bounds the same energy: where the certificate proves nothing,
+// the exact rule decides, so no decision depends on the order.
+SPRINGLAB_LANES_INLINE void load(const double* p, Lanes& a) { std::memcpy(&a, p, sizeof a); }
+
+SPRINGLAB_LANES_INLINE double lane_sum(const Lanes& a) {
+  double sum = 0.0;
+  for (int l = 0; l < kLanes; ++l) sum += a[l];
+  return sum;
+}
+
+SPRINGLAB_LANES_CLONES double weighted_squares(const double* w, const double* a, Eigen::Index n) {
+  Lanes sums = {};
+  const Eigen::Index whole = n - n % kLanes;
+  for (Eigen::Index i = 0; i < whole; i += kLanes) {
+    Lanes wi, ai;
+    load(w + i, wi);
+    load(a + i, ai);
+    sums += wi * ai * ai;
+  }
+  double sum = lane_sum(sums);
+  for (Eigen::Index i = whole; i < n; ++i) sum += w[i] * a[i] * a[i];
+  return sum;
+}
+
+SPRINGLAB_LANES_CLONES double squared_distance(const double* a, const double* b, Eigen::Index n) {
+  Lanes sums = {};
+  const Eigen::Index whole = n - n % kLanes;
+  for (Eigen::Index i = 0; i < whole; i += kLanes) {
+    Lanes ai, bi;
+    load(a + i, ai);
+    load(b + i, bi);
+    const Lanes d = ai - bi;
+    sums += d * d;
+  }
+  double sum = lane_sum(sums);
+  for (Eigen::Index i = whole; i < n; ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
+  return sum;
+}
+
+}  // namespace
 
 DivergenceCheck::DivergenceCheck(const ElasticModel& model, double bound)
     : model_(model), bound_(bound), mass_(model.mass()), energies_(model.energies(
@@ -40,21 +89,14 @@ bool DivergenceCheck::diverged(const Vector& x, const Vector& v, Vector& x_copy,
     v_copy = v;
     return !x.allFinite() || !v.allFinite();
   }
-  const double* px = x.data();
-  const double* pv = v.data();
-  const double* pr = x_ref_.data();
-  const double* pm = mass_.data();
-  double* cx = x_copy.data();
-  double* cv = v_copy.data();
-  double momentum2 = 0.0, drift2 = 0.0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double xi = px[i], vi = pv[i];
-    cx[i] = xi;
-    cv[i] = vi;
-    momentum2 += pm[i] * vi * vi;
-    const double d = xi - pr[i];
-    drift2 += d * d;
-  }
+  // The last good state's copy (std::copy_n, a memmove) and the certificate's sums, as
+  // three passes over vectors that stay in cache: one scalar loop doing all
+  // of it took about 11 instructions per entry, a quarter of a symplectic
+  // Euler step on the 1000-particle chain (callgrind).
+  std::copy_n(x.data(), n, x_copy.data());
+  std::copy_n(v.data(), n, v_copy.data());
+  const double momentum2 = weighted_squares(mass_.data(), v.data(), n);
+  const double drift2 = squared_distance(x.data(), x_ref_.data(), n);
   // (Finite, as the rule asks of the state, also when the bound is not.)
   if (certifies_) {
     const double certificate = 0.5 * momentum2 + 2.0 * u_ref_ + two_kappa_ * drift2;
