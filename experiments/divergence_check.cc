@@ -26,33 +26,36 @@ SPRINGLAB_LANES_INLINE double lane_sum(const Lanes& a) {
   return sum;
 }
 
-SPRINGLAB_LANES_CLONES double weighted_squares(const double* w, const double* a, Eigen::Index n) {
-  Lanes sums = {};
-  const Eigen::Index whole = n - n % kLanes;
-  for (Eigen::Index i = 0; i < whole; i += kLanes) {
-    Lanes wi, ai;
-    load(w + i, wi);
-    load(a + i, ai);
-    sums += wi * ai * ai;
-  }
-  double sum = lane_sum(sums);
-  for (Eigen::Index i = whole; i < n; ++i) sum += w[i] * a[i] * a[i];
-  return sum;
-}
+SPRINGLAB_LANES_INLINE void store(const Lanes& a, double* p) { std::memcpy(p, &a, sizeof a); }
 
-SPRINGLAB_LANES_CLONES double squared_distance(const double* a, const double* b, Eigen::Index n) {
-  Lanes sums = {};
+// One pass over the state: (x, v) copied to (x_copy, v_copy), and the two
+// sums (each vector read once: as separate passes, the copies and the sums
+// ran slower, BM_RunPair's ratio_min 1.23-1.29 against 1.18-1.19).
+SPRINGLAB_LANES_CLONES void copy_and_sum(const double* x, const double* v, const double* m,
+                                         const double* r, double* x_copy, double* v_copy,
+                                         Eigen::Index n, double& momentum2, double& drift2) {
+  Lanes momentum = {}, drift = {};
   const Eigen::Index whole = n - n % kLanes;
   for (Eigen::Index i = 0; i < whole; i += kLanes) {
-    Lanes ai, bi;
-    load(a + i, ai);
-    load(b + i, bi);
-    const Lanes d = ai - bi;
-    sums += d * d;
+    Lanes xi, vi, mi, ri;
+    load(x + i, xi);
+    load(v + i, vi);
+    load(m + i, mi);
+    load(r + i, ri);
+    store(xi, x_copy + i);
+    store(vi, v_copy + i);
+    momentum += mi * vi * vi;
+    const Lanes d = xi - ri;
+    drift += d * d;
   }
-  double sum = lane_sum(sums);
-  for (Eigen::Index i = whole; i < n; ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
-  return sum;
+  momentum2 = lane_sum(momentum);
+  drift2 = lane_sum(drift);
+  for (Eigen::Index i = whole; i < n; ++i) {
+    x_copy[i] = x[i];
+    v_copy[i] = v[i];
+    momentum2 += m[i] * v[i] * v[i];
+    drift2 += (x[i] - r[i]) * (x[i] - r[i]);
+  }
 }
 
 }  // namespace
@@ -89,14 +92,13 @@ bool DivergenceCheck::diverged(const Vector& x, const Vector& v, Vector& x_copy,
     v_copy = v;
     return !x.allFinite() || !v.allFinite();
   }
-  // The last good state's copy (std::copy_n, a memmove) and the certificate's sums, as
-  // three passes over vectors that stay in cache: one scalar loop doing all
-  // of it took about 11 instructions per entry, a quarter of a symplectic
-  // Euler step on the 1000-particle chain (callgrind).
-  std::copy_n(x.data(), n, x_copy.data());
-  std::copy_n(v.data(), n, v_copy.data());
-  const double momentum2 = weighted_squares(mass_.data(), v.data(), n);
-  const double drift2 = squared_distance(x.data(), x_ref_.data(), n);
+  // The last good state's copy and the certificate's sums in one pass, in
+  // lanes: the scalar loop took about 11 instructions per entry and waited
+  // on its sums, a quarter of a symplectic Euler step on the 1000-particle
+  // chain (benchmarks/README.md, issue 37).
+  double momentum2 = 0.0, drift2 = 0.0;
+  copy_and_sum(x.data(), v.data(), mass_.data(), x_ref_.data(), x_copy.data(), v_copy.data(), n,
+               momentum2, drift2);
   // (Finite, as the rule asks of the state, also when the bound is not.)
   if (certifies_) {
     const double certificate = 0.5 * momentum2 + 2.0 * u_ref_ + two_kappa_ * drift2;
