@@ -19,6 +19,7 @@
 #include "models/bodies.h"
 #include "models/contact.h"
 #include "models/element_kind.h"
+#include "models/spring_reading.h"
 #include "models/springs.h"
 
 namespace springlab {

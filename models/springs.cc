@@ -2,6 +2,7 @@
 // reading, checks, writing -- and its registration. The force itself, Hooke's
 // law with its SIMD kernel, is spring_force.cc; spring damping, read here
 // from each spring's "damping", is its own kind (spring_damping_force.cc).
+#include "models/spring_reading.h"
 #include "models/springs.h"
 
 #include <algorithm>

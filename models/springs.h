@@ -4,10 +4,7 @@
 #pragma once
 
 #include <cstddef>
-#include <string>
 #include <vector>
-
-#include "models/scene_io.h"
 
 namespace springlab {
 
@@ -25,15 +22,5 @@ using Springs = std::vector<Spring>;
 
 // At most this many springs per scene (docs/reliability.md, "Reliability").
 inline constexpr std::size_t kMaxSceneSprings = 2'000'000;
-
-// Reading a spring entry (springs.cc), shared with the springs to body
-// points (body_springs.cc):
-// whether an entry has an end {"body": b, "X": [...]} instead of a particle
-// index (the body-spring kind reads those, once the bodies are);
-bool is_body_spring(const Json& j);
-// its "k" and optional "rest", each a number >= 0; true when "rest" is given
-// (else the caller takes the ends' distance at rest).
-bool read_stiffness_and_rest(const Reporter& r, const std::string& where, const Json& j,
-                             double& k, double& rest);
 
 }  // namespace springlab
