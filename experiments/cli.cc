@@ -810,9 +810,14 @@ int run_cli(int argc, char** argv) {
   run->add_option("--every", run_options.run.every, "write every K-th output time (and the last)");
 
   CommonOptions stability_options;
+  stability_options.run.blowup = kStabilityBlowup;
   StabilitySettings stability_settings;
   CLI::App* stability = app.add_subcommand("stability", "largest stable step, by bisection on log dt");
   stability_options.add_to(*stability);
+  stability->get_option("--blowup")
+      ->description("a trial diverges when kinetic + spring energy exceeds this times E_s, times "
+                    "the swing a stable orbit of the method allows at w_max dt (1 for most methods, "
+                    "more for symplectic ones: docs/command-line.md)");
   stability->add_option("--dt-min", stability_settings.dt_min, "smallest step tried");
   stability->add_option("--dt-max", stability_settings.dt_max, "largest step tried");
   stability->add_option("--rel-tol", stability_settings.rel_tol, "bisection stops at hi/lo <= 1 + tol");

@@ -40,8 +40,20 @@ struct StabilityTrial {
   double hi = 0.0;       // smallest diverging step (0: none yet)
 };
 
+// The stability search's default blow-up factor. A trial diverges when its
+// kinetic + spring energy passes kStabilityBlowup * E_s * energy_excursion(w_max h)
+// (integrator.h): low enough to see a mode that grows just past the limit
+// before the scene's nonlinearity caps it (the cloth under gravity saturates
+// near 70 E_s), while a symplectic method's bounded swing is allowed for.
+inline constexpr double kStabilityBlowup = 10.0;
+
 struct StabilitySettings {
-  RunSettings run;          // integrator, t_end, options, blowup (dt is searched)
+  // integrator, t_end, options, blowup (dt is searched)
+  RunSettings run = [] {
+    RunSettings r;
+    r.blowup = kStabilityBlowup;
+    return r;
+  }();
   double dt_min = 1e-6;
   double dt_max = 1.0;
   double rel_tol = 1e-3;    // stop when hi / lo <= 1 + rel_tol

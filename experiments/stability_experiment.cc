@@ -78,7 +78,7 @@ class StabilityExperiment final : public Experiment {
     dt_min_factor_ = d.positive("dt_min_factor", 1e-3);
     dt_max_factor_ = d.positive("dt_max_factor", 10.0);
     rel_tol_ = d.positive("rel_tol", 1e-3);
-    blowup_ = d.positive("blowup", 1000.0);
+    blowup_ = d.positive("blowup", kStabilityBlowup);
     if (!(dt_max_factor_ > dt_min_factor_)) d.fail("dt_max_factor", "must exceed dt_min_factor");
     // A bisection runs `periods` periods of the fastest mode at dt_min too.
     const double steps_at_dt_min = periods_ * 2.0 * std::numbers::pi / dt_min_factor_;
@@ -217,8 +217,7 @@ class StabilityExperiment final : public Experiment {
     RunSettings s;
     s.integrator = task.integrator;
     s.dt = task.dt;
-    s.t_end = map_t_end_;
-    s.blowup = blowup_;
+    s.t_end = map_t_end_;  // the map's runs are `springlab run`'s: its blow-up factor
     s.options = options_;
     const RunResult r = simulate(model, s);
     Row row;

@@ -1,5 +1,6 @@
 #include "integrators/integrator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -14,6 +15,11 @@ const char* to_string(StabilityKind kind) {
     case StabilityKind::kUnknown: break;
   }
   return "unknown";
+}
+
+double energy_excursion(const IntegratorInfo& info, double wh) {
+  if (!info.energy_excursion || !(wh >= 0.0) || !(wh < info.stability_limit)) return 1.0;
+  return std::max(1.0, info.energy_excursion(wh));
 }
 
 std::string stability_text(const IntegratorInfo& info) {

@@ -96,11 +96,27 @@ struct IntegratorInfo {
   // family, BDF2, TR-BDF2): 1 keeps a stiff mode's amplitude, 0 removes it
   // in one step. NaN: not stated.
   double spectral_radius_infinity = std::numeric_limits<double>::quiet_NaN();
+  // The most the energy E = (v^2 + w^2 x^2)/2 of an undamped linear mode can
+  // rise along one stable orbit, max E / E_0 over the worst starting phase,
+  // as a function of w h below the stability limit. Empty: 1, a stable step
+  // never raises it (a scalar map with |R(i w h)| <= 1). A symplectic method
+  // conserves a nearby quadratic instead, so its energy swings: symplectic
+  // Euler (1 + w h/2) / (1 - w h/2), the Newmark methods with gamma = 1/2
+  // (Verlet, central difference, Fox-Goodwin, linear acceleration)
+  // 1 / (1 - (w h / limit)^2) (Hairer, Lubich and Wanner, Geometric Numerical
+  // Integration, I.5 and XIII.2: the conserved modified energy). The
+  // stability search scales its blow-up threshold by it, so a bounded swing
+  // near the limit is not taken for divergence.
+  std::function<double(double)> energy_excursion = {};
 };
 
 // The property in words, e.g. "L-stable", "A(51.8 deg)-stable",
 // "conditionally stable: w h <= 2.828 undamped", with the note appended.
 std::string stability_text(const IntegratorInfo& info);
+
+// info.energy_excursion at w h: 1 where it is not declared, and at or past
+// the stability limit (where no orbit is bounded).
+double energy_excursion(const IntegratorInfo& info, double wh);
 
 // Whether every undamped mode is stable at every step (A- and L-stable).
 inline bool stable_on_imaginary_axis(const IntegratorInfo& info) {

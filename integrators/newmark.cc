@@ -1,6 +1,7 @@
 #include "integrators/newmark.h"
 
 #include <cmath>
+#include <functional>
 #include <sstream>
 
 namespace springlab {
@@ -12,6 +13,14 @@ std::complex<double> trapezoidal(std::complex<double> z) { return (1.0 + z / 2.0
 
 // Stable for w h <= 1 / sqrt(gamma/2 - beta) (gamma = 1/2, Hughes 9.1.2).
 double newmark_limit(double beta) { return 1.0 / std::sqrt(0.25 - beta); }
+
+// With gamma = 1/2 the method conserves (v^2 + w^2 x^2 (1 + (beta - 1/4) (w h)^2))/2
+// on the undamped oscillator (Hughes 9.1.2), so E swings up to
+// 1 / (1 - (w h / limit)^2) times its least value along a stable orbit.
+std::function<double(double)> newmark_excursion(double beta) {
+  const double limit = newmark_limit(beta);
+  return [limit](double wh) { return 1.0 / (1.0 - (wh / limit) * (wh / limit)); };
+}
 
 }  // namespace
 
@@ -50,7 +59,8 @@ CentralDifference::CentralDifference()
                      .order = 2,
                      .symplectic = true,
                      .stability = StabilityKind::kConditional,
-                     .stability_limit = newmark_limit(0.0)}) {}
+                     .stability_limit = newmark_limit(0.0),
+                     .energy_excursion = newmark_excursion(0.0)}) {}
 
 LinearAcceleration::LinearAcceleration()
     : NewmarkFamily({.name = "linear-acceleration",
@@ -59,7 +69,8 @@ LinearAcceleration::LinearAcceleration()
                      .implicit = true,
                      .iterates_to_tolerance = true,
                      .stability = StabilityKind::kConditional,
-                     .stability_limit = newmark_limit(1.0 / 6.0)}) {}
+                     .stability_limit = newmark_limit(1.0 / 6.0),
+                     .energy_excursion = newmark_excursion(1.0 / 6.0)}) {}
 
 FoxGoodwin::FoxGoodwin()
     : NewmarkFamily({.name = "fox-goodwin",
@@ -69,6 +80,7 @@ FoxGoodwin::FoxGoodwin()
                      .implicit = true,
                      .iterates_to_tolerance = true,
                      .stability = StabilityKind::kConditional,
-                     .stability_limit = newmark_limit(1.0 / 12.0)}) {}
+                     .stability_limit = newmark_limit(1.0 / 12.0),
+                     .energy_excursion = newmark_excursion(1.0 / 12.0)}) {}
 
 }  // namespace springlab

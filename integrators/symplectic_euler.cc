@@ -8,7 +8,10 @@ SymplecticEuler::SymplecticEuler()
                   .order = 1,
                   .symplectic = true,
                   .stability = StabilityKind::kConditional,
-                  .stability_limit = 2.0}) {}
+                  .stability_limit = 2.0,
+                  // It conserves (v^2 + w^2 x^2 - w^2 h x v)/2, whose level
+                  // set holds E between 1 -+ w h/2 times it.
+                  .energy_excursion = [](double wh) { return (1.0 + wh / 2.0) / (1.0 - wh / 2.0); }}) {}
 
 namespace {
 

@@ -8,7 +8,9 @@ VelocityVerlet::VelocityVerlet()
                   .order = 2,
                   .symplectic = true,
                   .stability = StabilityKind::kConditional,
-                  .stability_limit = 2.0}) {}
+                  .stability_limit = 2.0,
+                  // It conserves (v^2 + w^2 x^2 (1 - (w h)^2 / 4))/2.
+                  .energy_excursion = [](double wh) { return 1.0 / (1.0 - wh * wh / 4.0); }}) {}
 
 StepResult VelocityVerlet::do_initialize() {
   have_acceleration_ = false;

@@ -192,9 +192,12 @@ TEST(CliHelp, ShowsDefaultsAndNoFlagNoise) {
     EXPECT_EQ(r.out.find('{'), std::string::npos) << r.out;
     if (std::string(command) != "experiment") {
       for (const char* shown : {"--rtol FLOAT=1e-06", "--atol FLOAT=1e-08", "--newton-tol FLOAT=0.0001",
-                                "--max-newton INT=20", "--blowup FLOAT=1000", "--linear-solver TEXT=auto"}) {
+                                "--max-newton INT=20", "--linear-solver TEXT=auto"}) {
         EXPECT_NE(r.out.find(shown), std::string::npos) << command << ": " << shown << "\n" << r.out;
       }
+      // run's divergence rule, and the stability search's lower default (stability.h).
+      const char* blowup = std::string(command) == "run" ? "--blowup FLOAT=1000" : "--blowup FLOAT=10 ";
+      EXPECT_NE(r.out.find(blowup), std::string::npos) << command << "\n" << r.out;
     }
   }
   const ProcessResult stability =

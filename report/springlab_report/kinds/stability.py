@@ -103,9 +103,14 @@ def limit_facts(exp, integrators):
             if len(set(k.tolist())) >= 2 and np.all(k > 0) and np.all(m > 0):
                 slope = np.polyfit(np.log(k), np.log(m), 1)[0]
                 text += "; the limit goes like %s^%s" % (parameter, fmt(float(slope), 3))
-            if integrators.stability(name).get("limit_wh") == 0:
+            limit_wh = integrators.stability(name).get("limit_wh")
+            if limit_wh == 0:
                 text += " (its theory, the time to grow by the blow-up factor, is exact for " \
                         "one mode, an estimate for several)"
+            elif limit_wh and float(np.min(ratio[ok])) > 1.03:
+                text += " (above its stated limit, the first step at which a mode grows: runs " \
+                        "past it are stable again, so its stable steps are not one interval, " \
+                        "and the bisection, which assumes one, ends on the edge of a later one)"
             out.append(text + ".")
         elif nolimit[idx].all():
             out.append("%s on %s: no run diverged up to the largest step searched, at any "
