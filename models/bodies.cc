@@ -191,6 +191,35 @@ class RigidityForce final : public ForceTerm {
     }
   }
 
+  // The rigidity's own discrete gradient (ForceTerm::has_discrete_gradient),
+  // built from the invariant C = A^T A as Gonzalez builds them (J.
+  // Nonlinear Sci. 6, 1996, sec. 4; Gonzalez and Simo, CMAME 134, 1996).
+  // E = kappa V |C - I|^2 is quadratic in C, with S(C) = dE/dC =
+  // 2 kappa V (C - I); for a quadratic the midpoint slope is exact:
+  //   E(C_y) - E(C_x) = S(C_avg) : (C_y - C_x),   C_avg = (C_x + C_y) / 2,
+  // and C_y - C_x = A_m^T D + D^T A_m (A_m = (A_x + A_y) / 2, D = A_y - A_x),
+  // so with S symmetric
+  //   g = 2 A_m S(C_avg) = 4 kappa V A_m G_avg,   G_avg = (C_x + C_y) / 2 - I,
+  // has g : D = E(A_y) - E(A_x) exactly and is dE/dA (4 kappa V A G) at
+  // y = x. Its force on column j, -4 kappa V sum_k a_m,k (G_avg)_kj, is A_m
+  // times a symmetric matrix: the torque sum_j a_m,j x F_j =
+  // -4 kappa V sum_jk (G_avg)_kj a_m,j x a_m,k vanishes, so the discrete
+  // gradient keeps the affine body's angular momentum exactly (Gonzalez's
+  // generic correction along D does not: discrete_gradient.h).
+  bool has_discrete_gradient() const override { return true; }
+  void add_discrete_gradient_force(const Configuration& x, const Configuration& y,
+                                   double* f) const override {
+    for (const Entry& e : bodies_) {
+      const Eigen::Matrix3d Ax = affine(x, e), Ay = affine(y, e);
+      const Eigen::Matrix3d G_avg = 0.5 * (Ax.transpose() * Ax + Ay.transpose() * Ay) -
+                                    Eigen::Matrix3d::Identity();
+      const Eigen::Matrix3d g = (0.5 * (Ax + Ay)) * G_avg;
+      for (int j = 0; j < 3; ++j) {
+        for (int r = 0; r < 3; ++r) f[(e.first + 1 + j) * 3 + r] -= e.four_kappa_v * g(r, j);
+      }
+    }
+  }
+
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
     for (const Entry& e : bodies_) {
       for (int j = 0; j < 3; ++j) {

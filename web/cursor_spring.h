@@ -51,6 +51,12 @@ class CursorSpring final : public MechanicalSystem {
   double nonconservative_power(double t, const Vector& x, const Vector& v) const override {
     return model_.nonconservative_power(t, x, v);
   }
+  // The cursor's spring keeps the generic discrete gradient.
+  bool has_own_discrete_gradients() const override { return model_.has_own_discrete_gradients(); }
+  void add_own_discrete_gradient_difference(double t, const Vector& x, const Vector& x_m,
+                                            const Vector& y, Vector& f) const override {
+    model_.add_own_discrete_gradient_difference(t, x, x_m, y, f);
+  }
   const SparseMatrix& jacobian_pattern() const override { return model_.jacobian_pattern(); }
   bool jacobian_symmetric() const override { return model_.jacobian_symmetric(); }
   VelocityDependence velocity_dependence() const override {
