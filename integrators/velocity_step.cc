@@ -56,7 +56,8 @@ void VelocityStep::residual(const Vector& v, Vector& r) {
   // their midpoint force, except on the frozen potential (whose gradient r
   // then is); Gonzalez's correction below is then that of the others'
   // energy V - sum V_k, since g_k . Delta = V_k(y) - V_k(x_n) exactly.
-  own_ = s.discrete_gradient && !frozen_ && system.has_own_discrete_gradients();
+  own_ = s.discrete_gradient && s.own_discrete_gradients && !frozen_ &&
+         system.has_own_discrete_gradients();
   if (s.discrete_gradient) {
     delta_ = h * vs_;  // Delta = y - x_n
     y_ = *x_ + delta_;
@@ -184,7 +185,10 @@ void VelocityStep::update_frozen(Vector& r, double& phi) {
     // the last residual()'s v, had the midpoint force of the forces with
     // their own discrete gradient and the frozen coefficient; r of the
     // step has their discrete gradients and the coefficient of the others.
-    if (own_ || !s_.discrete_gradient || !model_->system().has_own_discrete_gradients()) return;
+    if (own_ || !s_.discrete_gradient || !s_.own_discrete_gradients ||
+        !model_->system().has_own_discrete_gradients()) {
+      return;
+    }
     own_ = true;
     const double t = t_ + s_.t_eval_offset * h_;
     f_own_ = f_;

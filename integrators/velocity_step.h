@@ -40,6 +40,10 @@ struct VelocityImplicitScheme {
   // Gonzalez's discrete gradient of V in place of grad V(x*) (needs the
   // midpoint's (a, b, c) = (1/4, 1/4, 1/2), t* = t_n + h/2).
   bool discrete_gradient = false;
+  // With it, the forces' own exact discrete gradients where they have one
+  // (ForceTerm::has_discrete_gradient: the rigidity); false: Gonzalez's
+  // for every force.
+  bool own_discrete_gradients = true;
   // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
   // are evaluated at the end (implicit Euler), 2 at the midpoint.
   double end = 1.0;
