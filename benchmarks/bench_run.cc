@@ -16,8 +16,13 @@
 // BM_Step's explicit methods); kBatch steps of it never diverge from rest.
 // Counters: run_us and kernel_us per step, ratio, force_us (one
 // ElasticModel::force at the initial state, timed in the same loop: the
-// floor of a symplectic Euler step).
+// floor of a symplectic Euler step); run_min_us, kernel_min_us and
+// ratio_min from the fastest batch of each side (on a busy machine, the
+// batch least disturbed by other processes: a batch of the chain is about
+// 1.5 ms, shorter than a scheduler's time slice).
+#include <algorithm>
 #include <chrono>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -97,6 +102,7 @@ void run_pair(benchmark::State& state, const std::string& method, const SceneCas
   Kernel kernel(model, method, dt);
   Vector f;
   double run_s = 0.0, kernel_s = 0.0, force_s = 0.0;
+  double run_min = std::numeric_limits<double>::infinity(), kernel_min = run_min;
   long steps = 0, forces = 0;
   bool run_first = true;
   for (auto _ : state) {
@@ -104,14 +110,18 @@ void run_pair(benchmark::State& state, const std::string& method, const SceneCas
       const auto start = Clock::now();
       if ((side == 0) == run_first) {
         const RunResult r = simulate(model, settings);
-        run_s += seconds_since(start);
+        const double batch = seconds_since(start);
+        run_s += batch;
+        run_min = std::min(run_min, batch);
         if (r.status != RunStatus::kCompleted) {
           state.SkipWithError(("the run did not complete: " + r.failure).c_str());
           return;
         }
       } else {
         kernel.steps(kBatch);
-        kernel_s += seconds_since(start);
+        const double batch = seconds_since(start);
+        kernel_s += batch;
+        kernel_min = std::min(kernel_min, batch);
       }
     }
     const auto start = Clock::now();
@@ -129,6 +139,9 @@ void run_pair(benchmark::State& state, const std::string& method, const SceneCas
     state.counters["kernel_us"] = kernel_s * per_step;
     state.counters["force_us"] = 1e6 * force_s / static_cast<double>(forces);
     state.counters["ratio"] = run_s / kernel_s;
+    state.counters["run_min_us"] = 1e6 * run_min / static_cast<double>(kBatch);
+    state.counters["kernel_min_us"] = 1e6 * kernel_min / static_cast<double>(kBatch);
+    state.counters["ratio_min"] = run_min / kernel_min;
   }
   add_size_counters(state, model);
   state.SetLabel(std::string(method == "rk4" ? "kernel: odeint runge_kutta4" :

@@ -15,12 +15,15 @@
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <tuple>
+#include <type_traits>
+#include <variant>
 
 #include "experiments/body_output.h"
 #include "experiments/experiment_runner.h"
@@ -122,24 +125,12 @@ Json rows(const Eigen::MatrixXd& m) {
   return out;
 }
 
-// The integrator options of `run` and `stability`, with the names a method
-// lists in Integrator::options_read().
-const char* const kMethodOptions[] = {"rtol",      "atol",          "newton-tol",
-                                      "max-newton", "max-steps",    "max-order",
-                                      "linear-solver", "dq-jacobian", "stald",
-                                      "stiffness", "iterations", "substeps", "solver",
-                                      "chebyshev", "beta", "gamma", "alpha", "rho-inf"};
-
-// Iterations or substeps per step at most (as experiment definitions cap them).
-constexpr int kMaxInnerCount = 100000;
-
 // Options shared by `run` and `stability`.
 struct CommonOptions {
   std::string scene;
   std::vector<std::string> parameters;
   RunSettings run;
-  std::string stiffness = "exact";
-  std::string solver = "newton";
+  std::map<std::string, std::string> choice_text;  // the choices as given (--stiffness ...)
   bool json = false;
   CLI::App* command = nullptr;
 
@@ -151,50 +142,25 @@ struct CommonOptions {
     cmd.add_option("-p", parameters, "built-in scene parameter key=value (repeatable)")
         ->allow_extra_args(false)
         ->default_str("");
-    cmd.add_option("--rtol", run.options.rtol, "adaptive methods: relative tolerance");
-    cmd.add_option("--atol", run.options.atol, "adaptive methods: absolute tolerance");
-    cmd.add_option("--newton-tol", run.options.newton_tol,
-                   "implicit methods: Newton stops when its update ||dv||_inf <= tol [m/s]");
-    cmd.add_option("--max-newton", run.options.max_newton,
-                   "implicit methods: Newton iterations per step before the run fails");
-    cmd.add_option("--stiffness", stiffness,
-                   "linear-implicit-euler: exact dF/dx, or definite (compressed springs' negative "
-                   "transverse stiffness dropped, Choi and Ko 2002)");
-    cmd.add_option("--solver", solver,
-                   "implicit-euler: newton, or quasi-newton (L-BFGS with the local/global matrix "
-                   "as its initial Hessian, Liu et al. 2017)");
-    cmd.add_option("--iterations", run.options.iterations,
-                   "projective-dynamics (default 10), xpbd (default 1): iterations per step "
-                   "or substep")
-        ->default_str("the method's");
-    cmd.add_option("--chebyshev", run.options.chebyshev,
-                   "projective-dynamics: Chebyshev acceleration with this spectral radius rho "
-                   "of the plain iteration, in (0, 1) (Wang 2015); 0: off");
-    cmd.add_option("--substeps", run.options.substeps, "xpbd: substeps per --dt")
-        ->default_str("10");
-    cmd.add_option("--beta", run.options.beta, "newmark: beta in [0, 1/2]")->default_str("1/4");
-    cmd.add_option("--gamma", run.options.gamma,
-                   "newmark: gamma in [1/2, 1] (above 1/2 damps every mode)")
-        ->default_str("1/2");
-    cmd.add_option("--alpha", run.options.alpha, "hht-alpha: alpha in [-1/3, 0]")
-        ->default_str("-0.1");
-    cmd.add_option("--rho-inf", run.options.rho_inf,
-                   "generalized-alpha: spectral radius at infinity in [0, 1]")
-        ->default_str("0.5");
-    cmd.add_option("--max-steps", run.options.max_steps,
-                   "adaptive methods: internal steps per output interval before failing "
-                   "(default: 5e6 / unknowns, between 500 and 100000)")
-        ->default_str("scaled");
-    cmd.add_option("--max-order", run.options.max_order,
-                   "adaptive methods: highest order (ARKODE: the method's order)")
-        ->default_str("the method's");
-    cmd.add_option("--linear-solver", run.options.linear_solver,
-                   "implicit adaptive methods: dense, klu, gmres or auto (dense up to 100 "
-                   "unknowns, klu above)");
-    cmd.add_flag("--dq-jacobian", run.options.dq_jacobian,
-                 "implicit adaptive methods: SUNDIALS difference quotients instead of the "
-                 "analytic Jacobian");
-    cmd.add_flag("--stald", run.options.stald, "cvode-bdf: stability limit detection");
+    // The integrators' options, as integrators/integrator_options.h declares them.
+    for (const OptionSpec& spec : integrator_options()) {
+      const std::string name = "--" + std::string(spec.name);
+      CLI::Option* option = std::visit(
+          [&](auto field) -> CLI::Option* {
+            using Field = decltype(field);
+            if constexpr (std::is_same_v<Field, std::monostate>) {
+              std::string& text = choice_text[std::string(spec.name)];
+              text = spec.get(run.options);
+              return cmd.add_option(name, text, spec.help);
+            } else if constexpr (std::is_same_v<Field, bool IntegratorOptions::*>) {
+              return cmd.add_flag(name, run.options.*field, spec.help);
+            } else {
+              return cmd.add_option(name, run.options.*field, spec.help);
+            }
+          },
+          spec.field);
+      if (*spec.default_text != '\0') option->default_str(spec.default_text);
+    }
     cmd.add_option("--blowup", run.blowup,
                    "divergence when kinetic + spring energy exceeds this times E_s");
     cmd.add_flag("--json", json, "print one JSON object on stdout");
@@ -202,41 +168,15 @@ struct CommonOptions {
 
   void validate() {
     require_integrator(run.integrator);
-    if (!parse_stiffness(stiffness, run.options.stiffness)) {
-      throw UsageError("--stiffness: unknown '" + stiffness + "' (exact, definite)");
-    }
-    if (!parse_solver(solver, run.options.solver)) {
-      throw UsageError("--solver: unknown '" + printable(solver) + "' (newton, quasi-newton)");
-    }
     require_positive("--t-end", run.t_end);
-    require_positive("--rtol", run.options.rtol);
-    require_positive("--atol", run.options.atol);
-    require_positive("--newton-tol", run.options.newton_tol);
     require_positive("--blowup", run.blowup);
-    if (run.options.max_newton < 1) throw UsageError("--max-newton: must be >= 1");
-    // The caps of experiment definitions (solver_error's substeps and
-    // iterations): more would only spin (--substeps 2147483647 is 2e10
-    // projections a step).
-    if (given("iterations") && (run.options.iterations < 1 || run.options.iterations > kMaxInnerCount)) {
-      throw UsageError("--iterations: must be between 1 and " + std::to_string(kMaxInnerCount) +
-                       " (got " + std::to_string(run.options.iterations) + ")");
-    }
-    if (given("substeps") && (run.options.substeps < 1 || run.options.substeps > kMaxInnerCount)) {
-      throw UsageError("--substeps: must be between 1 and " + std::to_string(kMaxInnerCount) +
-                       " (got " + std::to_string(run.options.substeps) + ")");
-    }
-    if (!(run.options.chebyshev >= 0.0 && run.options.chebyshev < 1.0)) {
-      throw UsageError("--chebyshev: must be in [0, 1) (0: off)");
-    }
-    if (run.options.max_steps < 0 || (given("max-steps") && run.options.max_steps < 1)) {
-      throw UsageError("--max-steps: must be >= 1");
-    }
-    if (run.options.max_order < 0) throw UsageError("--max-order: must be >= 1");
-    static const char* solvers[] = {"auto", "dense", "klu", "gmres"};
-    if (std::find(std::begin(solvers), std::end(solvers), run.options.linear_solver) ==
-        std::end(solvers)) {
-      throw UsageError("--linear-solver: unknown '" + printable(run.options.linear_solver) +
-                       "' (auto, dense, klu, gmres)");
+    for (const OptionSpec& spec : integrator_options()) {
+      if (spec.set != nullptr) {
+        const std::string& text = choice_text.at(std::string(spec.name));
+        if (!spec.set(run.options, text)) throw UsageError(choice_refusal(spec, printable(text)));
+      }
+      const std::string why = check_option_range(spec, run.options, given(std::string(spec.name)));
+      if (!why.empty()) throw UsageError(why);
     }
   }
 
@@ -251,7 +191,8 @@ struct CommonOptions {
     }
     const std::vector<std::string> read = integrator->options_read();
     std::string ignored;
-    for (const char* option : kMethodOptions) {
+    for (const OptionSpec& spec : integrator_options()) {
+      const std::string option(spec.name);
       if (given(option) && std::find(read.begin(), read.end(), option) == read.end()) {
         ignored += std::string(ignored.empty() ? "" : ", ") + "--" + option;
       }
@@ -358,9 +299,12 @@ class ProgressLine final : public Observer {
     }
     last_ = now;
     shown_ = true;
-    std::fprintf(stderr, "\r[%s] t = %.6g of %.6g s (%d%%), %.0f s", label_.c_str(), t, t_end_,
-                 static_cast<int>(100.0 * t / t_end_),
-                 std::chrono::duration<double>(now - start_).count());
+    // The time left at the pace so far (issue 38.10: an adaptive method
+    // that creeps, arkode-dirk on a stiff block, says how long it will take).
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    std::fprintf(stderr, "\r\033[K[%s] t = %.6g of %.6g s (%d%%), %.0f s", label_.c_str(), t,
+                 t_end_, static_cast<int>(100.0 * t / t_end_), elapsed);
+    if (t > 0.0) std::fprintf(stderr, ", about %.0f s left", elapsed * (t_end_ - t) / t);
     std::fflush(stderr);
   }
 

@@ -1,6 +1,10 @@
 #include "experiments/experiment_support.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <type_traits>
+#include <variant>
 #include <string>
 
 #include "experiments/output_files.h"
@@ -10,10 +14,35 @@
 namespace springlab {
 
 IntegratorOptions definition_options(const DefinitionObject& o) {
+  // Every integrator option the definition gives (its allow_only list says
+  // which it may), under the command line's name with '_' for '-'
+  // (integrators/integrator_options.h), checked as the command line checks it.
   IntegratorOptions options;
-  options.rtol = o.positive("rtol", options.rtol);
-  options.atol = o.positive("atol", options.atol);
-  options.newton_tol = o.positive("newton_tol", options.newton_tol);
+  for (const OptionSpec& spec : integrator_options()) {
+    std::string key(spec.name);
+    std::replace(key.begin(), key.end(), '-', '_');
+    if (!o.has(key.c_str())) continue;
+    std::visit(
+        [&](auto field) {
+          using Field = decltype(field);
+          if constexpr (std::is_same_v<Field, std::monostate>) {
+            if (!spec.set(options, o.string(key.c_str()))) {
+              o.fail(key, choice_refusal(spec, o.string(key.c_str())).substr(spec.name.size() + 4));
+            }
+          } else if constexpr (std::is_same_v<Field, bool IntegratorOptions::*>) {
+            const nlohmann::json& value = o.raw(key.c_str());
+            if (!value.is_boolean()) o.fail(key, "expected true or false");
+            options.*field = value.get<bool>();
+          } else if constexpr (std::is_same_v<Field, double IntegratorOptions::*>) {
+            options.*field = o.number(key.c_str());
+          } else {
+            options.*field = o.count(key.c_str(), 0, 0, std::numeric_limits<int>::max());
+          }
+        },
+        spec.field);
+    const std::string why = check_option_range(spec, options, true);
+    if (!why.empty()) o.fail(key, why.substr(why.find(": ") + 2));
+  }
   return options;
 }
 

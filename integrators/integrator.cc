@@ -58,35 +58,6 @@ std::vector<std::string> Integrator::options_read() const {
   return {};
 }
 
-bool parse_stiffness(const std::string& name, Stiffness& stiffness) {
-  if (name == "exact") {
-    stiffness = Stiffness::kExact;
-  } else if (name == "definite") {
-    stiffness = Stiffness::kDefinite;
-  } else {
-    return false;
-  }
-  return true;
-}
-
-bool parse_solver(const std::string& name, Solver& solver) {
-  if (name == "newton") {
-    solver = Solver::kNewton;
-  } else if (name == "quasi-newton") {
-    solver = Solver::kQuasiNewton;
-  } else {
-    return false;
-  }
-  return true;
-}
-
-const char* to_string(Solver solver) {
-  return solver == Solver::kQuasiNewton ? "quasi-newton" : "newton";
-}
-
-const char* to_string(Stiffness stiffness) {
-  return stiffness == Stiffness::kDefinite ? "definite" : "exact";
-}
 
 StepResult Integrator::initialize(const MechanicalSystem& system, double t0, const Vector& x0,
                                   const Vector& v0, const IntegratorOptions& options) {

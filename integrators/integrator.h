@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "integrators/integrator_options.h"
 #include "models/mechanical_system.h"
 
 namespace springlab {
@@ -32,47 +33,6 @@ struct IntegratorStats {
   long newton_iterations = 0;   // nonlinear iterations
   long factorizations = 0;      // numeric factorizations / linear solver setups
   long nonlinear_failures = 0;  // nonlinear solves that did not converge
-};
-
-// Which stiffness dF/dx a linearized step uses: the exact one, or its
-// definite part (each compressed spring's negative transverse stiffness
-// dropped, Choi and Ko 2002), which keeps M - h^2 dF/dx positive definite.
-enum class Stiffness { kExact, kDefinite };
-// "exact" / "definite" (the command line's and definitions' names); false
-// for another name.
-bool parse_stiffness(const std::string& name, Stiffness& stiffness);
-const char* to_string(Stiffness stiffness);
-
-// Every knob any method reads; each method uses only the ones it needs.
-// How implicit-euler solves its step (docs/integrators.md "Fast solvers"): Newton, or
-// L-BFGS with the local/global matrix as its initial Hessian.
-enum class Solver { kNewton, kQuasiNewton };
-bool parse_solver(const std::string& name, Solver& solver);
-const char* to_string(Solver solver);
-
-struct IntegratorOptions {
-  double newton_tol = 1e-4;   // m/s: converged when the Newton update ||dv||_inf is below it
-  int max_newton = 200;       // Newton iterations per step before giving up (measured: benchmarks/README.md)
-  Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
-  Solver solver = Solver::kNewton;          // implicit-euler's
-  int iterations = 0;  // projective-dynamics, xpbd: iterations per (sub)step; 0 = the method's
-  double chebyshev = 0.0;  // projective-dynamics: Chebyshev's spectral radius rho; 0 = off
-  int substeps = 0;    // xpbd: substeps per step; 0 = the method's
-  double rtol = 1e-6;         // adaptive methods
-  double atol = 1e-8;
-  long max_steps = 0;         // adaptive: internal steps per output interval; 0 = scaled to the system
-  int max_order = 0;          // adaptive: 0 = the method's default
-  std::string linear_solver = "auto";
-  bool dq_jacobian = false;
-  bool stald = false;
-  // A stop request (Ctrl-C in a sweep): when set and true, a method that
-  // takes many internal steps in one advance_to() fails at the next one.
-  const std::atomic<bool>* stop = nullptr;
-  // The Newmark family (newmark_family.h); NaN: the method's own value.
-  double beta = std::numeric_limits<double>::quiet_NaN();     // newmark: --beta
-  double gamma = std::numeric_limits<double>::quiet_NaN();    // newmark: --gamma
-  double alpha = std::numeric_limits<double>::quiet_NaN();    // hht-alpha: --alpha
-  double rho_inf = std::numeric_limits<double>::quiet_NaN();  // generalized-alpha: --rho-inf
 };
 
 struct StepResult {

@@ -8,14 +8,35 @@
 // each of N iterations (--iterations, default 10)
 //   local:   p_c = L_c (x_a - x_b) / |x_a - x_b|        (each spring alone)
 //   global:  (M + h^2 L) x = M y + h^2 J p               (one linear solve
-//            per coordinate; L = sum_c k_c (e_a - e_b)(e_a - e_b)^T)
+//            per coordinate; L = sum_c k_c (e_a - e_b)(e_a - e_b)^T;
+//            with drag, h D and h D (x_n + h v_n) more: below)
 // lowers g; then v = (x - x_n)/h. The matrix is the same for x, y and z and
 // for every step of one h, so it is factored once (CHOLMOD, kept) and each
-// iteration is one solve with the three coordinates as three columns. The external forces (gravity, drag,
-// wind, spring damping) act explicitly through y. Not iterated to
-// convergence: N fixed, so it is implicit Euler only approximately (exactly,
-// after one iteration, on springs of rest length 0). Iterations count as
-// newton_iterations.
+// iteration is one solve with the three coordinates as three columns. The
+// other external forces (gravity, wind, spring damping) act explicitly
+// through y, except their part -D v with D diagonal and the same for each
+// coordinate of a particle (drag's gamma, wind's coefficient), which is
+// implicit (below). Not iterated to convergence: N fixed, so it is implicit
+// Euler only approximately (exactly, after one iteration, on springs of rest
+// length 0). Iterations count as newton_iterations.
+//
+// The implicit -D v. Implicit Euler's step with x' = x_n + h v',
+//   M (x' - x_n - h v_n) / h^2 = F_e(t_n, x_n, v_n) - D v' - grad E(x'),
+// where F_e is the rest of the external forces. y above uses the external
+// force, which holds -D v_n: y = x_n + h v_n + h^2 M^-1 (F_e - D v_n). Then
+// M (x' - y) / h^2 = -D (v' - v_n) - grad E(x'), and with
+// v' - v_n = (x' - x_n - h v_n) / h, times h^2:
+//   (M + h D + h^2 L) x' = M y + h D (x_n + h v_n) + h^2 J p,
+// the minimum over x' of g(x) + |x - x_n - h v_n|_D^2 / (2 h): the matrix
+// gains h D (the same for every coordinate, and for every step of one h),
+// the right-hand side h D (x_n + h v_n), computed once per step. Converged,
+// the iterations give implicit Euler's step on a scene with drag too
+// (tests/test_fast_solvers.cc). D is read once, at the start, from the
+// system's dF/dv (MechanicalSystem::jacobians) where the system's velocity
+// dependence is diagonal (MechanicalSystem::velocity_dependence): the
+// coefficients of drag and wind are constants. (A time-varying wind's
+// w(t) stays in F_e at t_n: there the converged step differs from implicit
+// Euler's, which takes it at t_n+1, by h^2 M^-1 c (w(t_n+1) - w(t_n)).)
 //
 // Chebyshev acceleration (--chebyshev RHO; Wang, "A Chebyshev semi-iterative
 // approach for accelerating projective and position-based dynamics", ACM
@@ -53,12 +74,32 @@ class ProjectiveDynamics final : public FastSolver {
   }
   static constexpr int kDefaultIterations = 10;
 
+  // A distance constraint as the local step reads it, in 24 bytes: b < 0
+  // stands for the anchor -1 - b.
+  struct LocalSpring {
+    int a = 0, b = 0;
+    double stiffness = 0.0, length = 0.0;
+  };
+
  protected:
   StepResult do_initialize() override;
   StepResult do_step(double h) override;
 
  private:
+  // The pieces of a step (do_step): y and the contact set, the matrix's
+  // factor, the right-hand side's part that stays over the iterations, the
+  // local steps into the right-hand side, the global solve, the Chebyshev
+  // extrapolation.
+  void predict(double h);
+  // damping_: D from dF/dv where the velocity dependence is diagonal.
+  void read_linear_damping();
   bool factor(double h, std::string& error);
+  void begin_right_hand_side(double h);
+  void add_spring_projections(double h);
+  void add_element_projections(double h);
+  void add_contact_projections(double h);
+  bool global_solve();
+  void extrapolate(int iteration, double rho, double& omega);
   // The (particle, plane) pairs in contact at x_n or at y; true when they
   // changed (the matrix must be factored again).
   bool update_contacts();
@@ -72,10 +113,14 @@ class ProjectiveDynamics final : public FastSolver {
   };
   std::vector<ContactPair> contacts_;
 
+  std::vector<LocalSpring> springs_;  // constraints_, in their order
+  std::vector<Eigen::Vector3d> anchors_;
   SparseMatrix laplacian_;  // L, free particles x free particles
   SparseDirectSolver solver_{FactorUse::kSolvedOften};
   double factored_h_ = 0.0;
-  Vector f_, y_, x_new_, rhs_;
+  Vector damping_;  // D per particle (read_linear_damping); empty: none
+  // y; x'; the right-hand side, and its part M y + h D (x_n + h v_n)
+  Vector f_, y_, x_new_, rhs_, rhs_start_;
   Eigen::MatrixXd columns_, solved_;  // n x dim: one coordinate per column
   Vector x_before_, x_last_;  // Chebyshev: the iterates k - 1 and k
 };

@@ -203,8 +203,7 @@ const ElementKind& body_body_contact_kind() {
       .name = "body-body-contact",
       .refers_to_particles = true,
       .make = make_body_body_contact,
-      .energy = {.name = "contact", .counts_with_spring = true},
-      .has_elements = has_body_contacts,
+      .energy = {.name = "contact", .counts_with_spring = true, .present = has_body_contacts},
       .add_random = add_random_body_pair,
   };
   return kind;

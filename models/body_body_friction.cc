@@ -60,8 +60,7 @@ class BodyBodyFrictionForce final : public ForceTerm {
     double sum = 0.0;
     for (const Sliding& s : lagged_contacts_) {
       const double y = (s.T * relative_velocity(s, c.v)).norm();
-      sum += s.mu * s.f_n *
-             (y < eps_ ? y * y / eps_ - y * y * y / (3.0 * eps_ * eps_) : y - eps_ / 3.0);
+      sum += s.mu * s.f_n * friction_potential(y, eps_);
     }
     return sum;
   }

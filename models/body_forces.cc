@@ -264,7 +264,7 @@ class BodyFrictionForce final : public ForceTerm {
     double sum = 0.0;
     for_each_contact(c, [&](std::size_t, const Vertex&, const Sliding& s) {
       const double y = s.y;
-      sum += s.mu * s.f_n * (y < eps_ ? y * y / eps_ - y * y * y / (3.0 * eps_ * eps_) : y - eps_ / 3.0);
+      sum += s.mu * s.f_n * friction_potential(y, eps_);
     });
     return sum;
   }

@@ -19,6 +19,7 @@
 #include "models/bodies.h"
 #include "models/contact.h"
 #include "models/element_kind.h"
+#include "models/spring_reading.h"
 #include "models/springs.h"
 
 namespace springlab {
@@ -120,27 +121,16 @@ BodySpring read_body_spring(const Reporter& r, const std::string& where, const J
   BodySpring s;
   s.i = read_end(r, where, "i", j.at("i"), scene);
   s.j = read_end(r, where, "j", j.at("j"), scene);
-  s.k = read_number(r, field(where, "k"), j.at("k"));
-  check_nonnegative(r, field(where, "k"), s.k);
-  const bool rest_given = j.contains("rest");
-  if (rest_given) {
-    s.rest = read_number(r, field(where, "rest"), j.at("rest"));
-    check_nonnegative(r, field(where, "rest"), s.rest);
-  }
+  const bool rest_given = read_stiffness_and_rest(r, where, j, s.k, s.rest);
   const double distance = check_ends(r, where, s, scene, rest_given);
   if (!rest_given) s.rest = distance;
   return s;
 }
 
-bool has_object_end(const Json& spring) {
-  return spring.is_object() && ((spring.contains("i") && spring.at("i").is_object()) ||
-                                (spring.contains("j") && spring.at("j").is_object()));
-}
-
 void read_body_springs(const Json& document, const Reporter& r, Scene& scene) {
   const Json& springs = document.at("springs");  // an array: the spring kind read it
   for (std::size_t s = 0; s < springs.size(); ++s) {
-    if (!has_object_end(springs[s])) continue;
+    if (!is_body_spring(springs[s])) continue;
     if (scene.dimension != 3) r.fail(element("springs", s), "body points need a 3-D scene");
     scene.block<BodySprings>().push_back(
         read_body_spring(r, element("springs", s), springs[s], scene));

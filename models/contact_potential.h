@@ -55,6 +55,14 @@ inline FrictionWeight friction_weight(double y2, double eps) {
   return {y, 1.0 / y, -1.0 / (y2 * y)};
 }
 
+// The dissipation potential whose v-derivative is that force, f0(|v_t|)
+// with f0' = f1 (IPC's D(v), Li et al. 2020, eq. 15; lagged friction is
+// F = -dW/dv, W = sum mu f_n0 f0(|v_t|)):
+//   f0(y) = y^2/eps - y^3/(3 eps^2) (y < eps),  y - eps/3 beyond.
+inline double friction_potential(double y, double eps) {
+  return y < eps ? y * y / eps - y * y * y / (3.0 * eps * eps) : y - eps / 3.0;
+}
+
 // phi of the scene's contact model (its stiffness and distance resolved).
 struct ContactLaw {
   ContactModel model = ContactModel::kPenalty;

@@ -1,8 +1,12 @@
-// The elastic model: the mechanical system of docs/physics.md "The physics" (springs today, finite
-// elements and contact as they are registered) assembled from a Scene: the state holds
-// only free particles, forces come from the terms of the registered element
+// The model: the mechanical system of docs/physics.md "The physics"
+// assembled from a Scene, whatever it holds (springs, finite elements,
+// contact and friction, drag and wind, affine bodies, fluids): the state
+// holds only the free unknowns (free particles, and each body's 12 as four
+// pseudo-particles), forces come from the terms of the registered element
 // kinds (element_kind.h) the scene has, and both Jacobians share one sparsity
-// pattern built here once.
+// pattern built here (once, or anew when a term's couplings move: a fluid's
+// neighbours, ForceTerm::pattern_holds). The fast solvers' views
+// (mechanical_system.h, part 3) are gathered here from the same terms.
 //
 // Not thread-safe: evaluation uses the model's scratch arrays. Use one model
 // per thread (they are cheap to build from the Scene).

@@ -91,10 +91,6 @@ struct ElementKind {
   ForceFactory make = nullptr;
   // Where its potential energy is reported; an empty name: it stores none.
   EnergyColumn energy = {};
-  // A kind with no scene key of its own whose column is not `always`:
-  // whether the scene has elements of it (its column is reported then).
-  // nullptr: it has elements when one of its keys counts some.
-  bool (*has_elements)(const Scene& scene) = nullptr;
   // Its term of docs/command-line.md "The command line"'s energy scale E_s per unit of free mass,
   // given the diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
   double (*energy_scale_per_mass)(const Scene& scene, double diameter) = nullptr;

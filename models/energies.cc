@@ -13,7 +13,6 @@ namespace {
 // reported only then).
 bool has_elements(const ElementKind& kind, const Scene& scene) {
   if (kind.energy.present != nullptr) return kind.energy.present(scene);
-  if (kind.has_elements != nullptr && kind.has_elements(scene)) return true;
   return std::any_of(kind.keys.begin(), kind.keys.end(), [&](const SceneKey& key) {
     return key.count != nullptr && key.count(scene) > 0;
   });

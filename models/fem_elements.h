@@ -51,7 +51,7 @@ void check_initial_orientation(const Reporter& r, const std::string& where,
                                const std::vector<Eigen::Vector3d>& x, int k);
 
 // A material's Poisson ratio where its model has a stable rest state
-// (MaterialModel::min_poisson, materials_kind.cc): refused, naming
+// (MaterialFacts::min_poisson, materials_kind.cc): refused, naming
 // materials.<name>.poisson, the model's range and why. `tetrahedra`: the
 // material is used by a tetrahedron (some models are unstable there only).
 void check_material_stability(const Reporter& r, const MaterialSpec& m, bool tetrahedra);

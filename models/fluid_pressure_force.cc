@@ -38,21 +38,23 @@
 #include <vector>
 
 #include "models/fluid_forces.h"
+#include "models/fluid_pattern.h"
 #include "models/fluids.h"
 #include "models/sph_particles.h"
 
 namespace springlab {
 namespace {
 
-// The skin of the declared pattern, in kernel supports.
-constexpr double kPatternSkin = 0.25;
-
 class FluidPressureForce final : public ForceTerm {
  public:
   FluidPressureForce(std::vector<std::shared_ptr<SphParticles>> fluids, int dim, int free_particles,
                      std::vector<double> x_all)
-      : fluids_(std::move(fluids)), dim_(dim), free_(free_particles), x_all0_(std::move(x_all)) {
-    follow(x_all0_.data());
+      : fluids_(std::move(fluids)),
+        dim_(dim),
+        free_(free_particles),
+        pattern_(2.0, dim),
+        x_all0_(std::move(x_all)) {
+    pattern_.follow(fluids_, x_all0_.data());
   }
 
   // xpbd: the density constraints of position-based fluids
@@ -88,33 +90,14 @@ class FluidPressureForce final : public ForceTerm {
   }
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    for (std::size_t f = 0; f < fluids_.size(); ++f) {
-      const SphParticles& fluid = *fluids_[f];
-      for (const auto& [a, b] : pattern_[f].pairs()) {
-        declare_pair_blocks(builder, fluid.index(a), fluid.index(b), free_);
-      }
-    }
+    pattern_.declare(fluids_, builder, free_);
   }
   void bind_jacobian(const SparseMatrix& pattern) override { pattern_matrix_ = &pattern; }
 
+  // Pairs within two supports couple (a common neighbour): fluid_pattern.h.
   bool pattern_varies() const override { return true; }
-  bool pattern_holds(const Configuration& c) const override {
-    for (std::size_t f = 0; f < fluids_.size(); ++f) {
-      const SphParticles& fluid = *fluids_[f];
-      const double limit = 0.5 * kPatternSkin * fluid.kernel().support();
-      const std::vector<double>& x0 = pattern_x_[f];
-      for (int a = 0; a < fluid.size(); ++a) {
-        double d2 = 0.0;
-        for (int r = 0; r < dim_; ++r) {
-          const double d = c.x[fluid.index(a) * dim_ + r] - x0[static_cast<std::size_t>(a * dim_ + r)];
-          d2 += d * d;
-        }
-        if (!(d2 <= limit * limit)) return false;
-      }
-    }
-    return true;
-  }
-  void follow_pattern(const Configuration& c) override { follow(c.x); }
+  bool pattern_holds(const Configuration& c) const override { return pattern_.holds(fluids_, c.x); }
+  void follow_pattern(const Configuration& c) override { pattern_.follow(fluids_, c.x); }
 
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx == nullptr) return;
@@ -125,23 +108,6 @@ class FluidPressureForce final : public ForceTerm {
   }
 
  private:
-  void follow(const double* x_all) {
-    pattern_.assign(fluids_.size(), NeighbourGrid());
-    pattern_x_.assign(fluids_.size(), {});
-    for (std::size_t f = 0; f < fluids_.size(); ++f) {
-      const SphParticles& fluid = *fluids_[f];
-      std::vector<double>& x0 = pattern_x_[f];
-      x0.resize(static_cast<std::size_t>(fluid.size() * dim_));
-      for (int a = 0; a < fluid.size(); ++a) {
-        for (int r = 0; r < dim_; ++r) {
-          x0[static_cast<std::size_t>(a * dim_ + r)] = x_all[fluid.index(a) * dim_ + r];
-        }
-      }
-      const double radius = (2.0 + kPatternSkin) * fluid.kernel().support();
-      pattern_[f].build(x0.data(), fluid.size(), dim_, radius);
-    }
-  }
-
   template <int D>
   void add_force_d(const Configuration& c, double* f) const {
     for (const auto& shared : fluids_) {
@@ -306,9 +272,7 @@ class FluidPressureForce final : public ForceTerm {
   // Shared with the viscosity (ParticleOrder::sph).
   std::vector<std::shared_ptr<SphParticles>> fluids_;
   int dim_, free_;
-  // The pairs declared in the pattern and the positions they were found at.
-  std::vector<NeighbourGrid> pattern_;
-  std::vector<std::vector<double>> pattern_x_;
+  FluidPattern pattern_;  // the pairs declared in the Jacobian's pattern
   const SparseMatrix* pattern_matrix_ = nullptr;
   std::vector<double> x_all0_;  // every particle at the start, internal order
   mutable std::vector<double> a_;
@@ -325,19 +289,9 @@ std::unique_ptr<ForceTerm> make_fluid_pressure_force(const Scene& scene, const P
     particles.push_back(shared_sph_particles(scene, k, order));
   }
 
-  // All particles' initial positions in the internal order.
-  const int dim = order.dim;
-  std::vector<double> x(order.scene_of_internal.size() * static_cast<std::size_t>(dim), 0.0);
-  for (std::size_t p = 0; p < order.scene_of_internal.size(); ++p) {
-    const int s = order.scene_of_internal[p];
-    if (s < 0) continue;
-    for (int r = 0; r < dim; ++r) {
-      x[p * static_cast<std::size_t>(dim) + static_cast<std::size_t>(r)] =
-          scene.particles[static_cast<std::size_t>(s)].x[r];
-    }
-  }
-  return std::make_unique<FluidPressureForce>(std::move(particles), dim, order.free_particles,
-                                              std::vector<double>(x.begin(), x.end()));
+  return std::make_unique<FluidPressureForce>(std::move(particles), order.dim,
+                                              order.free_particles,
+                                              internal_positions(scene, order));
 }
 
 }  // namespace springlab

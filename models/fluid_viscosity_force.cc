@@ -27,13 +27,13 @@
 
 #include "models/element_kind.h"
 #include "models/fluid_forces.h"
+#include "models/fluid_pattern.h"
 #include "models/fluids.h"
 #include "models/sph_particles.h"
 
 namespace springlab {
 namespace {
 
-constexpr double kPatternSkin = 0.25;  // in kernel supports
 constexpr double kEta2 = 0.01;         // eta^2 / h^2
 
 class FluidViscosityForce final : public ForceTerm {
@@ -41,8 +41,12 @@ class FluidViscosityForce final : public ForceTerm {
   FluidViscosityForce(std::vector<std::shared_ptr<SphParticles>> fluids, std::vector<double> nu,
                       int dim,
                       int free_particles, const double* x_all)
-      : fluids_(std::move(fluids)), nu_(std::move(nu)), dim_(dim), free_(free_particles) {
-    follow(x_all);
+      : fluids_(std::move(fluids)),
+        nu_(std::move(nu)),
+        dim_(dim),
+        free_(free_particles),
+        pattern_(1.0, dim) {
+    pattern_.follow(fluids_, x_all);
   }
 
   std::string_view name() const override { return "fluid-viscosity"; }
@@ -51,74 +55,30 @@ class FluidViscosityForce final : public ForceTerm {
   bool symmetric_jacobians() const override { return false; }
 
   void add_force(const Configuration& c, double* f) const override {
-    for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      SphParticles& fluid = *fluids_[k];
-      fluid.update(c.x);
-      const auto& pairs = fluid.pairs();
-      for (std::size_t e = 0; e < pairs.size(); ++e) {
-        const auto [a, b] = pairs[e];
-        double phi, slope;
-        shape(fluid, fluid.distance(e), phi, slope);
-        const double kappa = coefficient(k, a, b) * phi;
-        const int pa = fluid.index(a), pb = fluid.index(b);
-        for (int r = 0; r < dim_; ++r) {
-          const double force = -kappa * (c.v[pa * dim_ + r] - c.v[pb * dim_ + r]);
-          f[pa * dim_ + r] += force;
-          f[pb * dim_ + r] -= force;
-        }
+    for_each_pair(c, [&](const Pair& p) {
+      const double kappa = p.C * p.phi;
+      for (int r = 0; r < dim_; ++r) {
+        const double force = -kappa * (c.v[p.a * dim_ + r] - c.v[p.b * dim_ + r]);
+        f[p.a * dim_ + r] += force;
+        f[p.b * dim_ + r] -= force;
       }
-    }
+    });
   }
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      for (const auto& [a, b] : pattern_[k].pairs()) {
-        declare_pair_blocks(builder, fluids_[k]->index(a), fluids_[k]->index(b), free_);
-      }
-    }
+    pattern_.declare(fluids_, builder, free_);
   }
   void bind_jacobian(const SparseMatrix& pattern) override { pattern_matrix_ = &pattern; }
+  // Neighbours couple: fluid_pattern.h.
   bool pattern_varies() const override { return true; }
-  bool pattern_holds(const Configuration& c) const override {
-    for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      const SphParticles& fluid = *fluids_[k];
-      const double limit = 0.5 * kPatternSkin * fluid.kernel().support();
-      for (int a = 0; a < fluid.size(); ++a) {
-        double d2 = 0.0;
-        for (int r = 0; r < dim_; ++r) {
-          const double d = c.x[fluid.index(a) * dim_ + r] -
-                           pattern_x_[k][static_cast<std::size_t>(a * dim_ + r)];
-          d2 += d * d;
-        }
-        if (!(d2 <= limit * limit)) return false;
-      }
-    }
-    return true;
-  }
-  void follow_pattern(const Configuration& c) override { follow(c.x); }
+  bool pattern_holds(const Configuration& c) const override { return pattern_.holds(fluids_, c.x); }
+  void follow_pattern(const Configuration& c) override { pattern_.follow(fluids_, c.x); }
 
   void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
     if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
   }
 
  private:
-  void follow(const double* x_all) {
-    pattern_.assign(fluids_.size(), NeighbourGrid());
-    pattern_x_.assign(fluids_.size(), {});
-    for (std::size_t k = 0; k < fluids_.size(); ++k) {
-      const SphParticles& fluid = *fluids_[k];
-      std::vector<double>& x0 = pattern_x_[k];
-      x0.resize(static_cast<std::size_t>(fluid.size() * dim_));
-      for (int a = 0; a < fluid.size(); ++a) {
-        for (int r = 0; r < dim_; ++r) {
-          x0[static_cast<std::size_t>(a * dim_ + r)] = x_all[fluid.index(a) * dim_ + r];
-        }
-      }
-      pattern_[k].build(x0.data(), fluid.size(), dim_,
-                        (1.0 + kPatternSkin) * fluid.kernel().support());
-    }
-  }
-
   // C = -2 nu m_a m_b / rho0.
   double coefficient(std::size_t k, int a, int b) const {
     const SphParticles& fluid = *fluids_[k];
@@ -140,42 +100,53 @@ class FluidViscosityForce final : public ForceTerm {
     add_block<D>(values, find_block_slot(*pattern_matrix_, D, p, q), M, s);
   }
 
-  template <int D>
-  void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
+  // One pair of a fluid at the configuration: its particles' internal
+  // indices a, b, separation d = x_a - x_b and length r, C and phi(r), phi'(r).
+  struct Pair {
+    int a, b;
+    const double* d;
+    double r, C, phi, slope;
+  };
+  template <class Visit>
+  void for_each_pair(const Configuration& c, Visit visit) const {
     for (std::size_t k = 0; k < fluids_.size(); ++k) {
       SphParticles& fluid = *fluids_[k];
       fluid.update(c.x);
       const auto& pairs = fluid.pairs();
       for (std::size_t e = 0; e < pairs.size(); ++e) {
         const auto [a, b] = pairs[e];
-        const double r = fluid.distance(e);
-        double phi, slope;
-        shape(fluid, r, phi, slope);
-        const double C = coefficient(k, a, b);
-        const int pa = fluid.index(a), pb = fluid.index(b);
-        if (dfdv != nullptr) {
-          double K[D][D] = {};
-          for (int i = 0; i < D; ++i) K[i][i] = C * phi;
-          add<D>(dfdv, pa, pa, K, -1.0);
-          add<D>(dfdv, pb, pb, K, -1.0);
-          add<D>(dfdv, pa, pb, K, 1.0);
-          add<D>(dfdv, pb, pa, K, 1.0);
-        }
-        if (dfdx != nullptr && r > 0.0) {
-          const double* d = fluid.separation(e);
-          double B[D][D];
-          for (int i = 0; i < D; ++i) {
-            const double w = c.v[pa * D + i] - c.v[pb * D + i];
-            for (int j = 0; j < D; ++j) B[i][j] = C * slope * w * d[j] / r;
-          }
-          // dF_a/dx_a = -B, dF_a/dx_b = B, dF_b/dx_a = B, dF_b/dx_b = -B.
-          add<D>(dfdx, pa, pa, B, -1.0);
-          add<D>(dfdx, pb, pb, B, -1.0);
-          add<D>(dfdx, pa, pb, B, 1.0);
-          add<D>(dfdx, pb, pa, B, 1.0);
-        }
+        Pair p{.a = fluid.index(a), .b = fluid.index(b), .d = fluid.separation(e),
+               .r = fluid.distance(e), .C = coefficient(k, a, b)};
+        shape(fluid, p.r, p.phi, p.slope);
+        visit(p);
       }
     }
+  }
+
+  template <int D>
+  void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
+    for_each_pair(c, [&](const Pair& p) {
+      if (dfdv != nullptr) {
+        double K[D][D] = {};
+        for (int i = 0; i < D; ++i) K[i][i] = p.C * p.phi;
+        add<D>(dfdv, p.a, p.a, K, -1.0);
+        add<D>(dfdv, p.b, p.b, K, -1.0);
+        add<D>(dfdv, p.a, p.b, K, 1.0);
+        add<D>(dfdv, p.b, p.a, K, 1.0);
+      }
+      if (dfdx != nullptr && p.r > 0.0) {
+        double B[D][D];
+        for (int i = 0; i < D; ++i) {
+          const double w = c.v[p.a * D + i] - c.v[p.b * D + i];
+          for (int j = 0; j < D; ++j) B[i][j] = p.C * p.slope * w * p.d[j] / p.r;
+        }
+        // dF_a/dx_a = -B, dF_a/dx_b = B, dF_b/dx_a = B, dF_b/dx_b = -B.
+        add<D>(dfdx, p.a, p.a, B, -1.0);
+        add<D>(dfdx, p.b, p.b, B, -1.0);
+        add<D>(dfdx, p.a, p.b, B, 1.0);
+        add<D>(dfdx, p.b, p.a, B, 1.0);
+      }
+    });
   }
 
   // Shared with the pressure (ParticleOrder::sph): one search per
@@ -183,8 +154,7 @@ class FluidViscosityForce final : public ForceTerm {
   std::vector<std::shared_ptr<SphParticles>> fluids_;
   std::vector<double> nu_;
   int dim_, free_;
-  std::vector<NeighbourGrid> pattern_;
-  std::vector<std::vector<double>> pattern_x_;
+  FluidPattern pattern_;  // the pairs declared in the Jacobian's pattern
   const SparseMatrix* pattern_matrix_ = nullptr;
 };
 
@@ -202,23 +172,10 @@ std::unique_ptr<ForceTerm> make_fluid_viscosity_force(const Scene& scene,
     nu.push_back((*fluids)[k].viscosity);
   }
   if (particles.empty()) return nullptr;
-  const int dim = order.dim;
-  std::vector<double> x(order.scene_of_internal.size() * static_cast<std::size_t>(dim), 0.0);
-  for (std::size_t p = 0; p < order.scene_of_internal.size(); ++p) {
-    const int s = order.scene_of_internal[p];
-    if (s < 0) continue;
-    for (int r = 0; r < dim; ++r) {
-      x[p * static_cast<std::size_t>(dim) + static_cast<std::size_t>(r)] =
-          scene.particles[static_cast<std::size_t>(s)].x[r];
-    }
-  }
-  return std::make_unique<FluidViscosityForce>(std::move(particles), std::move(nu), dim,
+  const std::vector<double> x = internal_positions(scene, order);
+  return std::make_unique<FluidViscosityForce>(std::move(particles), std::move(nu), order.dim,
                                                order.free_particles, x.data());
 }
-
-namespace {
-
-}  // namespace
 
 const ElementKind& fluid_kind();               // fluid_kind.cc
 bool scene_has_viscous_fluid(const Scene& scene);  // fluid_kind.cc

@@ -72,9 +72,7 @@ class FrictionForce final : public ForceTerm {
   double velocity_potential(const Configuration& c) const override {
     if (!lagged_) return 0.0;
     double sum = 0.0;
-    auto f0 = [&](double y) {
-      return y < eps_ ? y * y / eps_ - y * y * y / (3.0 * eps_ * eps_) : y - eps_ / 3.0;
-    };
+    auto f0 = [&](double y) { return friction_potential(y, eps_); };
     if (dim_ == 2) {
       for_each_contact<2>(c, [&](int, double mu, const Sliding<2>& s) { sum += mu * s.f_n * f0(s.y); });
     } else {

@@ -2,10 +2,32 @@
 //
 //     M x'' = F(t, x, v),    v = x',
 //
-// over the free degrees of freedom only (fixed particles are not unknowns),
-// with a lumped (diagonal) mass M and the analytic Jacobians dF/dx, dF/dv on
-// one fixed sparsity pattern. Integrators know this interface and nothing of
-// springs; models implement it and know nothing of time stepping.
+// over the free unknowns only (fixed particles are not unknowns; an affine
+// body's 12, p and the columns of A, are unknowns like a particle's), with a
+// lumped (diagonal) mass M and the analytic Jacobians dF/dx, dF/dv on one
+// sparsity pattern (fixed for springs, elements and bodies; a fluid's follows
+// its neighbours: pattern_varies). Integrators know this interface and
+// nothing of springs; models implement it and know nothing of time stepping.
+//
+// The interface in three parts (what belongs to the physics, and what to a
+// solver's view of it):
+//   1. The physics, which every method may use: dofs, mass, force,
+//      jacobians, and the energy bookkeeping (derives_from_potentials, the
+//      position and velocity potentials, nonconservative_power) that the
+//      discrete gradient and the line searches read.
+//   2. What an implicit solve needs beyond it: definite_jacobians (Newton's
+//      definite matrix), jacobian_pattern, pattern_varies and pattern_version
+//      (a symbolic factorization kept per pattern), jacobian_symmetric,
+//      velocity_dependence, has_forbidden_states and admissible_fraction (the
+//      barrier's step cap), lag_normal_forces (friction lagged for one solve).
+//   3. The fast solvers' views of the same forces, each false with the
+//      reason when the model's forces have no such form (the solver then
+//      refuses the scene with it): projective_form (projective dynamics),
+//      position_based_form (xpbd), laplacian_form (quasi-Newton's initial
+//      Hessian), with plane_constraints, external_force and
+//      dimension_of_state for what they solve or add explicitly.
+// A method that needs only part 1 runs every system; parts 2 and 3 have
+// defaults that say "none" for a system without them.
 #pragma once
 
 #include <Eigen/Core>

@@ -8,7 +8,8 @@
 
 namespace springlab {
 
-double max_angular_frequency(const ElasticModel& model, const Vector& x, const Vector& v) {
+double max_angular_frequency(const ElasticModel& model, const Vector& x, const Vector& v,
+                             Eigen::Index dense_up_to) {
   SparseMatrix dfdx;
   model.jacobians(0.0, x, v, &dfdx, nullptr);
   // A = M^-1/2 K M^-1/2 with K the symmetric part of -dF/dx: same spectrum
@@ -17,7 +18,7 @@ double max_angular_frequency(const ElasticModel& model, const Vector& x, const V
   SparseMatrix k = -0.5 * (SparseMatrix(dfdx.transpose()) + dfdx);
   SparseMatrix a = s.asDiagonal() * k * s.asDiagonal();
   double lambda = 0.0;
-  if (a.rows() <= 3000) {
+  if (a.rows() <= dense_up_to) {
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd(a),
                                                             Eigen::EigenvaluesOnly);
     lambda = eig.eigenvalues().maxCoeff();

@@ -2,6 +2,7 @@
 // reading, checks, writing -- and its registration. The force itself, Hooke's
 // law with its SIMD kernel, is spring_force.cc; spring damping, read here
 // from each spring's "damping", is its own kind (spring_damping_force.cc).
+#include "models/spring_reading.h"
 #include "models/springs.h"
 
 #include <algorithm>
@@ -112,12 +113,25 @@ void check_springs_in_order(const Reporter& r, const Springs& springs, std::size
   check_no_duplicate(r, springs, springs.size(), particle_count, file_index);
 }
 
-// A spring with an end {"body": b, "X": [...]} instead of a particle index:
-// the body-spring kind's (body_springs.cc), read once the bodies are.
+
+}  // namespace
+
 bool is_body_spring(const Json& j) {
   return j.is_object() && ((j.contains("i") && j.at("i").is_object()) ||
                            (j.contains("j") && j.at("j").is_object()));
 }
+
+bool read_stiffness_and_rest(const Reporter& r, const std::string& where, const Json& j,
+                             double& k, double& rest) {
+  k = read_number(r, field(where, "k"), j.at("k"));
+  check_nonnegative(r, field(where, "k"), k);
+  if (!j.contains("rest")) return false;
+  rest = read_number(r, field(where, "rest"), j.at("rest"));
+  check_nonnegative(r, field(where, "rest"), rest);
+  return true;
+}
+
+namespace {
 
 Spring read_spring(const Reporter& r, const std::string& where, const Json& j,
                    const std::vector<Particle>& particles) {
@@ -129,13 +143,7 @@ Spring read_spring(const Reporter& r, const std::string& where, const Json& j,
   s.j = check_particle_index(r, where, "j", read_number(r, field(where, "j"), j.at("j")),
                              particles.size());
   check_not_self(r, where, s);
-  s.k = read_number(r, field(where, "k"), j.at("k"));
-  check_nonnegative(r, field(where, "k"), s.k);
-  const bool rest_given = j.contains("rest");
-  if (rest_given) {
-    s.rest = read_number(r, field(where, "rest"), j.at("rest"));
-    check_nonnegative(r, field(where, "rest"), s.rest);
-  }
+  const bool rest_given = read_stiffness_and_rest(r, where, j, s.k, s.rest);
   if (j.contains("damping")) {
     s.damping = read_number(r, field(where, "damping"), j.at("damping"));
     check_nonnegative(r, field(where, "damping"), s.damping);

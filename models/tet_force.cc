@@ -9,14 +9,14 @@
 // The stiffness block of nodes i, j = 1..3 is
 //   K_ij = df_i/dx_j = -W A(d_i, d_j),
 // A(a, b)_rs = sum_cd a_c (dP_rc/dF_sd) b_d the tangent contracted with two
-// rest-shape gradients, which each material gives in closed form, a few
-// flops a block (tangent_blocks3, material.h; tangent3.h) instead of the
-// 9 x 9 dPdF and two 9 x 9 products. Node 0's blocks follow from
-// g_0 = -(d_1 + d_2 + d_3):
+// rest-shape gradients, which the material's kernel gives (tet_kernel.h),
+// in closed form where the material has one, a few flops a block
+// (tangent3.h) instead of the 9 x 9 dPdF and two 9 x 9 products. Node 0's
+// blocks follow from g_0 = -(d_1 + d_2 + d_3):
 //   K_i0 = -sum_j K_ij,  K_0j = -sum_i K_ij,  K_00 = sum_ij K_ij.
 // Each pass takes the elements kLanes at a time (a Chunk, fill below), so
-// that a model that derives, or gives its blocks, in vector lanes
-// (MaterialModel::derive3_lanes, lanes.h) computes a chunk's in one call.
+// that a kernel that derives, or gives its blocks, in vector lanes
+// (TetKernel::derive_lanes, lanes.h) computes a chunk's in one call.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
@@ -30,6 +30,7 @@
 #include "models/materials/kinematics.h"  // Derived3
 #include "models/materials/lanes.h"
 #include "models/materials/material.h"
+#include "models/materials/tet_kernel.h"
 
 namespace springlab {
 namespace {
@@ -128,8 +129,7 @@ class TetrahedronForce final : public ElementTerm {
       std::array<Eigen::Matrix3d, kLanes> P;
       for (std::size_t l = 0; l < chunk.size; ++l) {
         const Tet& t = tets_[first + l];
-        P[l] = chunk.d[l] != nullptr ? t.model->P3_derived(chunk.F[l], *chunk.d[l], t.lame)
-                                     : P3(*t.model, chunk.F[l], t.lame);
+        P[l] = t.model->tet->P(chunk.F[l], *chunk.d[l], t.lame);
       }
       for (std::size_t l = 0; l < chunk.size; ++l) {
         const Tet& t = tets_[first + l];
@@ -148,8 +148,7 @@ class TetrahedronForce final : public ElementTerm {
       fill(c, first, chunk);
       for (std::size_t l = 0; l < chunk.size; ++l) {
         const Tet& t = tets_[first + l];
-        sum += t.W * (chunk.d[l] != nullptr ? t.model->Psi3_derived(chunk.F[l], *chunk.d[l], t.lame)
-                                            : t.model->Psi(Mat(chunk.F[l]), t.lame));
+        sum += t.W * t.model->tet->Psi(chunk.F[l], *chunk.d[l], t.lame);
       }
     }
     return sum;
@@ -251,8 +250,8 @@ class TetrahedronForce final : public ElementTerm {
   }
 
   // Up to kLanes consecutive elements, first .. first + size - 1: their F,
-  // and what each one's model derives from it first (MaterialModel::derive3;
-  // d[l] = nullptr where it derives nothing).
+  // and what each one's kernel derives from it first (TetKernel::derive;
+  // scratch, unused, where it derives nothing).
   struct Chunk {
     std::size_t first = 0, size = 0;
     std::array<Eigen::Matrix3d, kLanes> F;
@@ -269,19 +268,19 @@ class TetrahedronForce final : public ElementTerm {
   // energy, the force and dF/dx at the state its line search accepts, and
   // derives it once per F for all three; the result is the same as
   // deriving it again. An explicit method, which never asks for dF/dx,
-  // keeps nothing. Elements whose model derives in lanes
-  // (MaterialModel::derive3_lanes) are derived kLanes at a time, the same
+  // keeps nothing. Elements whose kernel derives in lanes
+  // (TetKernel::derive_lanes) are derived kLanes at a time, the same
   // result bit for bit.
   void fill(const Configuration& c, std::size_t first, Chunk& chunk) const {
     chunk.first = first;
     chunk.size = std::min<std::size_t>(kLanes, tets_.size() - first);
-    const MaterialModel* model = tets_[first].model;
+    const TetKernel* kernel = tets_[first].model->tet;
     chunk.one_model = true;
     std::array<std::size_t, kLanes> missing{};  // lanes to derive
     std::size_t n_missing = 0;
     for (std::size_t l = 0; l < chunk.size; ++l) {
       const Tet& t = tets_[first + l];
-      chunk.one_model = chunk.one_model && t.model == model;
+      chunk.one_model = chunk.one_model && t.model->tet == kernel;
       chunk.F[l] = deformation(c, t);
     }
     // In a second pass: F has just been stored, and copying it at once
@@ -289,10 +288,9 @@ class TetrahedronForce final : public ElementTerm {
     // stall, benchmarks/README).
     for (std::size_t l = 0; l < chunk.size; ++l) {
       const Tet& t = tets_[first + l];
-      chunk.d[l] = nullptr;
-      if (t.model->derive3 == nullptr) continue;
+      chunk.d[l] = &chunk.scratch[l];
+      if (t.model->tet->derive == nullptr) continue;
       if (kept_.empty()) {
-        chunk.d[l] = &chunk.scratch[l];
         missing[n_missing++] = l;
         continue;
       }
@@ -305,19 +303,19 @@ class TetrahedronForce final : public ElementTerm {
       }
     }
     if (n_missing == 0) return;
-    if (chunk.one_model && model->derive3_lanes != nullptr) {
+    if (chunk.one_model && kernel->derive_lanes != nullptr) {
       const Eigen::Matrix3d* in[kLanes];
       Derived3* out[kLanes];
       for (std::size_t m = 0; m < static_cast<std::size_t>(kLanes); ++m) {
         in[m] = &chunk.F[missing[m < n_missing ? m : 0]];
         out[m] = m < n_missing ? chunk.d[missing[m]] : &chunk.spare;
       }
-      model->derive3_lanes(in, out);
+      kernel->derive_lanes(in, out);
       return;
     }
     for (std::size_t m = 0; m < n_missing; ++m) {
       const std::size_t l = missing[m];
-      tets_[first + l].model->derive3(chunk.F[l], *chunk.d[l]);
+      tets_[first + l].model->tet->derive(chunk.F[l], *chunk.d[l]);
     }
   }
 
@@ -328,18 +326,16 @@ class TetrahedronForce final : public ElementTerm {
   // more time than the nine products cost, benchmarks/README.)
   Tangent3 blocks(const Chunk& chunk, std::size_t l) const {
     const Tet& t = tets_[chunk.first + l];
-    return chunk.d[l] != nullptr
-               ? t.model->tangent_blocks3_derived(chunk.F[l], *chunk.d[l], Dw(t), t.lame)
-               : tangent_blocks3(*t.model, chunk.F[l], Dw(t), t.lame);
+    return t.model->tet->blocks(chunk.F[l], *chunk.d[l], Dw(t), t.lame);
   }
   // The same for every element of the chunk at once, in lanes (entry k of
-  // element l's at K[k][l]), where its model computes them so
-  // (MaterialModel::tangent_blocks3_derived_lanes); false where it does not.
+  // element l's at K[k][l]), where its kernel computes them so
+  // (TetKernel::blocks_lanes); false where it does not.
   // The rows of sqrt(W) D and the Lame parameters come in lanes, arranged
   // once (lane_constants_).
   bool blocks_in_lanes(const Chunk& chunk, Lanes (&K)[81]) const {
-    const MaterialModel* model = tets_[chunk.first].model;
-    if (!chunk.one_model || model->tangent_blocks3_derived_lanes == nullptr) return false;
+    const TetKernel* kernel = tets_[chunk.first].model->tet;
+    if (!chunk.one_model || kernel->blocks_lanes == nullptr) return false;
     const Eigen::Matrix3d* F[kLanes];
     const Derived3* d[kLanes];
     for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
@@ -348,7 +344,7 @@ class TetrahedronForce final : public ElementTerm {
       d[l] = chunk.d[e];
     }
     const LaneConstants& c = lane_constants_[chunk.first / kLanes];
-    model->tangent_blocks3_derived_lanes(F, d, c.Dw, c.mu, c.lambda, K);
+    kernel->blocks_lanes(F, d, c.Dw, c.mu, c.lambda, K);
     return true;
   }
 
@@ -360,12 +356,12 @@ class TetrahedronForce final : public ElementTerm {
   }
 
   // Each chunk's rows of sqrt(W) D and Lame parameters in lanes, where some
-  // element's model gives its blocks in lanes. Unlike the element records
+  // element's kernel gives its blocks in lanes. Unlike the element records
   // (Dw above), these keep sqrt(W) D: arranging them into lanes at every
   // call cost more than reading them (benchmarks/README).
   void arrange_lane_constants() {
     const bool any = std::any_of(tets_.begin(), tets_.end(), [](const Tet& t) {
-      return t.model->tangent_blocks3_derived_lanes != nullptr;
+      return t.model->tet->blocks_lanes != nullptr;
     });
     if (!any) return;
     lane_constants_.resize((tets_.size() + kLanes - 1) / kLanes);

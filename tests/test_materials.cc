@@ -17,6 +17,7 @@
 #include "models/materials/kinematics.h"
 #include "models/materials/material.h"
 #include "models/materials/tangent3.h"
+#include "models/materials/tet_kernel.h"
 #include "registry_suite.h"
 
 namespace springlab {
@@ -96,26 +97,21 @@ class EveryMaterial : public ::testing::TestWithParam<MaterialCase> {
 class EveryMaterialSquareF : public EveryMaterial {};
 bool square(const MaterialCase& c) { return c.rows == c.cols; }
 bool solid(const MaterialCase& c) { return c.rows == 3 && c.cols == 3; }
-// 3 x 3, with the closed-form tangent blocks of the tetrahedra's fast path.
-class EveryMaterialClosedFormBlocks3 : public EveryMaterial {};
-bool solid_closed_form_blocks(const MaterialCase& c) {
-  return solid(c) && c.model->tangent_blocks3 != nullptr;
-}
-// 3 x 3, with a fixed-size P.
-class EveryMaterialFixedSizeStress3 : public EveryMaterial {};
-bool solid_fixed_size_stress(const MaterialCase& c) { return solid(c) && c.model->P3 != nullptr; }
-// 3 x 3, deriving something from F to keep between calls.
-class EveryMaterialDerived3 : public EveryMaterial {};
-bool solid_derives(const MaterialCase& c) {
-  const MaterialModel& m = *c.model;
-  return solid(c) && (m.derive3 != nullptr || m.Psi3_derived != nullptr ||
-                      m.P3_derived != nullptr || m.tangent_blocks3_derived != nullptr);
-}
-// 3 x 3, with functions for kLanes elements at once.
+// 3 x 3: the tetrahedra's kernel (tet_kernel.h).
+class EveryMaterialTetKernel : public EveryMaterial {};
+// 3 x 3, with a kernel for kLanes elements at once.
 class EveryMaterialLanes3 : public EveryMaterial {};
 bool solid_lanes(const MaterialCase& c) {
-  return solid(c) &&
-         (c.model->derive3_lanes != nullptr || c.model->tangent_blocks3_derived_lanes != nullptr);
+  const TetKernel& kernel = *c.model->tet;
+  return solid(c) && (kernel.derive_lanes != nullptr || kernel.blocks_lanes != nullptr);
+}
+
+// What the kernel keeps of F (nothing: zeros).
+Derived3 derived(const TetKernel& kernel, const Eigen::Matrix3d& F) {
+  Derived3 d;
+  d.R.setZero();
+  if (kernel.derive != nullptr) kernel.derive(F, d);
+  return d;
 }
 
 TEST_P(EveryMaterial, RestIsStressFreeWithZeroEnergy) {
@@ -161,11 +157,14 @@ TEST_P(EveryMaterial, TangentIsTheDerivativeOfTheStress) {
   }
 }
 
-// The closed-form tangent blocks of a 3 x 3 F (the tetrahedra's fast path,
-// A(d_i, d_j) for the rows of a random D) are the contraction of the tangent
-// assembled from dP, entry for entry, at random deformations and -- for
-// every model defined there -- inverted ones (J < 0).
-TEST_P(EveryMaterialClosedFormBlocks3, ClosedFormSolidTangentBlocksAreTheContractedTangent) {
+// The tetrahedra's kernel of a 3 x 3 F, from what it keeps of F, is the
+// plain model: its blocks (closed form where the model has one, A(d_i, d_j)
+// for the rows of a random D) the contraction of the tangent assembled from
+// dP, entry for entry, its P the plain P and its energy the plain energy,
+// at random deformations and -- for every model defined there -- inverted
+// ones (J < 0).
+TEST_P(EveryMaterialTetKernel, KernelIsThePlainModel) {
+  const TetKernel& kernel = *model().tet;
   std::mt19937 rng(19);
   std::uniform_real_distribution<double> entry(-1.0, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
@@ -173,68 +172,73 @@ TEST_P(EveryMaterialClosedFormBlocks3, ClosedFormSolidTangentBlocksAreTheContrac
     if (trial % 2 == 1 && model().finite_everywhere) F.col(0) *= -1.0;  // inverted
     Eigen::Matrix3d D;
     for (int k = 0; k < 9; ++k) D.data()[k] = entry(rng);
-    const Tangent3 reference = tangent_blocks(Tangent3(dPdF(model(), F, kLame)), D);
-    const Tangent3 closed = tangent_blocks3(model(), Eigen::Matrix3d(F), D, kLame);
-    EXPECT_LT((closed - reference).norm(), 1e-12 * reference.norm())
-        << "trial " << trial << ", J " << volume(F).J;
-  }
-}
-
-// The fixed-size P of a 3 x 3 F (the tetrahedra's force) is P, inverted F
-// included.
-TEST_P(EveryMaterialFixedSizeStress3, FixedSizeStressIsTheStress) {
-  std::mt19937 rng(23);
-  for (int trial = 0; trial < 10; ++trial) {
-    Mat F = deformed(rng);
-    if (trial % 2 == 1 && model().finite_everywhere) F.col(0) *= -1.0;  // inverted
-    const Mat reference = model().P(F, kLame);
-    const Eigen::Matrix3d fixed = P3(model(), Eigen::Matrix3d(F), kLame);
-    EXPECT_LT((fixed - Eigen::Matrix3d(reference)).norm(), 1e-14 * reference.norm())
-        << "trial " << trial;
-  }
-}
-
-// A model that derives something costly from F first (corotated: R and S;
-// neo-Hookean: ln J) gives its energy, P and blocks with it passed in (the
-// tetrahedra keep it between calls at one state): given what it derives
-// from F itself, each is its plain counterpart, inverted F included.
-TEST_P(EveryMaterialDerived3, FunctionsOfWhatItDerivesAreThePlainOnes) {
-  const MaterialModel& m = model();
-  // All four or none: the tetrahedra take each when they keep it.
-  ASSERT_TRUE(m.derive3 != nullptr && m.Psi3_derived != nullptr && m.P3_derived != nullptr &&
-              m.tangent_blocks3_derived != nullptr);
-  std::mt19937 rng(29);
-  std::uniform_real_distribution<double> entry(-1.0, 1.0);
-  for (int trial = 0; trial < 10; ++trial) {
-    Mat F = deformed(rng);
-    if (trial % 2 == 1 && m.finite_everywhere) F.col(0) *= -1.0;  // inverted
     const Eigen::Matrix3d F3 = F;
-    Derived3 d;
-    m.derive3(F3, d);
-    Eigen::Matrix3d D;
-    for (int k = 0; k < 9; ++k) D.data()[k] = entry(rng);
-    const double psi = m.Psi(F, kLame);
-    EXPECT_NEAR(m.Psi3_derived(F3, d, kLame), psi, 1e-14 * std::abs(psi)) << "trial " << trial;
-    // P and the blocks: the same arithmetic, bit for bit.
-    EXPECT_EQ(m.P3_derived(F3, d, kLame), P3(m, F3, kLame)) << "trial " << trial;
-    EXPECT_EQ(m.tangent_blocks3_derived(F3, d, D, kLame), tangent_blocks3(m, F3, D, kLame))
+    const Derived3 d = derived(kernel, F3);
+    const Tangent3 reference = tangent_blocks(Tangent3(dPdF(model(), F, kLame)), D);
+    EXPECT_LT((kernel.blocks(F3, d, D, kLame) - reference).norm(), 1e-12 * reference.norm())
+        << "trial " << trial << ", J " << volume(F).J;
+    const Mat P = model().P(F, kLame);
+    EXPECT_LT((kernel.P(F3, d, kLame) - Eigen::Matrix3d(P)).norm(), 1e-14 * P.norm())
         << "trial " << trial;
+    const double psi = model().Psi(F, kLame);
+    EXPECT_NEAR(kernel.Psi(F3, d, kLame), psi, 1e-14 * std::abs(psi)) << "trial " << trial;
+  }
+}
+
+// A material of Psi, P and dP alone (here stvk's, without its closed-form
+// blocks and fixed-size P): the kernel generated for it gives stvk's plain
+// P and the contraction of the dPdF assembled from its dP, bit for bit,
+// keeps nothing and has no lanes.
+struct OnlyTheCore {
+  static constexpr MaterialFacts facts = {.name = "stvk-core", .formula = "stvk's"};
+  static const MaterialModel& stvk() { return *find_material_model("stvk"); }
+  static double Psi(const Mat& F, const Lame& m) { return stvk().Psi(F, m); }
+  static Mat P(const Mat& F, const Lame& m) { return stvk().P(F, m); }
+  static Mat dP(const Mat& F, const Mat& dF, const Lame& m) { return stvk().dP(F, dF, m); }
+};
+
+TEST(Materials, KernelGeneratedFromPsiPAndDPAlone) {
+  const MaterialModel core = tet_kernel::model<OnlyTheCore>(nullptr);
+  const TetKernel& kernel = *core.tet;
+  EXPECT_EQ(core.name, "stvk-core");
+  EXPECT_EQ(kernel.derive, nullptr);
+  EXPECT_EQ(kernel.derive_lanes, nullptr);
+  EXPECT_EQ(kernel.blocks_lanes, nullptr);
+  const MaterialModel& stvk = OnlyTheCore::stvk();
+  std::mt19937 rng(37);
+  std::uniform_real_distribution<double> entry(-0.3, 0.3);
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::Matrix3d F = Eigen::Matrix3d::Identity(), D;
+    for (int k = 0; k < 9; ++k) {
+      F.data()[k] += entry(rng);
+      D.data()[k] = entry(rng);
+    }
+    const Derived3 d = derived(kernel, F);
+    EXPECT_EQ(kernel.Psi(F, d, kLame), stvk.Psi(F, kLame));
+    EXPECT_EQ(kernel.P(F, d, kLame), Eigen::Matrix3d(stvk.P(F, kLame)));
+    const Tangent3 contracted = tangent_blocks(Tangent3(dPdF(stvk, F, kLame)), D);
+    EXPECT_EQ(kernel.blocks(F, d, D, kLame), contracted) << "trial " << trial;
+    // and stvk's closed form agrees with it to round-off
+    const Tangent3 closed = stvk.tet->blocks(F, d, D, kLame);
+    EXPECT_LT((closed - contracted).norm(), 1e-12 * contracted.norm());
+    // (and is another computation: the kernel took the contraction)
+    EXPECT_NE(closed, contracted);
   }
 }
 
 // A model that derives and gives its blocks for kLanes elements at once, in
-// vector lanes (MaterialModel::derive3_lanes and
-// tangent_blocks3_derived_lanes; lanes.h), gives in each lane what its
+// vector lanes (TetKernel::derive_lanes and blocks_lanes; lanes.h), gives
+// in each lane what its
 // one-element functions give for that element, bit for bit, whichever
 // elements share the call: rotated and deformed ones (some turned by more
 // than the series' range of the polar decomposition allows), inverted ones
 // and strongly stretched ones side by side, each with its own D and
 // Lame parameters.
 TEST_P(EveryMaterialLanes3, LanesAreTheOneElementFunctionsBitForBit) {
-  const MaterialModel& m = model();
-  // The blocks in lanes take what derive3 gives.
-  ASSERT_NE(m.derive3, nullptr);
-  ASSERT_NE(m.derive3_lanes, nullptr);
+  const TetKernel& m = *model().tet;
+  // The blocks in lanes take what derive gives.
+  ASSERT_NE(m.derive, nullptr);
+  ASSERT_NE(m.derive_lanes, nullptr);
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> entry(-1.0, 1.0);
   std::uniform_int_distribution<int> kind(0, 3);
@@ -249,7 +253,7 @@ TEST_P(EveryMaterialLanes3, LanesAreTheOneElementFunctionsBitForBit) {
     for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
       F[l] = Eigen::Matrix3d(rotation(rng)) * Eigen::Matrix3d(deformed(rng));
       const int k = kind(rng);
-      if (k == 1 && m.finite_everywhere) F[l].col(0) *= -1.0;  // inverted
+      if (k == 1 && model().finite_everywhere) F[l].col(0) *= -1.0;  // inverted
       if (k == 2) F[l].col(1) *= 3.0;                          // stretched
       for (int i = 0; i < 9; ++i) D[l].data()[i] = entry(rng);
       lames[l] = lame(1e5 * (1.0 + entry(rng) * entry(rng)), 0.3 + 0.1 * entry(rng));
@@ -261,20 +265,20 @@ TEST_P(EveryMaterialLanes3, LanesAreTheOneElementFunctionsBitForBit) {
       d_in[l] = &d[l];
       d[l].R.setZero();  // what a model derives nothing into compares equal
     }
-    m.derive3_lanes(F_in, d_out);
+    m.derive_lanes(F_in, d_out);
     for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
       Derived3 one;
       one.R.setZero();
-      m.derive3(F[l], one);
+      m.derive(F[l], one);
       EXPECT_EQ(d[l].R, one.R) << "call " << call << ", lane " << l;
       EXPECT_EQ(d[l].log_J, one.log_J) << "call " << call << ", lane " << l;
     }
-    if (m.tangent_blocks3_derived_lanes == nullptr) continue;
-    m.tangent_blocks3_derived_lanes(F_in, d_in, D_in, mu, lambda, blocks);
+    if (m.blocks_lanes == nullptr) continue;
+    m.blocks_lanes(F_in, d_in, D_in, mu, lambda, blocks);
     for (std::size_t l = 0; l < static_cast<std::size_t>(kLanes); ++l) {
       Tangent3 in_lane;
       for (int k = 0; k < 81; ++k) in_lane.data()[k] = blocks[k][l];
-      EXPECT_EQ(in_lane, m.tangent_blocks3_derived(F[l], d[l], D[l], lames[l]))
+      EXPECT_EQ(in_lane, m.blocks(F[l], d[l], D[l], lames[l]))
           << "call " << call << ", lane " << l;
     }
   }
@@ -315,17 +319,8 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterial, ::testing::ValuesIn(cases()), 
 INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialSquareF,
                          ::testing::ValuesIn(cases_where("Registry/EveryMaterialSquareF", square)),
                          case_name);
-INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialClosedFormBlocks3,
-                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialClosedFormBlocks3",
-                                                         solid_closed_form_blocks)),
-                         case_name);
-INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialFixedSizeStress3,
-                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialFixedSizeStress3",
-                                                         solid_fixed_size_stress)),
-                         case_name);
-INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialDerived3,
-                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialDerived3",
-                                                         solid_derives)),
+INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialTetKernel,
+                         ::testing::ValuesIn(cases_where("Registry/EveryMaterialTetKernel", solid)),
                          case_name);
 INSTANTIATE_TEST_SUITE_P(Registry, EveryMaterialLanes3,
                          ::testing::ValuesIn(cases_where("Registry/EveryMaterialLanes3",

@@ -56,6 +56,10 @@ CASES = [
     ("tumbling-box", "tumbling-box", [], "0.01", "0.2"),
     ("box-on-slope", "box-on-slope", ["speed=0.5"], "0.01", "0.2"),
     ("box-pile", "box-pile", ["n=2"], "0.01", "0.2"),
+    ("box-chain", "box-chain", ["n=2"], "0.005", "0.05"),
+    ("dam-break", "dam-break", ["spacing=0.025"], "0.002", "0.02"),
+    ("sloshing", "sloshing", ["spacing=0.05"], "0.002", "0.02"),
+    ("tank", "tank", ["spacing=0.05"], "0.002", "0.02"),
     ("spec-damped", os.path.join(HERE, "data", "scenes", "spec_example.json"), [], "0.01", "0.3"),
 ]
 

@@ -1,11 +1,10 @@
 #include "web/cursor_spring.h"
 
-#include "models/force_term.h"
 
 namespace springlab {
 
 CursorSpring::CursorSpring(const ElasticModel& model, double w_max)
-    : model_(model), dim_(model.dimension()), diagonal_(diagonal_slots(model.jacobian_pattern())) {
+    : model_(model), dim_(model.dimension()) {
   // The lightest free particle's mass: the stiffest the spring gets.
   double m = model.mass().size() > 0 ? model.mass().minCoeff() : 1.0;
   k_ = w_max > 0.0 ? m * w_max * w_max / 4.0 : 100.0 * m;
@@ -28,8 +27,7 @@ void CursorSpring::add_force(const Vector& x, Vector& f) const {
 
 void CursorSpring::add_stiffness(SparseMatrix* dfdx) const {
   if (unknown_ < 0 || dfdx == nullptr) return;
-  double* values = dfdx->valuePtr();
-  for (int r = 0; r < dim_; ++r) values[diagonal_[static_cast<std::size_t>(unknown_ + r)]] -= k_;
+  for (int r = 0; r < dim_; ++r) dfdx->coeffRef(unknown_ + r, unknown_ + r) -= k_;
 }
 
 void CursorSpring::force(ForcePart part, double t, const Vector& x, const Vector& v,

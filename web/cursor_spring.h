@@ -58,6 +58,8 @@ class CursorSpring final : public MechanicalSystem {
     model_.add_own_discrete_gradient_difference(t, x, x_m, y, f);
   }
   const SparseMatrix& jacobian_pattern() const override { return model_.jacobian_pattern(); }
+  bool pattern_varies() const override { return model_.pattern_varies(); }
+  long pattern_version() const override { return model_.pattern_version(); }
   bool jacobian_symmetric() const override { return model_.jacobian_symmetric(); }
   VelocityDependence velocity_dependence() const override {
     return model_.velocity_dependence();
@@ -70,6 +72,12 @@ class CursorSpring final : public MechanicalSystem {
                        std::vector<ProjectiveElement>& elements,
                        std::string& why) const override {
     return model_.projective_form(constraints, elements, why);
+  }
+  bool position_based_form(std::vector<DistanceConstraint>& constraints,
+                           std::vector<ProjectiveElement>& elements,
+                           std::vector<std::unique_ptr<PositionProjection>>& projections,
+                           std::string& why) const override {
+    return model_.position_based_form(constraints, elements, projections, why);
   }
   bool laplacian_form(std::vector<DistanceConstraint>& constraints,
                       std::vector<ProjectiveElement>& elements) const override {
@@ -85,7 +93,8 @@ class CursorSpring final : public MechanicalSystem {
  private:
   // f += F_c (the spring's force on its particle's unknowns).
   void add_force(const Vector& x, Vector& f) const;
-  // dfdx -= k_c on the particle's diagonal entries (in the shared pattern).
+  // dfdx -= k_c on the particle's diagonal entries (every pattern has the
+  // full diagonal; a fluid's pattern changes, so they are looked up in it).
   void add_stiffness(SparseMatrix* dfdx) const;
 
   const ElasticModel& model_;
@@ -93,7 +102,6 @@ class CursorSpring final : public MechanicalSystem {
   int dim_ = 3;
   int unknown_ = -1;  // first unknown of the pulled particle; -1: none
   Eigen::Vector3d cursor_ = Eigen::Vector3d::Zero();
-  std::vector<int> diagonal_;  // value index of each diagonal entry of the pattern
 };
 
 }  // namespace springlab

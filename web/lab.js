@@ -1,5 +1,7 @@
 // springlab's lab page (docs/browser-lab.md): panels running one built-in
-// scene under different integrators, in step, drawn on 2-D canvases. The
+// scene under different integrators, in step, drawn on 2-D canvases:
+// springs and element edges as lines, rigid bodies as shaded surfaces,
+// fluids as dots coloured by speed, contact planes as a floor. The
 // physics is the C++ core compiled to WebAssembly (web/lab_api.cc); this
 // file only draws, reads the controls and decides how many steps each frame
 // takes. Its API, window.springlab, is what the tests drive.
@@ -7,7 +9,8 @@
 
 (function () {
   const DT_MIN = 1e-5, DT_MAX = 1e-1;    // the dt slider's ends [s]
-  const STEP_BUDGET_MS = 12;             // of a 16.7 ms frame, for stepping all panels
+  const STEP_BUDGET_MS = 10;             // of a 16.7 ms frame, for stepping all panels
+                                         // (drawing two cloth 32 panels takes ~4 ms more)
   const PLOT_SAMPLES = 600;              // energy samples kept per panel
   const VIEW_W = 440, VIEW_H = 360, PLOT_H = 90;
   const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
@@ -21,9 +24,13 @@
     paused: false, panels: [],
     view: null,           // projection shared by the panels
     drag: null,           // {particle, depth}
+    speedMax: 0,          // the fluid colours' scale: the fastest particle seen [m/s]
   };
-  const stats = { frames: 0, steps: 0, wanted: 0, stepMs: 0, realS: 0, simS: 0,
-                  fps: 0, stepsPerFrame: 0, wantedPerFrame: 0, msPerStep: 0, speed: 1, slowed: false };
+  // Per half second: frames, steps taken and wanted, time in steps and in
+  // drawing (where a frame's time goes), simulated and real time.
+  const stats = { frames: 0, steps: 0, wanted: 0, stepMs: 0, drawMs: 0, realS: 0, simS: 0,
+                  fps: 0, stepsPerFrame: 0, wantedPerFrame: 0, msPerStep: 0, stepMsPerFrame: 0,
+                  drawMsPerFrame: 0, speed: 1, slowed: false, framesTotal: 0 };
   let owed = 0;           // simulated time the frames still owe [s]
   let msPerStep = null;   // measured cost of one step of every panel [ms]
 
@@ -93,16 +100,12 @@
         p.state = panelState(p.id);
         p.e0 = p.state.total;
         attachMouse(p);
-        if (info.particles === 0) {
-          status.textContent = "This scene has rigid bodies only: the page draws particles and " +
-                               "their springs and elements (the energy plot still runs).";
-        }
       }
       lab.panels.push(p);
     });
     const first = lab.panels.find((p) => p.info);
     lab.view = first ? makeView(first) : null;
-    owed = 0; msPerStep = null;
+    owed = 0; msPerStep = null; lab.speedMax = 0;
     drawLimits();
     drawAll();
   }
@@ -125,23 +128,30 @@
 
   // ------------------------------------------------------------ drawing
   // A fixed view: rotated (yaw, pitch) for 3-D scenes, scaled to fit the
-  // first panel's initial state with room below for what falls.
+  // first panel's initial state (and the contact planes' points) with room
+  // below for what falls freely (gravity, no plane, no fluid in its box).
   function makeView(p) {
-    const pos = positions(p), n = p.info.particles;
+    const pos = positions(p), n = p.info.points;
     const three = p.info.dimension === 3;
     const yaw = three ? -0.5 : 0, pitch = three ? 0.35 : 0;
     const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
     // World -> view: turn about y by yaw, then about x by pitch.
     const R = [[cy, 0, sy], [-sp * sy, cp, sp * cy], [-cp * sy, -sp, cp * cy]];
     const lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
-    for (let i = 0; i < n; ++i) {
-      const v = rotate(R, pos, i);
+    const fit = (v) => {
       for (let a = 0; a < 2; ++a) { lo[a] = Math.min(lo[a], v[a]); hi[a] = Math.max(hi[a], v[a]); }
-    }
+    };
+    for (let i = 0; i < n; ++i) fit(rotate(R, pos, i));
+    for (const plane of p.info.planes) fit(rotate(R, plane.point, 0));
     const size = Math.max(hi[0] - lo[0], hi[1] - lo[1], 1e-3);
-    const scale = Math.min(VIEW_W, VIEW_H) / (2.2 * size);
-    const cx = (lo[0] + hi[0]) / 2, cyv = (lo[1] + hi[1]) / 2 - 0.45 * size;
-    return { R, scale, cx, cy: cyv };
+    const falls = p.info.gravity.some((g) => g !== 0) && p.info.planes.length === 0 &&
+                  p.info.fluid.particles.length === 0;
+    // A fluid stays in its box (walls included in the fit): fill the view.
+    const scale = p.info.fluid.particles.length > 0
+        ? Math.min(VIEW_W / (hi[0] - lo[0]), VIEW_H / (hi[1] - lo[1])) / 1.1
+        : Math.min(VIEW_W, VIEW_H) / ((falls ? 2.2 : 1.3) * size);
+    const cx = (lo[0] + hi[0]) / 2, cyv = (lo[1] + hi[1]) / 2 - (falls ? 0.45 * size : 0);
+    return { R, scale, cx, cy: cyv, size };
   }
   function rotate(R, pos, i) {
     const x = pos[3 * i], y = pos[3 * i + 1], z = pos[3 * i + 2];
@@ -159,46 +169,152 @@
     const v = [(sx - VIEW_W / 2) / w.scale + w.cx, -(sy - VIEW_H / 2) / w.scale + w.cy, depth];
     return [0, 1, 2].map((c) => R[0][c] * v[0] + R[1][c] * v[1] + R[2][c] * v[2]);
   }
+  // The panel's points (particles, then the bodies' surface vertices) and
+  // their speeds: views of the module's memory, valid until the next step.
   function positions(p) {
     const at = M.ccall("lab_panel_positions", "number", ["number"], [p.id]);
-    return new Float64Array(M.HEAPF64.buffer, at, 3 * p.info.particles);
+    return new Float64Array(M.HEAPF64.buffer, at, 3 * p.info.points);
+  }
+  function speeds(p) {
+    const at = M.ccall("lab_panel_speeds", "number", ["number"], [p.id]);
+    return new Float64Array(M.HEAPF64.buffer, at, p.info.points);
   }
 
+  // A contact plane: a square of side 1.2 x the view's size about its
+  // point, spanned by two unit tangents t1, t2 (n x t1); in a planar scene
+  // the square is seen edge on, a line.
+  function drawPlane(g, plane) {
+    const n = plane.normal, c = plane.point, h = 0.6 * lab.view.size;
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                             a[0] * b[1] - a[1] * b[0]];
+    const unit = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+    const t1 = unit(cross(n, Math.abs(n[2]) < 0.9 ? [0, 0, 1] : [1, 0, 0])), t2 = cross(n, t1);
+    const corner = (a, b) => toScreen(rotate(lab.view.R,
+        [0, 1, 2].map((k) => c[k] + h * (a * t1[k] + b * t2[k])), 0));
+    const q = [corner(-1, -1), corner(1, -1), corner(1, 1), corner(-1, 1)];
+    g.beginPath(); g.moveTo(q[0][0], q[0][1]);
+    for (let k = 1; k < 4; ++k) g.lineTo(q[k][0], q[k][1]);
+    g.closePath();
+    g.fillStyle = "#e8e4dc"; g.fill();
+    g.strokeStyle = "#a89f91"; g.lineWidth = 1.5; g.stroke();
+  }
+
+  // The bodies' surface triangles, far ones first (painter's order by mean
+  // view depth), each shaded by how squarely it faces the viewer
+  // (|n . view| / |n|, n its normal) and outlined in the panel's colour.
+  function drawFaces(g, p, pos, sx, sy, color) {
+    const f = p.info.faces;
+    if (f.length === 0) return;
+    const R = lab.view.R, list = [];
+    for (let k = 0; k < f.length; k += 3) {
+      const v = [f[k], f[k + 1], f[k + 2]].map((i) => rotate(R, pos, i));
+      const e1 = [0, 1, 2].map((a) => v[1][a] - v[0][a]);
+      const e2 = [0, 1, 2].map((a) => v[2][a] - v[0][a]);
+      const nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2];
+      const nz = e1[0] * e2[1] - e1[1] * e2[0], area = Math.hypot(nx, ny, nz);
+      list.push({ k, depth: v[0][2] + v[1][2] + v[2][2],
+                  light: area > 0 ? Math.abs(nz) / area : 0 });
+    }
+    list.sort((a, b) => a.depth - b.depth);
+    g.lineWidth = 1; g.strokeStyle = color;
+    for (const face of list) {
+      const a = f[face.k], b = f[face.k + 1], c = f[face.k + 2];
+      g.beginPath();
+      g.moveTo(sx[a], sy[a]); g.lineTo(sx[b], sy[b]); g.lineTo(sx[c], sy[c]);
+      g.closePath();
+      g.globalAlpha = 1; g.fillStyle = "#fff"; g.fill();
+      g.globalAlpha = 0.25 + 0.5 * face.light; g.fillStyle = color; g.fill();
+      g.globalAlpha = 1; g.stroke();
+    }
+  }
+
+  // Blue (at rest) through green and yellow to red (the fastest seen), in
+  // SPEED_LEVELS steps: one path per colour.
+  const SPEED_LEVELS = 24;
+  const speedColor = (level) =>
+      "hsl(" + Math.round(240 * (1 - level / (SPEED_LEVELS - 1))) + ",85%,45%)";
+
+  // Screen coordinates of every point into p.sx, p.sy (kept per panel: a
+  // frame allocates nothing per point).
+  function project(p, pos) {
+    const N = p.info.points, w = lab.view, R = w.R;
+    if (!p.sx || p.sx.length !== N) { p.sx = new Float64Array(N); p.sy = new Float64Array(N); }
+    const sx = p.sx, sy = p.sy, cx = VIEW_W / 2, cy = VIEW_H / 2;
+    for (let i = 0; i < N; ++i) {
+      const x = pos[3 * i], y = pos[3 * i + 1], z = pos[3 * i + 2];
+      sx[i] = cx + (R[0][0] * x + R[0][1] * y + R[0][2] * z - w.cx) * w.scale;
+      sy[i] = cy - (R[1][0] * x + R[1][1] * y + R[1][2] * z - w.cy) * w.scale;
+    }
+  }
+
+  // A panel is drawn again only when what it shows changed: its state (a
+  // step), the mouse's spring, the shared speed scale (paused: nothing).
   function drawPanel(p) {
+    const key = [p.state ? p.state.steps : -1, p.state ? p.state.status : "", !!lab.view,
+                 lab.drag ? lab.drag.screen.join() : "", lab.speedMax].join("|");
+    if (p.drawn === key) return;
+    p.drawn = key;
     const g = p.view.getContext("2d");
     g.clearRect(0, 0, VIEW_W, VIEW_H);
     if (!p.id || !lab.view) return;
     const pos = positions(p), n = p.info.particles;
-    const pts = new Array(n);
-    for (let i = 0; i < n; ++i) pts[i] = toScreen(rotate(lab.view.R, pos, i));
+    project(p, pos);
+    const sx = p.sx, sy = p.sy;
     const color = COLORS[p.index % COLORS.length];
+    for (const plane of p.info.planes) drawPlane(g, plane);
+    if (!p.edgeList) p.edgeList = Int32Array.from(p.info.edges.flat());
+    const e = p.edgeList;
     g.strokeStyle = color; g.globalAlpha = 0.55; g.lineWidth = 1;
     g.beginPath();
-    for (const [a, b] of p.info.edges) { g.moveTo(pts[a][0], pts[a][1]); g.lineTo(pts[b][0], pts[b][1]); }
+    for (let k = 0; k < e.length; k += 2) {
+      g.moveTo(sx[e[k]], sy[e[k]]); g.lineTo(sx[e[k + 1]], sy[e[k + 1]]);
+    }
     g.stroke();
     g.globalAlpha = 1;
-    if (p.info.edges.length === 0 || n <= 64) {
+    drawFaces(g, p, pos, sx, sy, color);
+    const fluid = p.info.fluid.particles;
+    if (fluid.length > 0) {
+      // Dots of the particle spacing's size, coloured by speed on one scale
+      // for all panels (the fastest particle any panel has had).
+      const v = speeds(p);
+      for (const i of fluid) lab.speedMax = Math.max(lab.speedMax, v[i]);
+      if (!(lab.speedMax > 0)) lab.speedMax = 1e-9;
+      const r = Math.max(1.5, 0.5 * p.info.fluid.spacing * lab.view.scale);
+      const paths = Array.from({ length: SPEED_LEVELS }, () => new Path2D());
+      for (const i of fluid) {
+        const level = Math.round((SPEED_LEVELS - 1) * Math.min(1, v[i] / lab.speedMax));
+        paths[level].moveTo(sx[i] + r, sy[i]);
+        paths[level].arc(sx[i], sy[i], r, 0, 2 * Math.PI);
+      }
+      paths.forEach((path, level) => { g.fillStyle = speedColor(level); g.fill(path); });
+    } else if (n > 0 && (p.info.edges.length === 0 || n <= 64)) {
       g.fillStyle = color;
-      for (const q of pts) g.fillRect(q[0] - 2, q[1] - 2, 4, 4);
+      for (let i = 0; i < n; ++i) g.fillRect(sx[i] - 2, sy[i] - 2, 4, 4);
     }
-    g.fillStyle = "#000";
-    for (const f of p.info.fixed) g.fillRect(pts[f][0] - 3, pts[f][1] - 3, 6, 6);
+    // Fixed particles: black squares, or small grey ones when many (walls).
+    const many = p.info.fixed.length > 64, w = many ? 2 : 6;
+    g.fillStyle = many ? "#888" : "#000";
+    g.beginPath();
+    for (const f of p.info.fixed) g.rect(sx[f] - w / 2, sy[f] - w / 2, w, w);
+    g.fill();
     if (lab.drag) {
-      const q = pts[lab.drag.particle], c = lab.drag.screen;
+      const i = lab.drag.particle, c = lab.drag.screen;
       g.strokeStyle = "#e67e22"; g.lineWidth = 2;
-      g.beginPath(); g.moveTo(q[0], q[1]); g.lineTo(c[0], c[1]); g.stroke();
+      g.beginPath(); g.moveTo(sx[i], sy[i]); g.lineTo(c[0], c[1]); g.stroke();
     }
     if (p.state.status !== "completed") {
       g.fillStyle = "rgba(192,57,43,0.12)"; g.fillRect(0, 0, VIEW_W, VIEW_H);
     }
-    p.markEl.textContent = p.mark;
-    if (n === 0) { drawPlot(p); return; }
+    if (p.markEl.textContent !== p.mark) p.markEl.textContent = p.mark;
     const s = p.state, lim = p.limit;
     const limit = lim === Infinity ? "no step limit" :
                   Number.isNaN(lim) ? "step limit: not one number" :
                   lim === 0 ? "no stable step without damping" : "dt limit " + lim.toPrecision(3) + " s";
     p.status.textContent = "t = " + s.t.toFixed(4) + " s   E = " + fmt(s.total) + " J   " +
-        "(E0 " + fmt(p.e0) + ")\n" + p.info.integrator.stability_text + "; " + limit;
+        "(E0 " + fmt(p.e0) + ")\n" + p.info.integrator.stability_text + "; " + limit +
+        (fluid.length > 0 ?
+         "\ncolour: speed, blue 0 to red " + lab.speedMax.toPrecision(3) + " m/s" : "") +
+        (s.failure ? "\n" + s.failure : "");
     drawPlot(p);
   }
   const fmt = (x) => (x === null ? "inf" : Math.abs(x) >= 1e4 || (Math.abs(x) < 1e-3 && x !== 0) ?
@@ -255,18 +371,23 @@
       }
       stats.steps += n; stats.wanted += wanted; stats.simS += n * lab.dt;
     }
-    stats.frames += 1; stats.realS += elapsed;
+    stats.frames += 1; stats.framesTotal += 1; stats.realS += elapsed;
     if (stats.realS >= 0.5) {
       stats.fps = stats.frames / stats.realS;
       stats.stepsPerFrame = stats.steps / stats.frames;
       stats.wantedPerFrame = stats.wanted / stats.frames;
       stats.msPerStep = stats.steps ? stats.stepMs / stats.steps : 0;
+      stats.stepMsPerFrame = stats.stepMs / stats.frames;
+      stats.drawMsPerFrame = stats.drawMs / stats.frames;
       stats.speed = stats.simS / stats.realS;
       stats.slowed = stats.steps < stats.wanted;
       showSpeed();
-      Object.assign(stats, { frames: 0, steps: 0, wanted: 0, stepMs: 0, realS: 0, simS: 0 });
+      Object.assign(stats, { frames: 0, steps: 0, wanted: 0, stepMs: 0, drawMs: 0,
+                             realS: 0, simS: 0 });
     }
+    const t0 = performance.now();
     drawAll();
+    stats.drawMs += performance.now() - t0;
   }
 
   function showSpeed() {
@@ -434,6 +555,7 @@
       t: p.state ? p.state.t : null, steps: p.state ? p.state.steps : null,
       status: p.state ? p.state.status : null,
       diverged_at: p.state ? p.state.diverged_at : null,
+      failure: p.state ? p.state.failure : null,
       mark: p.markEl.textContent, total: p.state ? p.state.total : null,
       w_max: p.info ? p.info.w_max : null, dt_limit: p.info ? p.limit : null,
     }));

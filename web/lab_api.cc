@@ -6,6 +6,7 @@
 // {"error": "the command line's message"}.
 #include <emscripten/emscripten.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -15,10 +16,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "experiments/body_output.h"
 #include "experiments/simulation.h"
 #include "integrators/registry.h"
 #include "models/builtin_scenes.h"
+#include "models/contact.h"
 #include "models/fem.h"
+#include "models/fluids.h"
+#include "models/gravity.h"
 #include "models/springs.h"
 #include "web/lab_panel.h"
 
@@ -108,6 +113,32 @@ Json edges_json(const Scene& scene) {
   return out;
 }
 
+// The fluids' moving particles (scene indices), coloured by speed, and
+// their smallest spacing l (the dots' size); their fixed wall particles are
+// among the scene's fixed ones.
+Json fluid_json(const Scene& scene) {
+  Json particles = Json::array();
+  double spacing = 0.0;
+  for (const Fluid& f : scene.get<Fluids>()) {
+    for (int s = f.first; s < f.first + f.count; ++s) {
+      if (!scene.particles[s].fixed) particles.push_back(s);
+    }
+    spacing = spacing > 0.0 ? std::min(spacing, f.spacing) : f.spacing;
+  }
+  return {{"particles", particles}, {"spacing", spacing}};
+}
+
+// The contact planes (the ground, a slope), drawn as lines: a point and the normal.
+Json planes_json(const Scene& scene) {
+  Json out = Json::array();
+  for (const Plane& plane : scene.get<Planes>()) {
+    const Eigen::Vector3d n = plane.normal.normalized();
+    out.push_back({{"point", {plane.point.x(), plane.point.y(), plane.point.z()}},
+                   {"normal", {n.x(), n.y(), n.z()}}});
+  }
+  return out;
+}
+
 std::map<int, std::unique_ptr<LabPanel>>& panels() {
   static std::map<int, std::unique_ptr<LabPanel>> all;
   return all;
@@ -182,14 +213,18 @@ EMSCRIPTEN_KEEPALIVE const char* lab_run(const char* request_text) {
                    {"t_final", r.t_final},
                    {"energy_initial", r.energy_initial},
                    {"energy_final", r.energy_final},
-                   {"x", positions_json(model, r.x_final)}});
+                   {"x", positions_json(model, r.x_final)},
+                   // As `springlab run --json`'s "bodies" (body_output.h).
+                   {"bodies", bodies_json(model, r.x_final, r.v_final)}});
   } catch (const std::exception& e) {
     return error_answer(e.what());
   }
 }
 
 // A live panel: {"scene", "params", "integrator", options} -> {"id", what
-// the page draws (particles, edges, fixed), "w_max", the method's info}.
+// the page draws ("particles"; "points": the particles, then the bodies'
+// surface vertices; "edges", "faces" (the bodies' triangles), "fixed",
+// "fluid", "planes"), "w_max", the method's info}.
 EMSCRIPTEN_KEEPALIVE const char* lab_panel_new(const char* request_text) {
   static int next_id = 1;
   try {
@@ -209,6 +244,14 @@ EMSCRIPTEN_KEEPALIVE const char* lab_panel_new(const char* request_text) {
     const int id = next_id++;
     Json info = {{"id", id},
                  {"particles", model.particle_count()},
+                 {"points", panel->points()},
+                 {"faces", panel->body_faces()},
+                 {"fluid", fluid_json(model.scene())},
+                 {"planes", planes_json(model.scene())},
+                 {"gravity", [&] {
+                    const Eigen::Vector3d& g = model.scene().get<Gravity>().acceleration;
+                    return Json::array({g.x(), g.y(), g.z()});
+                  }()},
                  {"dimension", model.dimension()},
                  {"fixed", fixed},
                  {"edges", edges_json(model.scene())},
@@ -246,10 +289,17 @@ EMSCRIPTEN_KEEPALIVE const char* lab_panel_state(int id) {
                  {"total", number(panel->total_energy())}});
 }
 
-// The last good state's positions: x y z per scene particle (z = 0 in 2-D).
+// The last good state's positions: x y z per point (z = 0 in 2-D): the
+// scene's particles, then the bodies' surface vertices.
 EMSCRIPTEN_KEEPALIVE const double* lab_panel_positions(int id) {
   LabPanel* panel = find_panel(id);
   return panel == nullptr ? nullptr : panel->positions().data();
+}
+
+// The last good state's speeds |v|, one per point.
+EMSCRIPTEN_KEEPALIVE const double* lab_panel_speeds(int id) {
+  LabPanel* panel = find_panel(id);
+  return panel == nullptr ? nullptr : panel->speeds().data();
 }
 
 // Pulls scene particle `particle` toward (x, y, z); 0 when it cannot be

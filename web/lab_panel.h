@@ -22,6 +22,9 @@
 
 namespace springlab {
 
+class VtkBodies;  // experiments/vtk_bodies.h (not included: its scene_io.h's Json
+                  // and bodies.h's Triangle would meet lab_api.cc's)
+
 struct PanelSettings {
   std::string scene;                                        // a built-in scene's name
   std::vector<std::pair<std::string, std::string>> params;  // its -p key=value pairs
@@ -39,6 +42,7 @@ class LabPanel {
   // unknown integrator or option, RunRefused where the method refuses the
   // scene (simulation.h).
   explicit LabPanel(const PanelSettings& settings);
+  ~LabPanel();
 
   // Up to `steps` steps of dt; stops at the first that diverges or fails
   // (the panel then keeps its last good state). Returns the steps taken.
@@ -52,8 +56,15 @@ class LabPanel {
   // Kinetic and total energy of the last good state (energies.h).
   double kinetic_energy() const { return energies_->kinetic(); }
   double total_energy() const { return energies_->total(); }
-  // The last good state's positions, scene order, x y z per particle.
+  // What the page draws: the scene's particles, then the rigid bodies'
+  // surface vertices x = p + A X (vtk_bodies.h), in scene order.
+  int points() const { return points_; }
+  // The last good state's positions, x y z per point, and speeds |v| per
+  // point (a fluid's particles are coloured by it).
   const std::vector<double>& positions() const { return positions_; }
+  const std::vector<double>& speeds() const { return speeds_; }
+  // The bodies' surface triangles, numbered as points() (3 per triangle).
+  std::vector<int> body_faces() const;
 
   const ElasticModel& model() const { return *model_; }
   const Integrator& integrator() const { return *integrator_; }
@@ -65,6 +76,8 @@ class LabPanel {
   void store_good_state();
 
   std::unique_ptr<ElasticModel> model_;
+  std::unique_ptr<VtkBodies> bodies_;  // null: the scene has no rigid bodies
+  int points_ = 0;
   double w_max_ = 0.0;
   std::unique_ptr<CursorSpring> cursor_;
   std::unique_ptr<Integrator> integrator_;
@@ -77,7 +90,8 @@ class LabPanel {
   long steps_ = 0;  // steps in all
   Vector x_good_, v_good_, x_next_, v_next_;
   std::optional<Energies> energies_;
-  std::vector<double> positions_;
+  std::vector<double> positions_, speeds_;
+  Eigen::MatrixXd body_x_, body_v_;  // scratch: the bodies' surface vertices
 };
 
 }  // namespace springlab

@@ -99,10 +99,10 @@ SPRINGLAB_LANES_INLINE void stretch(const T (&R)[9], const T (&F)[9], T (&S)[9])
 }
 
 // What a material derives from a 3 x 3 F first, the costly step its
-// energy, stress and tangent blocks share (MaterialModel::derive3):
+// energy, stress and tangent blocks share (Keeps, tet_kernel.h):
 // corotated's rotation R of F = R S (about 50 ns; S follows from R and F in
 // a few dozen flops, stretch), neo-Hookean's ln J (a logarithm, about
-// 12 ns). Each model fills the members it uses; the tetrahedra keep each
+// 12 ns). The kernel (tet_kernel.h) fills the one a material keeps; the tetrahedra keep each
 // element's between calls at one state (tet_force.cc).
 struct Derived3 {
   Eigen::Matrix3d R;   // F = R S (corotated)
@@ -127,7 +127,7 @@ Mat nearest_unit_volume(const Mat& F);
 
 // volume() and polar() of a 3 x 3 F with fixed sizes, so that a material's
 // P, written once as a template on the matrix type, also has a fixed-size
-// instance (MaterialModel::P3).
+// instance (the tetrahedra's P, tet_kernel.h).
 struct Volume3 {
   double J = 0.0;
   Eigen::Matrix3d g;

@@ -4,24 +4,38 @@
 //
 // F is d x k: square for solids (2 x 2 plane strain, 3 x 3 tetrahedra) and
 // 3 x 2 for membranes (triangles in 3-D: in-plane stretch and shear only).
-// Every formula below is written for any of these shapes, with C = F^T F
+// Every formula is written for any of these shapes, with C = F^T F
 // (k x k), I_C = tr C and J the element's area or volume ratio
-// (kinematics.h). Each material lives in its own file and registers a
-// MaterialModel in material_registry.cc (one line).
+// (kinematics.h).
 //
-// Derivatives: each model gives P and the directional derivative
-// dP = dP/dF [dF] in closed form (the differential of its P formula); the
-// tangent dPdF, a (d k) x (d k) matrix on vec(F) (column-major), is
-// assembled from dP along each basis direction of F (dPdF below), so one
-// formula per model serves every shape.
+// A material is one class in one file (as in HOBAK, Kim and Eberle,
+// "Dynamic Deformables", SIGGRAPH course 2022: one class per energy with
+// Psi, PK1 and Hessian), static members only:
+//
+//   struct StVK {
+//     static constexpr MaterialFacts facts = {.name = "stvk", .formula = "..."};
+//     static double Psi(const Mat& F, const Lame& m);              // Psi(F)
+//     static Mat P(const Mat& F, const Lame& m);                   // P = dPsi/dF
+//     static Mat dP(const Mat& F, const Mat& dF, const Lame& m);  // dP = (dP/dF)[dF]
+//   };
+//   SPRINGLAB_MATERIAL(StVK, stvk)  // tet_kernel.h: registers it as stvk_material()
+//
+// and one line in material_registry.cc. dP is the differential of the P
+// formula, in closed form; dPdF (below) assembles the tangent from it, so
+// one formula serves every shape. The tetrahedra's kernel (tet_kernel.h)
+// is generated from these three; a class may add, for 3 x 3 F only, what
+// the kernel cannot derive fast (tet_kernel.h lists the optional members):
+// P as a template on the matrix type (a fixed-size instance), its tangent
+// contracted with two rest-shape gradients in closed form (`blocks`,
+// tangent3.h), and which costly quantity of F its Psi, P and blocks share
+// (`keeps`: the rotation of F = R S, or ln J), which the tetrahedra keep per
+// element and derive in vector lanes.
 #pragma once
 
 #include <Eigen/Core>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include "models/materials/lanes.h"  // kLanes
 
 namespace springlab {
 
@@ -40,9 +54,8 @@ struct Lame {
 };
 Lame lame(double young, double poisson);
 
-struct Derived3;  // what a model derives from a 3 x 3 F first (kinematics.h)
-
-struct MaterialModel {
+// What a material states about itself, beside its formulas.
+struct MaterialFacts {
   std::string_view name;  // "neo-hookean": the "model" of a scene's material
   std::string_view formula;  // Psi, for `springlab list` and docs/physics.md
   bool membranes = true;  // defined for 3 x 2 F (linear: not, docs/physics.md "Finite elements")
@@ -56,59 +69,18 @@ struct MaterialModel {
   double min_poisson = -1.0;
   bool unstable_in_tetrahedra_only = false;
   std::string_view unstable_why = {};
-  // Psi(F); +infinity where the model has no energy (neo-Hookean, J <= 0).
-  double (*Psi)(const Mat& F, const Lame& m) = nullptr;
-  // P = dPsi/dF (d x k).
+};
+
+struct TetKernel;  // tet_kernel.h
+
+// A registered material as the rest of the code sees it: its facts, the
+// plain Psi, P and dP of any shape of F (fem_force.cc, the reference), and
+// the tetrahedra's kernel, all generated from its class (tet_kernel.h).
+struct MaterialModel : MaterialFacts {
+  double (*Psi)(const Mat& F, const Lame& m) = nullptr;  // +infinity where undefined
   Mat (*P)(const Mat& F, const Lame& m) = nullptr;
-  // The same P for a 3 x 3 F with fixed sizes (the tetrahedra's fast path):
-  // each model writes P once, as a template on the matrix type, and
-  // registers both instances. nullptr: P.
-  Eigen::Matrix3d (*P3)(const Eigen::Matrix3d& F, const Lame& m) = nullptr;
-  // dP = (dP/dF)[dF], the change of P along dF (d x k).
   Mat (*dP)(const Mat& F, const Mat& dF, const Lame& m) = nullptr;
-  // The tetrahedra's fast path (tet_force.cc): for the rows d_1, d_2, d_3
-  // of D = Dm^-1, the 9 x 9 matrix whose 3 x 3 block (i, j) is
-  //   A(d_i, d_j)_rs = sum_cd (d_i)_c (dP_rc / dF_sd) (d_j)_d,
-  // the tangent contracted with two rest-shape gradients (tangent3.h; the
-  // "constitutive component" of the element's tangent matrix, Bonet and
-  // Wood 2008), in closed form. nullptr: contracted from dPdF. The shared
-  // tests check it against the contraction of the dPdF assembled from dP.
-  // Any three rows serve (the blocks are bilinear in them): tet_force.cc
-  // passes Dm^-1 scaled by sqrt(W), which scales the blocks by W.
-  Tangent3 (*tangent_blocks3)(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D,
-                              const Lame& m) = nullptr;
-  // A model whose energy, P and blocks of a 3 x 3 F first derive something
-  // costly from F (Derived3, kinematics.h: corotated's rotation R of
-  // F = R S, neo-Hookean's ln J) names that step derive3 and also gives
-  // Psi, P and the blocks with its result passed in, so that a tetrahedron
-  // evaluated several times at one state (an implicit method's line search
-  // asks for the energy, then the force, then dF/dx at the point it
-  // accepts) derives it once: tet_force.cc keeps each element's. Its P3
-  // and tangent_blocks3 derive and call these (the same result bit for bit,
-  // kept or not), and the tetrahedra take its energy from Psi3_derived
-  // either way. nullptr: nothing to keep.
-  void (*derive3)(const Eigen::Matrix3d& F, Derived3& d) = nullptr;
-  double (*Psi3_derived)(const Eigen::Matrix3d& F, const Derived3& d, const Lame& m) = nullptr;
-  Eigen::Matrix3d (*P3_derived)(const Eigen::Matrix3d& F, const Derived3& d,
-                                const Lame& m) = nullptr;
-  Tangent3 (*tangent_blocks3_derived)(const Eigen::Matrix3d& F, const Derived3& d,
-                                      const Eigen::Matrix3d& D, const Lame& m) = nullptr;
-  // Optional, with derive3: derive3 and tangent_blocks3_derived for
-  // kLanes elements at once, in vector lanes (lanes.h), lane l's result bit
-  // for bit the one-element function's for element l (the shared tests
-  // check it). The tetrahedra call them kLanes elements at a time where a
-  // model has them (a pointer may repeat, to fill the lanes). The blocks
-  // stay in lanes: entry k of element l's 9 x 9 matrix (column-major, as
-  // in a Tangent3) is lane l of K[k], K[k][l].
-  void (*derive3_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
-                        Derived3* const (&d)[kLanes]) = nullptr;
-  // D and the Lame parameters come in lanes (D[3 r + c][l] is D(r, c) of
-  // element l): they are constants of the elements, which the tetrahedra
-  // arrange so once.
-  void (*tangent_blocks3_derived_lanes)(const Eigen::Matrix3d* const (&F)[kLanes],
-                                        const Derived3* const (&d)[kLanes],
-                                        const Lanes (&D)[9], const Lanes& mu,
-                                        const Lanes& lambda, Lanes (&K)[81]) = nullptr;
+  const TetKernel* tet = nullptr;  // 3 x 3 F: tet_force.cc
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
@@ -121,11 +93,5 @@ std::string material_model_names();
 // column from dP along each basis matrix E_rc: the reference every closed
 // form is checked against.
 Tangent dPdF(const MaterialModel& model, const Mat& F, const Lame& m);
-// P of a 3 x 3 F: the model's fixed-size instance when it has one, else P.
-Eigen::Matrix3d P3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m);
-// The blocks A(d_i, d_j) of a 3 x 3 F (above): the model's closed form when
-// it has one, else the contraction of dPdF.
-Tangent3 tangent_blocks3(const MaterialModel& model, const Eigen::Matrix3d& F,
-                         const Eigen::Matrix3d& D, const Lame& m);
 
 }  // namespace springlab

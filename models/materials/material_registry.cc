@@ -1,24 +1,27 @@
 // The registered material models (material.h). Adding one: its file (a
-// function returning its MaterialModel, like the ones below) and one line in
-// this table.
+// class with SPRINGLAB_MATERIAL(Class, name) at its end, tet_kernel.h) and
+// one line X(name) in this table.
 
 #include "models/materials/material.h"
 #include "models/materials/tangent3.h"
 
 namespace springlab {
 
-// Each in its own file.
-const MaterialModel& linear_material();              // linear.cc
-const MaterialModel& corotated_material();           // corotated.cc
-const MaterialModel& stvk_material();                // stvk.cc
-const MaterialModel& neo_hookean_material();         // neo_hookean.cc
-const MaterialModel& stable_neo_hookean_material();  // stable_neo_hookean.cc
+#define SPRINGLAB_MATERIALS(X) \
+  X(linear)                    \
+  X(corotated)                 \
+  X(stvk)                      \
+  X(neo_hookean)               \
+  X(stable_neo_hookean)
+
+// NAME_material(), each in NAME.cc.
+#define SPRINGLAB_DECLARE_MATERIAL(NAME) const MaterialModel& NAME##_material();
+SPRINGLAB_MATERIALS(SPRINGLAB_DECLARE_MATERIAL)
 
 const std::vector<const MaterialModel*>& material_models() {
+#define SPRINGLAB_MATERIAL_ENTRY(NAME) &NAME##_material(),
   static const std::vector<const MaterialModel*> models = {
-      &linear_material(),      &corotated_material(),          &stvk_material(),
-      &neo_hookean_material(), &stable_neo_hookean_material(),
-  };
+      SPRINGLAB_MATERIALS(SPRINGLAB_MATERIAL_ENTRY)};
   return models;
 }
 
@@ -79,17 +82,6 @@ Tangent3 tangent_blocks(const Tangent3& T, const Eigen::Matrix3d& D) {
     }
   }
   return K;
-}
-
-Eigen::Matrix3d P3(const MaterialModel& model, const Eigen::Matrix3d& F, const Lame& m) {
-  if (model.P3 != nullptr) return model.P3(F, m);
-  return model.P(Mat(F), m);
-}
-
-Tangent3 tangent_blocks3(const MaterialModel& model, const Eigen::Matrix3d& F,
-                         const Eigen::Matrix3d& D, const Lame& m) {
-  if (model.tangent_blocks3 != nullptr) return model.tangent_blocks3(F, D, m);
-  return tangent_blocks(dPdF(model, Mat(F), m), D);
 }
 
 }  // namespace springlab

@@ -6,49 +6,13 @@
 // Defined for every F, inverted ones included (no logarithm): the energy
 // pushes an inverted element back instead of ending the run. The constant
 // makes Psi(I) = 0 and alpha makes P(I) = 0.
-#include "models/materials/kinematics.h"
-#include "models/materials/tangent3.h"
+#include "models/materials/tet_kernel.h"
 
 namespace springlab {
 namespace {
 
-double shifted_lambda(const Lame& m) { return m.lambda + m.mu; }
-double alpha(const Lame& m) { return 1.0 + m.mu / shifted_lambda(m); }
-
-double Psi(const Mat& F, const Lame& m) {
-  const double J = volume(F).J;
-  const double l = shifted_lambda(m), a = alpha(m);
-  const double d = static_cast<double>(F.cols());
-  return 0.5 * m.mu * (F.squaredNorm() - d) + 0.5 * l * (J - a) * (J - a) -
-         m.mu * m.mu / (2.0 * l);
-}
-
-template <typename Matrix>
-Matrix P(const Matrix& F, const Lame& m) {
-  const auto v = volume(F);
-  return m.mu * F + shifted_lambda(m) * (v.J - alpha(m)) * v.g;
-}
-
-// dP = mu dF + lambda' (dJ g + (J - alpha) dg), dJ = g:dF.
-Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
-  const Volume v = volume(F);
-  return m.mu * dF + shifted_lambda(m) * (contract(v.g, dF) * v.g +
-                                          (v.J - alpha(m)) * volume_differential(F, dF));
-}
-
-// dPdF = mu I + lambda' g g^T + lambda' (J - alpha) H_J, g = vec(dJ/dF), so
-// (tangent3.h, with g's matrix the cofactor matrix G)
-//   A(a, b) = mu (a . b) I + lambda' (G a)(G b)^T - lambda' (J - alpha) [F (a x b)]x.
-Tangent3 tangent_blocks3(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
-  const double l = shifted_lambda(m);
-  const Volume3 v = volume(F);
-  return volumetric_blocks(F, v.g, D, m.mu, l, l * (v.J - alpha(m)));
-}
-
-}  // namespace
-
-const MaterialModel& stable_neo_hookean_material() {
-  static const MaterialModel model = {
+struct StableNeoHookean {
+  static constexpr MaterialFacts facts = {
       .name = "stable-neo-hookean",
       .formula = "mu/2 (I_C - d) + lambda'/2 (J - alpha)^2 - mu^2/(2 lambda'), "
                  "lambda' = lambda + mu, alpha = 1 + mu/lambda'",
@@ -60,13 +24,44 @@ const MaterialModel& stable_neo_hookean_material() {
       .unstable_in_tetrahedra_only = true,
       .unstable_why = "a tetrahedron collapsed to a point has the energy lambda' nu W < 0, below "
                       "its rest state's",
-      .Psi = Psi,
-      .P = P<Mat>,
-      .P3 = P<Eigen::Matrix3d>,
-      .dP = dP,
-      .tangent_blocks3 = tangent_blocks3,
   };
-  return model;
-}
+
+  static double shifted_lambda(const Lame& m) { return m.lambda + m.mu; }
+  static double alpha(const Lame& m) { return 1.0 + m.mu / shifted_lambda(m); }
+
+  static double Psi(const Mat& F, const Lame& m) {
+    const double J = volume(F).J;
+    const double l = shifted_lambda(m), a = alpha(m);
+    const double d = static_cast<double>(F.cols());
+    return 0.5 * m.mu * (F.squaredNorm() - d) + 0.5 * l * (J - a) * (J - a) -
+           m.mu * m.mu / (2.0 * l);
+  }
+
+  template <typename Matrix>
+  static Matrix P(const Matrix& F, const Lame& m) {
+    const auto v = volume(F);
+    return m.mu * F + shifted_lambda(m) * (v.J - alpha(m)) * v.g;
+  }
+
+  // dP = mu dF + lambda' (dJ g + (J - alpha) dg), dJ = g:dF.
+  static Mat dP(const Mat& F, const Mat& dF, const Lame& m) {
+    const Volume v = volume(F);
+    return m.mu * dF + shifted_lambda(m) * (contract(v.g, dF) * v.g +
+                                            (v.J - alpha(m)) * volume_differential(F, dF));
+  }
+
+  // dPdF = mu I + lambda' g g^T + lambda' (J - alpha) H_J, g = vec(dJ/dF), so
+  // (tangent3.h, with g's matrix the cofactor matrix G)
+  //   A(a, b) = mu (a . b) I + lambda' (G a)(G b)^T - lambda' (J - alpha) [F (a x b)]x.
+  static Tangent3 blocks(const Eigen::Matrix3d& F, const Eigen::Matrix3d& D, const Lame& m) {
+    const double l = shifted_lambda(m);
+    const Volume3 v = volume(F);
+    return volumetric_blocks(F, v.g, D, m.mu, l, l * (v.J - alpha(m)));
+  }
+};
+
+}  // namespace
+
+SPRINGLAB_MATERIAL(StableNeoHookean, stable_neo_hookean)
 
 }  // namespace springlab

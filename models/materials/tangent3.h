@@ -1,5 +1,5 @@
 // Pieces of the closed-form tangents of 3 x 3 deformation gradients
-// (material.h: the tetrahedra's fast path). dPdF is on vec(F) column-major
+// (tet_kernel.h: the tetrahedra's fast path). dPdF is on vec(F) column-major
 // (entry (r, c) of F at r + 3 c), so that dP = dPdF vec(dF); the fast path
 // needs it only contracted with two rest-shape gradients a, b (rows of
 // Dm^-1),

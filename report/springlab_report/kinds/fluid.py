@@ -88,7 +88,7 @@ def render(exp, ctx):
             (ax_z, "surge front", "Z = z / a"),
             (ax_e, "total energy change", "(E − E₀) / (M g a)"),
             (ax_w, "viscous work", "W_visc / (M g a)"),
-            (ax_n, "numerical: E − E₀ + W_visc", "/ (M g a)")):
+            (ax_n, "numerical: E − E₀ + W_visc", "(E − E₀ + W_visc) / (M g a)")):
         ax.set_title(title, loc="left", fontweight="bold")
         ax.set_xlabel("T = t √(2g/a)")
         ax.set_ylabel(ylabel)
