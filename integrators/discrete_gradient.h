@@ -39,17 +39,14 @@
 // tumbling box). A discrete gradient built from the energy's invariants
 // (the rigid bodies' rigidity, a function of A^T A: bodies.cc; Gonzalez
 // 1996, sec. 4) exerts none, and keeps L to round-off (3.0e-15 relative
-// over the same steps). Newton's matrix keeps those forces' midpoint
-// Hessian, an approximation of their discrete gradient's derivative off by
-// O(|D|): on the tumbling box at --newton-tol 1e-14, 6.0 Newton iterations
-// per step against 5.66 with the generic correction, but 7.0 linear solves
-// and force evaluations per step against 11.3 (the correction, and its
-// rank-one term, vanish: the rigidity is all of V). Along a rotation of a
-// body the midpoint Hessian has no stiffness while the discrete gradient's
-// derivative has one of order kappa V times the step's turn: at large
-// turns per step Newton converges slowly (box-chain at 10 ms fails at
-// t = 0.98 s; docs/integrators.md). On the frozen potential (below) they
-// take their midpoint force, whose potential it is.
+// over the same steps). Newton's matrix then has, for those forces, the
+// derivative of their discrete gradient with respect to the step's end
+// (ForceTerm::add_discrete_gradient_jacobian), not their midpoint Hessian,
+// which is off from it by O(|D|) times kappa V (bodies.cc: 40.5 Newton
+// iterations per step on box-chain at 10 ms with it, 4.18 with the exact
+// block); that derivative is not symmetric, so the exact matrix is
+// factored by LU. On the frozen potential (below) they take their midpoint
+// force and Hessian, whose potential it is.
 // The correction is left out when its numerator is below the round-off of
 // V(y) - V(x) (tiny steps, equilibrium): there it is noise, and the midpoint
 // rule's own energy error is smaller still.

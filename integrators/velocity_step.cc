@@ -117,10 +117,18 @@ void VelocityStep::matrix(const Vector& v, bool definite, NewtonLinearSolver& li
   const double t = t_ + s.t_eval_offset * h;
   stage(v);
   // The Newton matrix's coefficients of dF/dx (h^2 w b) and dF/dv (h w c).
+  // Where r has forces' own discrete gradients g_k(x_n, y) (own_), their
+  // part of J is h w dg_k/dy dy/dv = (h^2 w / 2) dg_k/dy, not their
+  // midpoint Hessian's (h^2 w / 4) H_k(x*): the matrix takes it from the
+  // model with the step's ends (newton_matrix.h).
   matrix_->set_point({.t = t, .x = &xs_, .v = &vs_, .h = h, .b = s.weight * s.b,
-                      .c = s.weight * s.c});
+                      .c = s.weight * s.c, .start = own_ ? x_ : nullptr, .end = &y_});
+  // That derivative is not symmetric (bodies.cc: its skew part is as large
+  // as its difference from the midpoint Hessian), so the exact matrix is
+  // then factored by LU; the definite one keeps its symmetric positive part.
+  const bool own_exact = own_ && !definite;
   SparseMatrix& jacobian =
-      linear.matrix(definite, model_->system().jacobian_symmetric(), *matrix_);
+      linear.matrix(definite, model_->system().jacobian_symmetric() && !own_exact, *matrix_);
   matrix_->assemble(definite, jacobian);
   // The discrete gradient's correction c D (c = correction_) has the
   // derivative (h^2/2) (c I + D (w - 2 c D)^T / |D|^2) with respect to v,

@@ -361,6 +361,39 @@ void ElasticModel::add_own_discrete_gradient_difference(double t, const Vector& 
   f += f_all_.head(n);
 }
 
+void ElasticModel::add_own_discrete_gradient_jacobian_difference(double t, const Vector& x,
+                                                                 const Vector& x_m,
+                                                                 const Vector& y, bool definite,
+                                                                 double s,
+                                                                 SparseMatrix& out) const {
+  // -dF_k/dx(x_m) (exact or definite), then -2 dg_k/dy(x, y), of the terms
+  // with their own discrete gradient, on out's pattern (the model's).
+  const Eigen::Index n = dofs();
+  own_values_.setZero(out.nonZeros());
+  x_all_.head(n) = x_m;
+  const Configuration mid = stored_configuration(t);
+  for (const auto& term : terms_) {
+    if (!term->has_discrete_gradient()) continue;
+    if (definite) {
+      term->add_definite_stiffness(mid, own_values_.data());
+    } else {
+      term->add_jacobians(mid, own_values_.data(), nullptr);
+    }
+  }
+  own_values_ = -own_values_;
+  x_all_.head(n) = x;
+  y_all_.head(n) = y;
+  const Configuration from = stored_configuration(t);
+  Configuration to = from;
+  to.x = y_all_.data();
+  for (const auto& term : terms_) {
+    if (term->has_discrete_gradient()) {
+      term->add_discrete_gradient_jacobian(from, to, definite, own_values_.data());
+    }
+  }
+  Eigen::Map<Vector>(out.valuePtr(), out.nonZeros()) += s * own_values_;
+}
+
 Eigen::MatrixXd ElasticModel::scene_positions(const Vector& x) const {
   const int dim = order_.dim;
   Eigen::MatrixXd out(particle_count(), dim);

@@ -48,6 +48,9 @@ class ElasticModel final : public MechanicalSystem {
   bool has_own_discrete_gradients() const override { return has_own_discrete_gradients_; }
   void add_own_discrete_gradient_difference(double t, const Vector& x, const Vector& x_m,
                                             const Vector& y, Vector& f) const override;
+  void add_own_discrete_gradient_jacobian_difference(double t, const Vector& x, const Vector& x_m,
+                                                     const Vector& y, bool definite, double s,
+                                                     SparseMatrix& out) const override;
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
   bool pattern_varies() const override { return pattern_varies_; }
   long pattern_version() const override { return pattern_version_; }
@@ -146,6 +149,8 @@ class ElasticModel final : public MechanicalSystem {
   mutable Vector x_all_, v_all_, f_all_;
   // The second configuration of a discrete gradient (y), all particles.
   mutable Vector y_all_;
+  // Scratch values on the pattern (add_own_discrete_gradient_jacobian_difference).
+  mutable Vector own_values_;
   bool has_own_discrete_gradients_ = false;
   // projective_form and laplacian_form: the stiff conservative terms'
   // distance constraints, and their elements in the form asked for; false

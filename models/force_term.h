@@ -180,6 +180,17 @@ class ForceTerm {
   virtual bool has_discrete_gradient() const { return false; }
   virtual void add_discrete_gradient_force(const Configuration& /*x*/, const Configuration& /*y*/,
                                            double* /*f*/) const {}
+  // The Jacobian of that force for Newton's matrix of the discrete-gradient
+  // step, on the term's declared blocks of the pattern: the derivative of
+  // -g(x, 2 m - x) with respect to the midpoint m = (x + y) / 2, x held,
+  //   dfdm += -2 dg/dy (x, y),
+  // which at y = x is add_jacobians' dF/dx (2 dg/dy = the Hessian of V
+  // there). It need not be symmetric (the step's matrix is then factored
+  // by LU); with `definite`, a symmetric negative semidefinite part of it,
+  // as add_definite_stiffness gives of dF/dx.
+  virtual void add_discrete_gradient_jacobian(const Configuration& /*x*/,
+                                              const Configuration& /*y*/, bool /*definite*/,
+                                              double* /*dfdm*/) const {}
   // Whether potential_energy can be +infinity (MechanicalSystem::
   // has_forbidden_states).
   virtual bool forbids_states() const { return false; }

@@ -189,6 +189,17 @@ class MechanicalSystem {
   virtual void add_own_discrete_gradient_difference(double /*t*/, const Vector& /*x*/,
                                                     const Vector& /*x_m*/, const Vector& /*y*/,
                                                     Vector& /*f*/) const {}
+  // The Jacobian of that difference with respect to the midpoint, x held
+  // (y = 2 x_m - x), for the discrete-gradient step's Newton matrix:
+  //   out += s * sum over them of (-2 dg_k/dy (x, y) - dF_k/dx (t, x_m))
+  // on the pattern of jacobians(), which out has (ForceTerm::
+  // add_discrete_gradient_jacobian; not symmetric in general); with
+  // `definite`, both as definite_jacobians() has them (symmetric).
+  virtual void add_own_discrete_gradient_jacobian_difference(double /*t*/, const Vector& /*x*/,
+                                                             const Vector& /*x_m*/,
+                                                             const Vector& /*y*/,
+                                                             bool /*definite*/, double /*s*/,
+                                                             SparseMatrix& /*out*/) const {}
 
   // The shared pattern (union of both Jacobians' entries plus the full
   // diagonal), values all zero. Built once per scene, except for a system

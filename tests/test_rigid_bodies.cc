@@ -13,6 +13,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "experiments/body_output.h"
@@ -218,6 +219,96 @@ TEST(Rigidity, OwnDiscreteGradientIsExactAndTorqueFree) {
   }
 }
 
+// The own discrete gradient's Jacobian for Newton's matrix (bodies.cc
+// add_discrete_gradient_jacobian, through the model's
+// add_own_discrete_gradient_jacobian_difference): with dF/dx at the
+// midpoint, the difference turns the rigidity's part into -2 dg/dy, which
+// must match central differences of -g(x, 2 m - x) in m (1e-7 relative);
+// it is not symmetric (its skew part above 1e-2 of it here; the least of
+// the five trials: 1.9e-2). The difference itself is the closed form
+// -4 kappa V [dA D^T D / 4 + A_m (dA^T D + D^T dA) / 2] on random
+// directions (1e-10 relative); it vanishes at y = x; the definite variant
+// is symmetric and negative semidefinite.
+TEST(Rigidity, OwnDiscreteGradientJacobianMatchesCentralDifferences) {
+  const Body body = box({0.3, 0.2, 0.1}, 50.0);
+  const ElasticModel model(one_body(body));
+  const double kappa_v = body.rigidity * rigid_body(body).mass.volume;
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Vector v = model.initial_velocities();
+  auto affine = [](const Vector& q) {
+    Eigen::Matrix3d A;
+    for (int i = 0; i < 3; ++i) A.col(i) = q.segment<3>(3 + 3 * i);
+    return A;
+  };
+  for (int trial = 0; trial < 5; ++trial) {
+    Vector x = model.initial_positions(), y = x;
+    for (Eigen::Index k = 3; k < 12; ++k) x[k] += 0.4 * u(rng);
+    const Eigen::Matrix3d Q =
+        Eigen::AngleAxisd(u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .toRotationMatrix();
+    for (int i = 0; i < 4; ++i) y.segment<3>(3 * i) = Q * x.segment<3>(3 * i);
+    for (Eigen::Index k = 3; k < 12; ++k) y[k] += 0.1 * u(rng);
+    const Vector xm = 0.5 * (x + y);
+    // -g(x, 2 m - x) as the model gives it.
+    auto minus_g = [&](const Vector& m) {
+      Vector f, d = Vector::Zero(x.size());
+      model.force(0.0, m, v, f);
+      model.add_own_discrete_gradient_difference(0.0, x, m, 2.0 * m - x, d);
+      return Vector(f + d);
+    };
+    SparseMatrix dfdx, dfdv, replaced, unused;
+    model.jacobians(0.0, xm, v, &dfdx, &dfdv);
+    replaced = dfdx;
+    model.add_own_discrete_gradient_jacobian_difference(0.0, x, xm, y, false, 1.0, replaced);
+    const Eigen::MatrixXd K(replaced), K_mid(dfdx);
+    Eigen::MatrixXd fd(x.size(), x.size());
+    const double eps = 1e-6;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      Vector mp = xm, mm = xm;
+      mp[k] += eps;
+      mm[k] -= eps;
+      fd.col(k) = (minus_g(mp) - minus_g(mm)) / (2 * eps);
+    }
+    EXPECT_LT((K - fd).norm(), 1e-7 * fd.norm()) << "trial " << trial;
+    const double skew = 0.5 * (K - K.transpose()).norm() / K.norm();
+    EXPECT_GT(skew, 1e-2) << "trial " << trial;
+    RecordProperty("skew_" + std::to_string(trial), std::to_string(skew));
+    // The difference against the midpoint Hessian in closed form.
+    const Eigen::Matrix3d Am = 0.5 * (affine(x) + affine(y)), D = affine(y) - affine(x);
+    const Eigen::MatrixXd diff = K - K_mid;
+    for (int probe = 0; probe < 3; ++probe) {
+      Vector a = Vector::Zero(x.size());
+      for (Eigen::Index k = 3; k < 12; ++k) a[k] = u(rng);
+      auto closed = [&](const Vector& q) {  // -4 kappa V [...] applied to dA = q's columns
+        const Eigen::Matrix3d dA = affine(q);
+        const Eigen::Matrix3d M =
+            -4.0 * kappa_v *
+            (dA * D.transpose() * D / 4.0 + Am * (dA.transpose() * D + D.transpose() * dA) / 2.0);
+        Vector out = Vector::Zero(q.size());
+        for (int i = 0; i < 3; ++i) out.segment<3>(3 + 3 * i) = M.col(i);
+        return out;
+      };
+      EXPECT_LT((diff * a - closed(a)).norm(), 1e-10 * closed(a).norm()) << "trial " << trial;
+    }
+    // At y = x the difference vanishes.
+    SparseMatrix at_x, unused_x;
+    model.jacobians(0.0, x, v, &at_x, &unused_x);
+    const Eigen::MatrixXd K_x(at_x);
+    model.add_own_discrete_gradient_jacobian_difference(0.0, x, x, x, false, 1.0, at_x);
+    EXPECT_LT((Eigen::MatrixXd(at_x) - K_x).norm(), 1e-14 * K_x.norm()) << "trial " << trial;
+    // The definite variant: -K semidefinite.
+    SparseMatrix definite;
+    model.definite_jacobians(0.0, xm, v, &definite, &unused);
+    model.add_own_discrete_gradient_jacobian_difference(0.0, x, xm, y, true, 1.0, definite);
+    const Eigen::MatrixXd Kd = -Eigen::MatrixXd(definite);
+    EXPECT_LT((Kd - Kd.transpose()).norm(), 1e-12 * Kd.norm()) << "trial " << trial;
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Kd).eigenvalues()[0],
+              -1e-10 * Kd.norm())
+        << "trial " << trial;
+  }
+}
+
 // ---- Dynamics. ----
 
 // A rigid body's angular velocity in the body frame, from A^T dA/dt = [w_b]x.
@@ -344,7 +435,9 @@ TEST(RigidBodies, ImplicitMidpointAndDiscreteGradientConserveAngularMomentum) {
     ASSERT_EQ(r.stats.steps, 1000) << method;
     const Eigen::Vector3d L = momentum(model, r.x_final, r.v_final);
     EXPECT_LT((L - L0).norm() / L0.norm(), 1e-10) << method;
-    RecordProperty(method + "_L_drift", std::to_string((L - L0).norm() / L0.norm()));
+    std::ostringstream drift;
+    drift << (L - L0).norm() / L0.norm();
+    RecordProperty(method + "_L_drift", drift.str());
     RecordProperty(method + "_newton_per_step",
                    std::to_string(static_cast<double>(r.stats.newton_iterations) /
                                   static_cast<double>(r.stats.steps)));
