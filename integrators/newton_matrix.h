@@ -61,6 +61,13 @@ class NewtonMatrix final : public DefiniteMatrixSource {
     const Vector* x = nullptr;
     const Vector* v = nullptr;
     double h = 0.0, b = 0.0, c = 0.0;
+    // The discrete-gradient step with the forces' own discrete gradients
+    // (velocity_step.h): its start x_n and end y. J then has, for those
+    // forces, the derivative of their discrete gradient with respect to x
+    // in place of their dF/dx (MechanicalSystem::
+    // add_own_discrete_gradient_jacobian_difference); dfdx() keeps dF/dx.
+    const Vector* start = nullptr;
+    const Vector* end = nullptr;
   };
   void set_point(const Point& point) { point_ = point; }
   // out = J at the point, of the exact or the definite Jacobians; dF/dx

@@ -40,6 +40,10 @@ struct VelocityImplicitScheme {
   // Gonzalez's discrete gradient of V in place of grad V(x*) (needs the
   // midpoint's (a, b, c) = (1/4, 1/4, 1/2), t* = t_n + h/2).
   bool discrete_gradient = false;
+  // With it, the forces' own exact discrete gradients where they have one
+  // (ForceTerm::has_discrete_gradient: the rigidity); false: Gonzalez's
+  // for every force.
+  bool own_discrete_gradients = true;
   // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
   // are evaluated at the end (implicit Euler), 2 at the midpoint.
   double end = 1.0;
@@ -88,7 +92,9 @@ class VelocityStep final : public NewtonProblem {
   bool frozen() const { return frozen_; }
   void set_frozen_coefficient(double c) { frozen_c_ = c; }
   // At the start of an iteration on the frozen potential: the coefficient
-  // at the last residual()'s v, and r and Phi with it.
+  // at the last residual()'s v, and r and Phi with it. At the first
+  // iteration off it: r of the step at that v (where some forces have
+  // their own discrete gradient, which the frozen potential leaves out).
   void update_frozen(Vector& r, double& phi);
   // r at v with the coefficient of v, then frozen at that value.
   void refreeze_at(const Vector& v, Vector& r);
@@ -107,6 +113,14 @@ class VelocityStep final : public NewtonProblem {
   // coefficient c (0: left out), F at y, the rank-one term's vector z.
   Vector delta_, y_, f_end_, z_;
   double correction_ = 0.0;
+  // F with the own discrete gradients in place of those forces' midpoint
+  // values (MechanicalSystem::add_own_discrete_gradient_difference), when
+  // the last residual() used them (own_).
+  Vector f_own_;
+  bool own_ = false;
+  // Gonzalez's coefficient at the last stage, with the force f (F, or F
+  // with the own discrete gradients); 0 below round-off.
+  double coefficient(double t, const Vector& f) const;
   bool rank_one_ = false;  // the last matrix() has the term h c D's derivative
   // On the potential path the coefficient is frozen for each iteration
   // (r is then the gradient of the midpoint's potential + c |D|^2).

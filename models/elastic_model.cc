@@ -96,7 +96,9 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     symmetric_ = symmetric_ && term->symmetric_jacobians();
     derives_from_potentials_ = derives_from_potentials_ && term->derives_from_potentials();
     velocity_dependence_ = std::max(velocity_dependence_, term->velocity_dependence());
+    has_own_discrete_gradients_ = has_own_discrete_gradients_ || term->has_discrete_gradient();
   }
+  y_all_ = x_all_;  // the fixed tail, which never changes
   reads_velocity_ = velocity_dependence_ != VelocityDependence::kNone;
 
   const Configuration initial = configure(0.0, x0_, v0_);
@@ -333,6 +335,63 @@ double ElasticModel::nonconservative_power(double t, const Vector& x, const Vect
     if (!term->conservative()) term->add_force(c, f_all_.data());
   }
   return f_all_.head(dofs()).dot(v);
+}
+
+void ElasticModel::add_own_discrete_gradient_difference(double t, const Vector& x,
+                                                        const Vector& x_m, const Vector& y,
+                                                        Vector& f) const {
+  // -F_k(x_m), then -g_k(x, y), of the terms with their own discrete
+  // gradient (conservative: none reads v).
+  const Eigen::Index n = dofs();
+  f_all_.setZero();
+  x_all_.head(n) = x_m;
+  const Configuration mid = stored_configuration(t);
+  for (const auto& term : terms_) {
+    if (term->has_discrete_gradient()) term->add_force(mid, f_all_.data());
+  }
+  f_all_ = -f_all_;
+  x_all_.head(n) = x;
+  y_all_.head(n) = y;
+  const Configuration from = stored_configuration(t);
+  Configuration to = from;
+  to.x = y_all_.data();
+  for (const auto& term : terms_) {
+    if (term->has_discrete_gradient()) term->add_discrete_gradient_force(from, to, f_all_.data());
+  }
+  f += f_all_.head(n);
+}
+
+void ElasticModel::add_own_discrete_gradient_jacobian_difference(double t, const Vector& x,
+                                                                 const Vector& x_m,
+                                                                 const Vector& y, bool definite,
+                                                                 double s,
+                                                                 SparseMatrix& out) const {
+  // -dF_k/dx(x_m) (exact or definite), then -2 dg_k/dy(x, y), of the terms
+  // with their own discrete gradient, on out's pattern (the model's).
+  const Eigen::Index n = dofs();
+  own_values_.setZero(out.nonZeros());
+  x_all_.head(n) = x_m;
+  const Configuration mid = stored_configuration(t);
+  for (const auto& term : terms_) {
+    if (!term->has_discrete_gradient()) continue;
+    if (definite) {
+      term->add_definite_stiffness(mid, own_values_.data());
+    } else {
+      term->add_jacobians(mid, own_values_.data(), nullptr);
+    }
+  }
+  own_values_ = -own_values_;
+  x_all_.head(n) = x;
+  y_all_.head(n) = y;
+  const Configuration from = stored_configuration(t);
+  Configuration to = from;
+  to.x = y_all_.data();
+  for (const auto& term : terms_) {
+    if (term->has_discrete_gradient()) {
+      term->add_discrete_gradient_jacobian(from, to, definite, own_values_.data());
+    }
+  }
+  Eigen::Map<Vector>(out.valuePtr(), out.nonZeros()) += s * own_values_;
 }
 
 Eigen::MatrixXd ElasticModel::scene_positions(const Vector& x) const {

@@ -45,6 +45,12 @@ class ElasticModel final : public MechanicalSystem {
   // Power of the non-conservative forces (drag, spring damping, wind): the
   // rate at which they change the mechanical energy.
   double nonconservative_power(double t, const Vector& x, const Vector& v) const override;
+  bool has_own_discrete_gradients() const override { return has_own_discrete_gradients_; }
+  void add_own_discrete_gradient_difference(double t, const Vector& x, const Vector& x_m,
+                                            const Vector& y, Vector& f) const override;
+  void add_own_discrete_gradient_jacobian_difference(double t, const Vector& x, const Vector& x_m,
+                                                     const Vector& y, bool definite, double s,
+                                                     SparseMatrix& out) const override;
   const SparseMatrix& jacobian_pattern() const override { return pattern_; }
   bool pattern_varies() const override { return pattern_varies_; }
   long pattern_version() const override { return pattern_version_; }
@@ -141,6 +147,11 @@ class ElasticModel final : public MechanicalSystem {
   // Scratch: all particles, internal order. The fixed tail of x_all_ holds
   // the fixed positions and never changes; v_all_'s fixed tail stays 0.
   mutable Vector x_all_, v_all_, f_all_;
+  // The second configuration of a discrete gradient (y), all particles.
+  mutable Vector y_all_;
+  // Scratch values on the pattern (add_own_discrete_gradient_jacobian_difference).
+  mutable Vector own_values_;
+  bool has_own_discrete_gradients_ = false;
   // projective_form and laplacian_form: the stiff conservative terms'
   // distance constraints, and their elements in the form asked for; false
   // where a term has neither form (why says which).

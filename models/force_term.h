@@ -167,6 +167,30 @@ class ForceTerm {
   // MechanicalSystem::derives_from_potentials). Conservative terms do;
   // dissipative ones that do (drag, wind) say so and supply W.
   virtual bool derives_from_potentials() const { return conservative(); }
+  // A conservative term may give its own discrete gradient of
+  // potential_energy between two configurations x and y: a vector g with
+  //   g . (y - x) = V(y) - V(x)   exactly, and g = grad V(x) when y = x
+  // (Gonzalez, "Time integration and discrete Hamiltonian systems", J.
+  // Nonlinear Sci. 6, 1996, Def. 3.1). The discrete-gradient method uses it
+  // in place of its generic one for this term's share of the energy: a
+  // term built from invariants (the rigid bodies' rigidity, a function of
+  // A^T A) so keeps the first integrals its energy's symmetry gives
+  // (Gonzalez 1996, sec. 4; Gonzalez and Simo 1996). x and y share t and
+  // the fixed particles. f += -g (the discrete gradient as a force).
+  virtual bool has_discrete_gradient() const { return false; }
+  virtual void add_discrete_gradient_force(const Configuration& /*x*/, const Configuration& /*y*/,
+                                           double* /*f*/) const {}
+  // The Jacobian of that force for Newton's matrix of the discrete-gradient
+  // step, on the term's declared blocks of the pattern: the derivative of
+  // -g(x, 2 m - x) with respect to the midpoint m = (x + y) / 2, x held,
+  //   dfdm += -2 dg/dy (x, y),
+  // which at y = x is add_jacobians' dF/dx (2 dg/dy = the Hessian of V
+  // there). It need not be symmetric (the step's matrix is then factored
+  // by LU); with `definite`, a symmetric negative semidefinite part of it,
+  // as add_definite_stiffness gives of dF/dx.
+  virtual void add_discrete_gradient_jacobian(const Configuration& /*x*/,
+                                              const Configuration& /*y*/, bool /*definite*/,
+                                              double* /*dfdm*/) const {}
   // Whether potential_energy can be +infinity (MechanicalSystem::
   // has_forbidden_states).
   virtual bool forbids_states() const { return false; }

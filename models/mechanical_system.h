@@ -178,6 +178,28 @@ class MechanicalSystem {
   // F_nc . v, the power of the forces that do not derive from V (drag,
   // wind, spring damping): F = -dV/dx + F_nc.
   virtual double nonconservative_power(double t, const Vector& x, const Vector& v) const = 0;
+  // Whether some forces give their own discrete gradient of their potential
+  // V_k (ForceTerm::has_discrete_gradient: g_k(x, y) with
+  // g_k . (y - x) = V_k(y) - V_k(x) exactly), and, at the midpoint
+  // x_m = (x + y) / 2 the caller holds, the difference those forces make
+  // against their midpoint force:
+  //   f += sum over them of (-g_k(x, y) - F_k(t, x_m)).
+  // The discrete-gradient method adds it to F(t, x_m, v_m) (discrete_gradient.h).
+  virtual bool has_own_discrete_gradients() const { return false; }
+  virtual void add_own_discrete_gradient_difference(double /*t*/, const Vector& /*x*/,
+                                                    const Vector& /*x_m*/, const Vector& /*y*/,
+                                                    Vector& /*f*/) const {}
+  // The Jacobian of that difference with respect to the midpoint, x held
+  // (y = 2 x_m - x), for the discrete-gradient step's Newton matrix:
+  //   out += s * sum over them of (-2 dg_k/dy (x, y) - dF_k/dx (t, x_m))
+  // on the pattern of jacobians(), which out has (ForceTerm::
+  // add_discrete_gradient_jacobian; not symmetric in general); with
+  // `definite`, both as definite_jacobians() has them (symmetric).
+  virtual void add_own_discrete_gradient_jacobian_difference(double /*t*/, const Vector& /*x*/,
+                                                             const Vector& /*x_m*/,
+                                                             const Vector& /*y*/,
+                                                             bool /*definite*/, double /*s*/,
+                                                             SparseMatrix& /*out*/) const {}
 
   // The shared pattern (union of both Jacobians' entries plus the full
   // diagonal), values all zero. Built once per scene, except for a system

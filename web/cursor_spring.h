@@ -51,6 +51,17 @@ class CursorSpring final : public MechanicalSystem {
   double nonconservative_power(double t, const Vector& x, const Vector& v) const override {
     return model_.nonconservative_power(t, x, v);
   }
+  // The cursor's spring keeps the generic discrete gradient.
+  bool has_own_discrete_gradients() const override { return model_.has_own_discrete_gradients(); }
+  void add_own_discrete_gradient_difference(double t, const Vector& x, const Vector& x_m,
+                                            const Vector& y, Vector& f) const override {
+    model_.add_own_discrete_gradient_difference(t, x, x_m, y, f);
+  }
+  void add_own_discrete_gradient_jacobian_difference(double t, const Vector& x, const Vector& x_m,
+                                                     const Vector& y, bool definite, double s,
+                                                     SparseMatrix& out) const override {
+    model_.add_own_discrete_gradient_jacobian_difference(t, x, x_m, y, definite, s, out);
+  }
   const SparseMatrix& jacobian_pattern() const override { return model_.jacobian_pattern(); }
   bool pattern_varies() const override { return model_.pattern_varies(); }
   long pattern_version() const override { return model_.pattern_version(); }
