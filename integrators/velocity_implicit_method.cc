@@ -57,7 +57,7 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
   const LagNormalForces lag(system(), x_);
   step_.begin(t_, x_, v_, h, s);
   const bool lbfgs = quasi && system().derives_from_potentials();
-  check_.begin(step_, lbfgs, options().newton_tol);
+  check_.begin(step_, options().newton_tol);
   std::string quasi_rejected;  // why L-BFGS's answer was not taken
   // L-BFGS needs the potential; where it stalls, Newton solves the step.
   if (lbfgs) {
@@ -68,8 +68,9 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
   StepResult result = checked_newton(NewtonPolicy::Matrices::kAlternating, nullptr, v, refused);
   const Vector* start = nullptr;
   if (!result.ok && !refused.empty()) {
-    // An answer above the kept state's potential: Newton again from there
-    // (the tetrahedron above: from v = 0, 3 J -> 0.059 J in that step).
+    // An answer that raised the potential (or the energy): Newton again from
+    // the kept state (the tetrahedron above: from v = 0, 3 J -> 0.059 J in
+    // that step). Not after other failures: those runs keep their results.
     ++mutable_stats().nonlinear_failures;
     start = &check_.kept();
     std::string again;
@@ -103,16 +104,17 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
   return result;
 }
 
-// Newton's answer, judged where the step's kept state lies below Newton's
-// start (incremental_potential_check.h): an answer above it by more than
-// the tolerance resolves is no solution of the step (one near-incompressible
-// tetrahedron went from 3 J to 1,494 J in one step of 1 ms, "converged").
+// Newton's answer, judged (incremental_potential_check.h): one above the
+// lower of the step's two start states' potential (or, for backward Euler,
+// energy) by more than the tolerance resolves is no solution of the step
+// (one near-incompressible tetrahedron went from 3 J to 1,494 J in one step
+// of 1 ms, "converged").
 StepResult VelocityImplicitMethod::checked_newton(NewtonPolicy::Matrices matrices,
                                                   const Vector* start, Vector& v,
                                                   std::string& refused) {
   StepResult result = newton(matrices, start, v);
-  if (!result.ok || !check_.judges_newton()) return result;
-  const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_);
+  if (!result.ok || !check_.active()) return result;
+  const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
   if (rise.empty()) return result;
   std::ostringstream message;
   message << name() << ": Newton's answer at t = " << t_ << " (h = " << step_.h() << ") "
@@ -125,19 +127,18 @@ StepResult VelocityImplicitMethod::checked_newton(NewtonPolicy::Matrices matrice
   return StepResult::failure(refused);
 }
 
-// L-BFGS's answer is judged against the lower of the step's two start
-// guesses (incremental_potential_check.h): one above it is an iterate that
-// looked converged but is no minimizer (near-incompressible elements: block
-// n=3 at poisson 0.49999999999 with L-BFGS, whose stiff initial Hessian
-// makes its updates small while the residual is not, went from 47 J to
-// 493 J in 1 s of "completed" steps, each answer up to 26 J above E_n).
-// L-BFGS's answer is then not taken (`rejected` says why, and the failure
-// is counted): Newton solves the step from its start.
+// L-BFGS's answer is judged as Newton's (incremental_potential_check.h):
+// one above the start is an iterate that looked converged but is no
+// minimizer (near-incompressible elements: block n=3 at poisson
+// 0.49999999999 with L-BFGS, whose stiff initial Hessian makes its updates
+// small while the residual is not, went from 47 J to 493 J in 1 s of
+// "completed" steps). L-BFGS's answer is then not taken (`rejected` says
+// why, and the failure is counted): Newton solves the step from its start.
 StepResult VelocityImplicitMethod::quasi_newton(Vector& v, std::string& rejected) {
   if (!lbfgs_.solve(step_, model_, inv_mass(), options().newton_tol, options().max_newton, v)) {
     return StepResult::failure("L-BFGS stalled");
   }
-  const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, true);
+  const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
   if (rise.empty()) return StepResult::success();
   std::ostringstream message;
   message << name() << ": L-BFGS's step at t = " << t_ << " (h = " << step_.h()

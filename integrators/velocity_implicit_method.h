@@ -29,10 +29,11 @@
 //     attempt, not the first.
 //
 // Where the step minimizes an incremental potential, an answer that lies
-// above the step's start state's potential by more than the tolerance
-// resolves is no solution: L-BFGS's is then not taken; Newton's is solved
-// again from the kept state (x_n), and the step fails if that answer is
-// refused too (incremental_potential_check.h).
+// above the potential of the step's start states (for backward Euler also
+// above the start's energy) by more than the tolerance resolves is no
+// solution: L-BFGS's is then not taken; Newton's is solved again from the
+// kept state (x_n), and the step fails if that answer is refused too
+// (incremental_potential_check.h).
 //
 // The plain textbook version of implicit-euler's step, which the tests
 // compare this one with, is reference_backward_euler.h.
