@@ -67,7 +67,7 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
   std::string refused;  // why Newton's answer from v_n was not taken
   StepResult result = checked_newton(NewtonPolicy::Matrices::kAlternating, nullptr, v, refused);
   const Vector* start = nullptr;
-  if (!result.ok && !refused.empty()) {
+  if (!result.ok && !refused.empty() && !linear_.out_of_memory()) {
     // An answer that raised the potential (or the energy): Newton again from
     // the kept state (the tetrahedron above: from v = 0, 3 J -> 0.059 J in
     // that step). Not after other failures: those runs keep their results.
