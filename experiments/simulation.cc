@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -99,6 +101,27 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
   return simulate(model, settings, observers, nullptr);
 }
 
+namespace {
+
+// A plain blow-up's message (docs/command-line.md "Divergence"): what the
+// rule saw and what to try.
+std::string blowup_text(const ElasticModel& model, const RunSettings& settings, double bound,
+                        const Vector& x, const Vector& v) {
+  std::ostringstream text;
+  if (!x.allFinite() || !v.allFinite()) {
+    text << "the state turned non-finite";
+  } else {
+    text << "kinetic + spring energy " << model.energies(x, v).kinetic_and_spring()
+         << " J exceeded --blowup " << settings.blowup << " x E_s = " << bound << " J";
+  }
+  text << "; " << settings.integrator
+       << " is unstable or inaccurate at this step: try a smaller --dt (`springlab stability` "
+          "finds the largest stable one) or a method with a larger stability limit";
+  return text.str();
+}
+
+}  // namespace
+
 RunResult simulate(const ElasticModel& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers, std::unique_ptr<Integrator> prepared) {
   if (settings.every < 1) throw std::invalid_argument("every must be >= 1");
@@ -181,6 +204,7 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
             "plane, where the barrier has no force); use implicit-euler (its Newton iteration "
             "keeps every gap open) or a smaller --dt";
       }
+      if (result.failure.empty()) result.failure = blowup_text(model, settings, bound, x, v);
       break;
     }
     t_good = t;

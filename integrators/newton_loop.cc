@@ -90,7 +90,7 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, const Pieces& pieces,
 }
 
 void NewtonLoop::start(NewtonProblem& problem, Vector& v) {
-  v = problem.start();
+  v = settings_.start != nullptr ? *settings_.start : problem.start();
   problem.residual(v, r_);
   // The start leaves the states where the forces are defined (a barrier's
   // gap closed, an element inverted): the problem's other start.

@@ -59,6 +59,9 @@ class NewtonLoop {
   struct Settings {
     double tol = 1e-4;   // m/s
     int max_iterations = 200;
+    // Where the iteration starts instead of problem.start() (a second
+    // attempt from another state); nullptr: problem.start().
+    const Vector* start = nullptr;
   };
   // Who solves what, for a failure's message: "METHOD: Newton failed at
   // t = T (h = H): why".
@@ -72,7 +75,7 @@ class NewtonLoop {
     NewtonLinearSolver& linear;  // the update
     LineSearch& search;          // the step along it
   };
-  // Solves problem's r(v) = 0 from problem.start(); v holds the solution on
+  // Solves problem's r(v) = 0 from problem.start() (or settings.start); v holds the solution on
   // success. Counts Newton iterations in `stats`.
   StepResult solve(NewtonProblem& problem, const Pieces& pieces, const Settings& settings,
                    const Context& context, IntegratorStats& stats, Vector& v);

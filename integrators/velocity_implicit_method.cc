@@ -10,7 +10,6 @@ namespace {
 
 // Relative residual of the one linear solve of a linearized step.
 constexpr double kLinearRtol = 1e-6;
-constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();  // as Newton's
 
 // Friction's normal forces from the step's start while the step is solved
 // (MechanicalSystem::lag_normal_forces): friction then derives from a
@@ -39,9 +38,10 @@ StepResult VelocityImplicitMethod::do_initialize() {
   return StepResult::success();
 }
 
-StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, Vector& v) {
-  const NewtonLoop::Settings settings{.tol = options().newton_tol,
-                                      .max_iterations = options().max_newton};
+StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const Vector* start,
+                                          Vector& v) {
+  const NewtonLoop::Settings settings{
+      .tol = options().newton_tol, .max_iterations = options().max_newton, .start = start};
   const NewtonLoop::Context context{.method = name(), .t = t_, .h = step_.h()};
   const bool symmetric = system().jacobian_symmetric();
   if (step_.scheme().discrete_gradient) {
@@ -56,22 +56,44 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
                                                   Vector& v, bool quasi) {
   const LagNormalForces lag(system(), x_);
   step_.begin(t_, x_, v_, h, s);
+  const bool lbfgs = quasi && system().derives_from_potentials();
+  check_.begin(step_, options().newton_tol);
   std::string quasi_rejected;  // why L-BFGS's answer was not taken
   // L-BFGS needs the potential; where it stalls, Newton solves the step.
-  if (quasi && system().derives_from_potentials()) {
+  if (lbfgs) {
     const StepResult answer = quasi_newton(v, quasi_rejected);
     if (answer.ok) return answer;
   }
-  StepResult result = newton(NewtonPolicy::Matrices::kAlternating, v);
+  std::string refused;  // why Newton's answer from v_n was not taken
+  StepResult result = checked_newton(NewtonPolicy::Matrices::kAlternating, nullptr, v, refused);
+  const Vector* start = nullptr;
+  if (!result.ok && !refused.empty() && !linear_.out_of_memory()) {
+    // An answer that raised the potential (or the energy): Newton again from
+    // the kept state (the tetrahedron above: from v = 0, 3 J -> 0.059 J in
+    // that step). Not after other failures: those runs keep their results.
+    ++mutable_stats().nonlinear_failures;
+    start = &check_.kept();
+    std::string again;
+    result = checked_newton(NewtonPolicy::Matrices::kAlternating, start, v, again);
+    if (result.ok) return result;
+  }
   if (!result.ok && system().jacobian_symmetric() && !linear_.out_of_memory()) {
     // The definite fallback (see the header): projected Newton from the
-    // step's start.
+    // step's start (or the kept state).
     ++mutable_stats().nonlinear_failures;
-    StepResult second = newton(NewtonPolicy::Matrices::kDefinite, v);
+    std::string again;
+    StepResult second = checked_newton(NewtonPolicy::Matrices::kDefinite, start, v, again);
     if (second.ok) return second;
     result = second;
   }
   if (!result.ok) ++mutable_stats().nonlinear_failures;
+  if (!result.ok && !refused.empty() && result.message != refused) {
+    const std::string own = name() + ": ";
+    const std::string last = result.message.rfind(own, 0) == 0
+                                 ? result.message.substr(own.size())
+                                 : result.message;
+    result = StepResult::failure(refused + "; from the step's start state, " + last);
+  }
   if (!result.ok && !quasi_rejected.empty()) {
     const std::string own = name() + ": ";  // Newton's message names the method too
     const std::string newton_text = result.message.rfind(own, 0) == 0
@@ -82,65 +104,46 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
   return result;
 }
 
-// Where the step minimizes the incremental potential Phi, a solution lies
-// no higher than the start guesses the solvers descend from: v_n, and the v
-// that keeps the stage at x_n (Newton's start where v_n leaves the states
-// with an energy; for implicit Euler, v = 0 and Phi = E_n, the step's
-// starting energy). An answer above the lower of the two by more than
-// Phi's round-off is an iterate that looked converged but is no minimizer
-// (near-incompressible elements: block n=3 at poisson 0.49999999999 with
-// L-BFGS, whose stiff initial Hessian makes its updates small while the
-// residual is not, went from 47 J to 493 J in 1 s of "completed" steps,
-// each answer up to 26 J above E_n). L-BFGS's answer is then not taken
-// (`rejected` says why, and the failure is counted): Newton solves the step
-// from its start. Newton's own answers are not checked so: its line search
-// already asks Phi to fall, and near a state at rest the stored energy's
-// round-off (a turned neo-Hookean block: 2.3e-14 J against terms of
-// mu W ~ 300 J) is not Phi's parts' magnitude, so a check at that scale
-// refuses good steps.
+// Newton's answer, judged (incremental_potential_check.h): one above the
+// lower of the step's two start states' potential (or, for backward Euler,
+// energy) by more than the tolerance resolves is no solution of the step
+// (one near-incompressible tetrahedron went from 3 J to 1,494 J in one step
+// of 1 ms, "converged").
+StepResult VelocityImplicitMethod::checked_newton(NewtonPolicy::Matrices matrices,
+                                                  const Vector* start, Vector& v,
+                                                  std::string& refused) {
+  StepResult result = newton(matrices, start, v);
+  if (!result.ok || !check_.active()) return result;
+  const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
+  if (rise.empty()) return result;
+  std::ostringstream message;
+  message << name() << ": Newton's answer at t = " << t_ << " (h = " << step_.h() << ") "
+          << rise
+          << ": this method's step minimizes the incremental potential, so the answer is no "
+             "solution (a point where the iteration stopped short, or a higher stationary "
+             "point); try a smaller --dt or --newton-tol, or for finite elements a Poisson "
+             "ratio further from 0.5";
+  refused = message.str();
+  return StepResult::failure(refused);
+}
+
+// L-BFGS's answer is judged as Newton's (incremental_potential_check.h):
+// one above the start is an iterate that looked converged but is no
+// minimizer (near-incompressible elements: block n=3 at poisson
+// 0.49999999999 with L-BFGS, whose stiff initial Hessian makes its updates
+// small while the residual is not, went from 47 J to 493 J in 1 s of
+// "completed" steps). L-BFGS's answer is then not taken (`rejected` says
+// why, and the failure is counted): Newton solves the step from its start.
 StepResult VelocityImplicitMethod::quasi_newton(Vector& v, std::string& rejected) {
-  const VelocityImplicitScheme& s = step_.scheme();
-  const double h = step_.h();
-  const bool minimizes = s.b > 0.0 && s.c > 0.0 && !s.discrete_gradient;
-  double phi_start = std::numeric_limits<double>::infinity(), magnitude_start = 0.0;
-  if (minimizes) {
-    Vector v_kept = (-s.a / s.b) * v_;
-    if (s.x_offset != nullptr) v_kept -= (1.0 / (h * s.b)) * *s.x_offset;
-    // Phi's round-off scale is that of both guesses' terms (at v_n the
-    // inertia term is 0 and the stored energy may be nearly 0 too -- a
-    // strain-free spin --, while the answer's terms carry the round-off of
-    // the kinetic energy the guess at x_n holds).
-    for (const Vector* guess : {&v_, &v_kept}) {
-      double magnitude = 0.0;
-      step_.stage(*guess);
-      const double phi = step_.potential(*guess, magnitude);
-      if (std::isfinite(magnitude)) magnitude_start = std::max(magnitude_start, magnitude);
-      if (phi < phi_start) phi_start = phi;
-    }
-  }
   if (!lbfgs_.solve(step_, model_, inv_mass(), options().newton_tol, options().max_newton, v)) {
     return StepResult::failure("L-BFGS stalled");
   }
-  if (!minimizes || !std::isfinite(phi_start)) return StepResult::success();
-  double magnitude_end = 0.0;
-  step_.stage(v);
-  const double phi_end = step_.potential(v, magnitude_end);
-  // (At least the smallest normal double: a state decayed into denormals,
-  // 0 J to 4.9e-324 J, has nothing left to compare.)
-  const double noise = std::max(kRoundoff * std::max(magnitude_start, magnitude_end),
-                                std::numeric_limits<double>::min());
-  if (phi_end <= phi_start + noise) return StepResult::success();
-  // Above the start by more than round-off: still a solution if within
-  // what the Newton tolerance leaves. Near the minimizer v*,
-  // Phi(v) - Phi(v*) ~ r(v).(v - v*) / 2 <= ||r(v)||_1 tol / 2 (a body at
-  // rest, turned: both about 1.5e-29 J, 3 % apart).
-  step_.residual(v, r_end_);
-  const double allowance = 0.5 * options().newton_tol * r_end_.lpNorm<1>();
-  if (phi_end <= phi_start + noise + allowance) return StepResult::success();
+  const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
+  if (rise.empty()) return StepResult::success();
   std::ostringstream message;
-  message << name() << ": L-BFGS's step at t = " << t_ << " (h = " << h
-          << ") raised the incremental potential from " << phi_start << " J to " << phi_end
-          << " J (this method's step minimizes it: not a solution)";
+  message << name() << ": L-BFGS's step at t = " << t_ << " (h = " << step_.h()
+          << ") " << rise << " (this method's step minimizes the incremental potential: not a "
+             "solution)";
   rejected = message.str();
   ++mutable_stats().nonlinear_failures;  // Newton from the step's start
   return StepResult::failure(rejected);

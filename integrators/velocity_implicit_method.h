@@ -28,12 +28,20 @@
 //     step than the exact matrix takes where it works, so it is the second
 //     attempt, not the first.
 //
+// Where the step minimizes an incremental potential, an answer that lies
+// above the potential of the step's start states (for backward Euler also
+// above the start's energy) by more than the tolerance resolves is no
+// solution: L-BFGS's is then not taken; Newton's is solved again from the
+// kept state (x_n), and the step fails if that answer is refused too
+// (incremental_potential_check.h).
+//
 // The plain textbook version of implicit-euler's step, which the tests
 // compare this one with, is reference_backward_euler.h.
 #pragma once
 
 #include <string>
 
+#include "integrators/incremental_potential_check.h"
 #include "integrators/integrator.h"
 #include "integrators/newton_loop.h"
 #include "integrators/quasi_newton.h"
@@ -69,7 +77,12 @@ class VelocityImplicitMethod : public Integrator {
 
  private:
   // Newton on the step begun in step_, with the given matrices.
-  StepResult newton(NewtonPolicy::Matrices matrices, Vector& v);
+  // From `start` (nullptr: v_n).
+  StepResult newton(NewtonPolicy::Matrices matrices, const Vector* start, Vector& v);
+  // newton(), failed where its answer raises the step's incremental
+  // potential (incremental_potential_check.h): `refused` then holds why.
+  StepResult checked_newton(NewtonPolicy::Matrices matrices, const Vector* start, Vector& v,
+                            std::string& refused);
   // L-BFGS's answer, taken unless it raises the potential (see the .cc).
   StepResult quasi_newton(Vector& v, std::string& rejected);
 
@@ -80,6 +93,7 @@ class VelocityImplicitMethod : public Integrator {
   VelocityStep step_;
   NewtonLoop newton_;
   Lbfgs lbfgs_;
+  IncrementalPotentialCheck check_;
   Vector rhs_, r_end_;
 };
 

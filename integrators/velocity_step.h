@@ -63,6 +63,7 @@ class VelocityStep final : public NewtonProblem {
   double t() const { return t_; }  // t_n
   double h() const { return h_; }
   const Vector& x() const { return *x_; }  // x_n
+  const MechanicalSystem& system() const { return model_->system(); }
 
   const Vector& start() const override { return *v_; }
   // The v that keeps the stage at x_n, a v_n + b v = 0: a state the last

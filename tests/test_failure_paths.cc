@@ -112,6 +112,16 @@ TEST_F(FailurePaths, DivergenceMidRun) {
                       "--t-end", "100", "--every", "7"});
   EXPECT_EQ(j["status"], "diverged");
   EXPECT_GT(j["t_final"].get<double>(), 0.0);
+  // The message says what the rule saw and what to try (issue 38: it was
+  // null). E_s = T(0) + U_spring(0) = 0.5 J for the oscillator (k = m = 1,
+  // x0 = 1): the bound is 1000 x 0.5 = 500 J.
+  ASSERT_TRUE(j["failure"].is_string()) << j.dump();
+  const std::string failure = j["failure"].get<std::string>();
+  EXPECT_EQ(failure.find("kinetic + spring energy "), 0u) << failure;
+  EXPECT_NE(failure.find(" J exceeded --blowup 1000 x E_s = 500 J; explicit-euler is unstable "
+                         "or inaccurate at this step: try a smaller --dt"),
+            std::string::npos)
+      << failure;
   expect_consistent(j, 2, 2);
 }
 
