@@ -3,11 +3,6 @@
 #include <algorithm>
 
 namespace springlab {
-namespace {
-
-constexpr int kFreshSteps = 4;  // see the header
-
-}  // namespace
 
 std::string out_of_memory_text(const SparseDirectSolver& solver) {
   return solver.error() +
@@ -22,6 +17,7 @@ void NewtonLinearSolver::reset(IntegratorStats& stats) {
   preconditioner_valid_ = false;
   direct_current_ = false;
   fresh_steps_ = 0;
+  fresh_run_ = kFreshSteps;
   cg_slow_ = 0;
   rent_ = 0;
   exact_iterations_ = -1;
@@ -62,8 +58,12 @@ NewtonLinearSolver::Start NewtonLinearSolver::begin_first_solve() {
 
 void NewtonLinearSolver::end_first_solve(const Start& start) {
   // The kept factor failed at a step's start: fresh ones for the next steps.
-  if (start.probe && stats_->factorizations > start.factorizations) {
-    fresh_steps_ = kFreshSteps;
+  if (!start.probe) return;
+  if (stats_->factorizations > start.factorizations) {
+    fresh_steps_ = fresh_run_;
+    fresh_run_ = std::min(2 * fresh_run_, kMaxFreshSteps);
+  } else {
+    fresh_run_ = kFreshSteps;  // it served: probe again soon after a failure
   }
 }
 

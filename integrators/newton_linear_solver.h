@@ -29,15 +29,19 @@
 // kRefreshCost, the next solve has a fresh one. (The rule it replaces,
 // refresh after any solve of more than 10 iterations, refreshed on cloth
 // 128 after nearly every exact solve of a buckling step, whose next
-// update, of the definite matrix, then took 1 iteration: 8.4
+// update, of the definite matrix, then took 1 iteration: 8.9
 // factorizations per step over the first 0.3 s.) A solve not converged
 // after kCgHardLimit is redone at once with a fresh factor. At a nonlinear
 // solve's first linear solve (start_nonlinear_solve) the kept factor, made
 // in an earlier step, gets kCgSoftLimit products, and after it failed
-// there the next kFreshSteps steps start with a fresh factor: at 1/60 s a
-// factor of the step before preconditions poorly (BM_LinearSolver/
-// kept-factor-cg: 34 products to 1e-2 on cloth 64, 444 on cloth 128), a
-// new factorization costs less.
+// there the next steps start with a fresh factor: at 1/60 s a factor of
+// the step before preconditions poorly (BM_LinearSolver/kept-factor-cg: 34
+// products to 1e-2 on cloth 64, 444 on cloth 128), a new factorization
+// costs less. How many: kFreshSteps after a probe that served, twice as
+// many after each further failed one, up to kMaxFreshSteps (exponential
+// backoff: where every probe fails, as for linear-implicit-euler
+// --stiffness definite on cloth 64 at 1/60 s, a failed probe's 10
+// products every 5 steps were two thirds of its CG work).
 //
 // Counts linear solves, their iterations and factorizations in the method's
 // statistics.
@@ -88,6 +92,8 @@ class NewtonLinearSolver {
   static constexpr int kRefreshCost = 10;
   static constexpr int kCgSoftLimit = 10;
   static constexpr int kCgHardLimit = 30;
+  static constexpr int kFreshSteps = 4;
+  static constexpr int kMaxFreshSteps = 64;
 
  private:
   Result solve_with_limit(const Vector& rhs, const Tolerance& tolerance, Vector& d,
@@ -124,6 +130,8 @@ class NewtonLinearSolver {
   bool preconditioner_valid_ = false;
   // Nonlinear solves left to start with a fresh factor.
   int fresh_steps_ = 0;
+  // How many steps start with a fresh factor after the next failed probe.
+  int fresh_run_ = 0;
   bool direct_current_ = false;  // direct_ holds a factorization of jacobian_ as it is
   int cg_slow_ = 0;              // the kept factor is to be refreshed before the next solve
   // The rent paid on the kept factor (see above): the iterations beyond a

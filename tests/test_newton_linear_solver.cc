@@ -3,7 +3,8 @@
 // factor costs beyond a fresh one's, summed since it was made, exceed
 // kRefreshCost; for the exact matrix, beyond the count its first solve with
 // the factor took (the exact and definite matrices' own difference, which
-// no refresh removes).
+// no refresh removes); and how many steps start with a fresh factor after
+// the kept one failed at a step's start.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -117,6 +118,36 @@ TEST(NewtonLinearSolver, KeepsTheFactorWhileTheExactMatrixCostsWhatItCostFresh) 
     EXPECT_EQ(again.factorizations, 0) << k;
     EXPECT_EQ(again.iterations, first.iterations) << k;
   }
+}
+
+TEST(NewtonLinearSolver, BacksOffFromProbingAKeptFactorThatKeepsFailing) {
+  IntegratorStats stats;
+  NewtonLinearSolver linear;
+  linear.reset(stats);
+  FixedSource source;
+  // Two definite matrices far apart (diagonal 2..12 against 4), one per
+  // step in turn: the factor kept from the step before never serves.
+  std::vector<double> flat(kN, 4.0), ramp(kN);
+  for (int i = 0; i < kN; ++i) ramp[i] = 2.0 + 10.0 * i / (kN - 1.0);
+  const SparseMatrix a[2] = {tridiagonal(flat, -1.0), tridiagonal(ramp, -0.5)};
+  std::vector<int> probes;  // the steps that tried the kept factor first
+  for (int step = 1; step <= 40; ++step) {
+    const SparseMatrix& m = a[step % 2];
+    source.definite = m;
+    linear.start_nonlinear_solve();
+    const Counts c = solve(linear, source, m, true, stats);
+    ASSERT_EQ(c.factorizations, 1) << step;  // a fresh factor either way
+    // A fresh factor of the matrix itself takes 1 iteration; a probe first
+    // spends kCgSoftLimit on the kept one.
+    if (c.iterations > 1) {
+      EXPECT_EQ(c.iterations, NewtonLinearSolver::kCgSoftLimit + 1) << step;
+      probes.push_back(step);
+    }
+  }
+  // Step 1 has no factor yet; then a probe, kFreshSteps = 4 fresh steps,
+  // a probe, 8, a probe, 16, a probe (the rule it replaced probed every
+  // fifth step: 2, 7, 12, 17, ...).
+  EXPECT_EQ(probes, (std::vector<int>{2, 7, 16, 33}));
 }
 
 }  // namespace
