@@ -14,8 +14,8 @@
 // The kept factor, refreshed by renting against buying (the ski-rental
 // rule: Karlin, Manasse, Rudolph and Sleator, "Competitive snoopy caching",
 // Algorithmica 3, 1988: rent until the rent paid equals the price, then
-// buy; it never pays more than twice what the best choice in hindsight
-// would). A factorization costs about kRefreshCost CG iterations (CPU time
+// buy; in that problem it never pays more than twice what the best choice
+// in hindsight would, here a guide, the future iterations being unknown). A factorization costs about kRefreshCost CG iterations (CPU time
 // in one run of cloth 32 / 64 / 128 at 1/60 s, 2026-11-27: 14 / 7.3 / 11.4
 // iterations of 0.42 / 5.2 / 28 ms; a count, not a clock, so that a run is
 // the same from one machine to the next). The rent is the iterations a
