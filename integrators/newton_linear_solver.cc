@@ -3,11 +3,6 @@
 #include <algorithm>
 
 namespace springlab {
-namespace {
-
-constexpr int kFreshSteps = 4;  // see the header
-
-}  // namespace
 
 std::string out_of_memory_text(const SparseDirectSolver& solver) {
   return solver.error() +
@@ -22,7 +17,10 @@ void NewtonLinearSolver::reset(IntegratorStats& stats) {
   preconditioner_valid_ = false;
   direct_current_ = false;
   fresh_steps_ = 0;
+  fresh_run_ = kFreshSteps;
   cg_slow_ = 0;
+  rent_ = 0;
+  exact_iterations_ = -1;
   direct_version_ = preconditioner_version_ = -1;
   jacobian_ = SparseMatrix();
   preconditioner_matrix_ = SparseMatrix();
@@ -60,8 +58,12 @@ NewtonLinearSolver::Start NewtonLinearSolver::begin_first_solve() {
 
 void NewtonLinearSolver::end_first_solve(const Start& start) {
   // The kept factor failed at a step's start: fresh ones for the next steps.
-  if (start.probe && stats_->factorizations > start.factorizations) {
-    fresh_steps_ = kFreshSteps;
+  if (!start.probe) return;
+  if (stats_->factorizations > start.factorizations) {
+    fresh_steps_ = fresh_run_;
+    fresh_run_ = std::min(2 * fresh_run_, kMaxFreshSteps);
+  } else {
+    fresh_run_ = kFreshSteps;  // it served: probe again soon after a failure
   }
 }
 
@@ -88,6 +90,8 @@ bool NewtonLinearSolver::refresh_preconditioner(std::string& error) {
                                        MatrixKind::kPositiveDefinite) &&
                           preconditioner_.positive_definite();
   cg_slow_ = 0;
+  rent_ = 0;
+  exact_iterations_ = -1;
   if (!preconditioner_valid_ && preconditioner_.out_of_memory()) {
     error = out_of_memory_text(preconditioner_);
   } else if (!preconditioner_valid_) {
@@ -154,7 +158,7 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_with_limit(const Vector& rh
     if (!refresh_preconditioner(error)) return no_preconditioner();
     cg = krylov(std::max(max_iterations, kCgHardLimit));
   }
-  cg_slow_ = cg.iterations > kCgSoftLimit ? 1 : 0;
+  pay_rent(cg.iterations);
   if (!cg.finite) {
     error = "the linear solve gave a non-finite update";
     return Result{.ok = false};
@@ -166,6 +170,18 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_with_limit(const Vector& rh
   // Indefinite (or still not converged) and a true solve is wanted.
   return solve_factored(definite_ ? MatrixKind::kPositiveDefinite : MatrixKind::kSymmetric, rhs,
                         d, error);
+}
+
+void NewtonLinearSolver::pay_rent(int iterations) {
+  // What a fresh factor would have needed (header): 1 for the definite
+  // matrix, the factor's first exact solve's count for the exact one.
+  int fresh = 1;
+  if (!definite_) {
+    if (exact_iterations_ < 0) exact_iterations_ = iterations;
+    fresh = exact_iterations_;
+  }
+  rent_ += std::max(0, iterations - fresh);
+  cg_slow_ = rent_ > kRefreshCost ? 1 : 0;
 }
 
 bool NewtonLinearSolver::solve_directly(const Vector& rhs, Vector& d, std::string& error) {

@@ -11,17 +11,37 @@
 //     where neither converges;
 //   - J not symmetric (spring damping): sparse LU at every new matrix.
 //
-// The kept factor. A CG solve that needs more than kCgSoftLimit products has
-// it refreshed before the next solve; one not converged after kCgHardLimit
-// is redone at once with a fresh factor. A factorization costs about 15-30
-// preconditioned CG iterations on cloth 64 and 128 (benchmarks/README.md):
-// of the pairs (6, 20), (10, 30), (15, 40), (25, 60) measured on cloth 64
-// at 1/60 s, (10, 30) cost least. At a nonlinear solve's first linear solve
-// (start_nonlinear_solve) the kept factor, made in an earlier step, gets
-// kCgSoftLimit products, and after it failed there the next kFreshSteps
-// steps start with a fresh factor: at 1/60 s a factor of the step before
-// preconditions poorly (BM_LinearSolver/kept-factor-cg: 34 products to 1e-2
-// on cloth 64, 444 on cloth 128), a new factorization costs less.
+// The kept factor, refreshed by renting against buying (the ski-rental
+// rule: Karlin, Manasse, Rudolph and Sleator, "Competitive snoopy caching",
+// Algorithmica 3, 1988: rent until the rent paid equals the price, then
+// buy; in that problem it never pays more than twice what the best choice
+// in hindsight would, here a guide, the future iterations being unknown). A factorization costs about kRefreshCost CG iterations (CPU time
+// in one run of cloth 32 / 64 / 128 at 1/60 s, 2026-11-27: 14 / 7.3 / 11.4
+// iterations of 0.42 / 5.2 / 28 ms; a count, not a clock, so that a run is
+// the same from one machine to the next). The rent is the iterations a
+// kept factor costs beyond what a fresh one would: a fresh factor solves
+// the definite matrix in 1 iteration, so every further one is the kept
+// factor's; it solves the exact matrix (compressed springs' negative
+// stiffness included) in as many as the two matrices' difference costs,
+// 5-20 on cloth 128 while it buckles, which no refresh removes: that count
+// is taken from the factor's first exact solve, and only iterations beyond
+// it are rent. Once the rent summed since the factor was made exceeds
+// kRefreshCost, the next solve has a fresh one. (The rule it replaces,
+// refresh after any solve of more than 10 iterations, refreshed on cloth
+// 128 after nearly every exact solve of a buckling step, whose next
+// update, of the definite matrix, then took 1 iteration: 8.9
+// factorizations per step over the first 0.3 s.) A solve not converged
+// after kCgHardLimit is redone at once with a fresh factor. At a nonlinear
+// solve's first linear solve (start_nonlinear_solve) the kept factor, made
+// in an earlier step, gets kCgSoftLimit products, and after it failed
+// there the next steps start with a fresh factor: at 1/60 s a factor of
+// the step before preconditions poorly (BM_LinearSolver/kept-factor-cg: 34
+// products to 1e-2 on cloth 64, 444 on cloth 128), a new factorization
+// costs less. How many: kFreshSteps after a probe that served, twice as
+// many after each further failed one, up to kMaxFreshSteps (exponential
+// backoff: where every probe fails, as for linear-implicit-euler
+// --stiffness definite on cloth 64 at 1/60 s, a failed probe's 10
+// products every 5 steps were two thirds of its CG work).
 //
 // Counts linear solves, their iterations and factorizations in the method's
 // statistics.
@@ -69,8 +89,11 @@ class NewtonLinearSolver {
   bool solve_directly(const Vector& rhs, Vector& d, std::string& error);
   bool out_of_memory() const { return direct_.out_of_memory() || preconditioner_.out_of_memory(); }
 
+  static constexpr int kRefreshCost = 10;
   static constexpr int kCgSoftLimit = 10;
   static constexpr int kCgHardLimit = 30;
+  static constexpr int kFreshSteps = 4;
+  static constexpr int kMaxFreshSteps = 64;
 
  private:
   Result solve_with_limit(const Vector& rhs, const Tolerance& tolerance, Vector& d,
@@ -107,8 +130,17 @@ class NewtonLinearSolver {
   bool preconditioner_valid_ = false;
   // Nonlinear solves left to start with a fresh factor.
   int fresh_steps_ = 0;
+  // How many steps start with a fresh factor after the next failed probe.
+  int fresh_run_ = 0;
   bool direct_current_ = false;  // direct_ holds a factorization of jacobian_ as it is
-  int cg_slow_ = 0;              // the last CG solve needed more than the soft limit
+  int cg_slow_ = 0;              // the kept factor is to be refreshed before the next solve
+  // The rent paid on the kept factor (see above): the iterations beyond a
+  // fresh factor's summed since it was made, and its first exact solve's
+  // count (-1: none yet).
+  int rent_ = 0;
+  int exact_iterations_ = -1;
+  // Adds a solve of `iterations` with the kept factor to its rent.
+  void pay_rent(int iterations);
   CgScratch cg_;
   MinresScratch minres_;
 };
