@@ -58,31 +58,6 @@ SPRINGLAB_LANES_CLONES void copy_and_sum(const double* x, const double* v, const
   }
 }
 
-// The same sums without the copies, for a driver whose integrator keeps the
-// last good state itself (Integrator::previous_state).
-SPRINGLAB_LANES_CLONES void sum_only(const double* x, const double* v, const double* m,
-                                     const double* r, Eigen::Index n, double& momentum2,
-                                     double& drift2) {
-  Lanes momentum = {}, drift = {};
-  const Eigen::Index whole = n - n % kLanes;
-  for (Eigen::Index i = 0; i < whole; i += kLanes) {
-    Lanes xi, vi, mi, ri;
-    load(x + i, xi);
-    load(v + i, vi);
-    load(m + i, mi);
-    load(r + i, ri);
-    momentum += mi * vi * vi;
-    const Lanes d = xi - ri;
-    drift += d * d;
-  }
-  momentum2 = lane_sum(momentum);
-  drift2 = lane_sum(drift);
-  for (Eigen::Index i = whole; i < n; ++i) {
-    momentum2 += m[i] * v[i] * v[i];
-    drift2 += (x[i] - r[i]) * (x[i] - r[i]);
-  }
-}
-
 }  // namespace
 
 DivergenceCheck::DivergenceCheck(const ElasticModel& model, double bound)
@@ -124,17 +99,6 @@ bool DivergenceCheck::diverged(const Vector& x, const Vector& v, Vector& x_copy,
   double momentum2 = 0.0, drift2 = 0.0;
   copy_and_sum(x.data(), v.data(), mass_.data(), x_ref_.data(), x_copy.data(), v_copy.data(), n,
                momentum2, drift2);
-  return decide(x, v, momentum2, drift2);
-}
-
-bool DivergenceCheck::diverged(const Vector& x, const Vector& v) {
-  if (!(bound_ > 0.0)) return !x.allFinite() || !v.allFinite();
-  double momentum2 = 0.0, drift2 = 0.0;
-  sum_only(x.data(), v.data(), mass_.data(), x_ref_.data(), x.size(), momentum2, drift2);
-  return decide(x, v, momentum2, drift2);
-}
-
-bool DivergenceCheck::decide(const Vector& x, const Vector& v, double momentum2, double drift2) {
   // (Finite, as the rule asks of the state, also when the bound is not.)
   if (certifies_) {
     const double certificate = 0.5 * momentum2 + 2.0 * u_ref_ + two_kappa_ * drift2;

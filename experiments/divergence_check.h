@@ -44,14 +44,8 @@ class DivergenceCheck {
   // the bound (with a bound of 0: only when it is not finite). The same pass
   // copies (x, v) to (x_copy, v_copy): the driver's last good state.
   bool diverged(const Vector& x, const Vector& v, Vector& x_copy, Vector& v_copy);
-  // The same without the copy, for a driver that has the last good state
-  // elsewhere (Integrator::previous_state).
-  bool diverged(const Vector& x, const Vector& v);
 
  private:
-  // The rule's decision from the pass's sums m v.v and |x - x_ref|^2.
-  bool decide(const Vector& x, const Vector& v, double momentum2, double drift2);
-
   const ElasticModel& model_;
   double bound_;
   const Vector& mass_;

@@ -142,15 +142,8 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
     result.diverged_at = 0.0;
   }
   DivergenceCheck check(model, bound);
-  // The last good state: (x0, v0) until a step is good. Then the
-  // integrator's own state where it keeps its step's start (so a step
-  // that fails or diverges is reported from that start: no copy per step,
-  // issue 37), else the copy the divergence check's pass makes.
-  const PreviousState* kept = integrator->previous_state();
   double t_good = 0.0;
   Vector x_good = x0, v_good = v0;
-  const Vector* x_last = &x_good;
-  const Vector* v_last = &v_good;
   Vector x_next, v_next;  // the new state's copy, good once checked
   bool good_observed = true;  // has the last good state been written?
   for (long k = 1; k <= grid.steps && result.status == RunStatus::kCompleted; ++k) {
@@ -168,7 +161,7 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
     }
     const Vector& x = integrator->x();
     const Vector& v = integrator->v();
-    if (kept != nullptr ? check.diverged(x, v) : check.diverged(x, v, x_next, v_next)) {
+    if (check.diverged(x, v, x_next, v_next)) {
       result.status = RunStatus::kDiverged;
       result.diverged_at = t;
       // A finite state of infinite energy (a barrier's gap closed): say where.
@@ -191,30 +184,19 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
       break;
     }
     t_good = t;
-    if (kept != nullptr) {
-      x_last = &x;
-      v_last = &v;
-    } else {
-      x_good.swap(x_next);
-      v_good.swap(v_next);
-    }
+    x_good.swap(x_next);
+    v_good.swap(v_next);
     good_observed = k == grid.steps || k % settings.every == 0;
     if (good_observed) notify(t, x, v);
   }
-  // A step that failed or diverged after the last good one started from
-  // it: the integrator keeps it as its previous state.
-  if (kept != nullptr && result.status != RunStatus::kCompleted && kept->t == t_good) {
-    x_last = &kept->x;
-    v_last = &kept->v;
-  }
   // A run that stopped early still ends its output at its last good state.
-  if (!good_observed) notify(t_good, *x_last, *v_last);
+  if (!good_observed) notify(t_good, x_good, v_good);
 
   result.stats = integrator->stats();
   result.t_final = t_good;
-  result.energy_final = model.energies(*x_last, *v_last).total();
-  result.x_final = *x_last;
-  result.v_final = *v_last;
+  result.energy_final = model.energies(x_good, v_good).total();
+  result.x_final = std::move(x_good);
+  result.v_final = std::move(v_good);
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -107,17 +107,6 @@ inline bool stable_on_imaginary_axis(const IntegratorInfo& info) {
   return info.stability == StabilityKind::kA || info.stability == StabilityKind::kL;
 }
 
-// The state (t, x, v) at the start of a method's last step, which a method
-// keeps without a copy when its step writes the new state into buffers of
-// its own and swaps them in (symplectic Euler): the old state's buffers are
-// then this. The run driver reports a divergent or failed step from it
-// instead of copying every good state (issue 37). t is NaN before the first
-// step.
-struct PreviousState {
-  double t = std::numeric_limits<double>::quiet_NaN();
-  Vector x, v;
-};
-
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -151,11 +140,6 @@ class Integrator {
   const Vector& x() const { return x_; }
   const Vector& v() const { return v_; }
   const IntegratorStats& stats() const { return stats_; }
-  // The state at the start of the last step, where the method keeps it
-  // (PreviousState); nullptr for a method that does not (the driver then
-  // copies each good state). A fixed-step method that keeps it swaps the
-  // start in before anything in its step can fail.
-  virtual const PreviousState* previous_state() const { return nullptr; }
 
  protected:
   explicit Integrator(IntegratorInfo info) : info_(std::move(info)) {}

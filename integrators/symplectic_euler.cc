@@ -12,17 +12,15 @@ SymplecticEuler::SymplecticEuler()
 
 namespace {
 
-// v' = v + h M^-1 f, then x' = x + h v': a = M^-1 F, the kick and the
-// drift in one pass (three as separate vector operations), each entry
-// rounded exactly as v += h a, x += h v; the new state goes to (x', v'),
-// the start stays in (x, v). The arrays never overlap (__restrict lets the
-// compiler vectorize without run-time alias checks).
+// v += h M^-1 f, then x += h v: a = M^-1 F, the kick and the drift in one
+// pass (three as separate vector operations), each entry rounded exactly as
+// v += h a, x += h v. The arrays never overlap (__restrict lets the compiler
+// vectorize without run-time alias checks).
 void kick_drift(Eigen::Index n, double h, const double* __restrict f,
-                const double* __restrict inv_m, const double* __restrict x,
-                const double* __restrict v, double* __restrict x_new, double* __restrict v_new) {
+                const double* __restrict inv_m, double* __restrict x, double* __restrict v) {
   for (Eigen::Index i = 0; i < n; ++i) {
-    v_new[i] = v[i] + h * (f[i] * inv_m[i]);
-    x_new[i] = x[i] + h * v_new[i];
+    v[i] += h * (f[i] * inv_m[i]);
+    x[i] += h * v[i];
   }
 }
 
@@ -30,16 +28,7 @@ void kick_drift(Eigen::Index n, double h, const double* __restrict f,
 
 StepResult SymplecticEuler::do_step(double h) {
   eval_force(t_, x_, v_, f_);
-  // The start becomes the previous state; the step writes into the
-  // buffers of the one before (swaps of pointers, no copy).
-  start_.t = t_;
-  start_.x.swap(x_);
-  start_.v.swap(v_);
-  const Eigen::Index n = start_.x.size();
-  x_.resize(n);  // (allocates at the first step only)
-  v_.resize(n);
-  kick_drift(n, h, f_.data(), inv_mass().data(), start_.x.data(), start_.v.data(), x_.data(),
-             v_.data());
+  kick_drift(x_.size(), h, f_.data(), inv_mass().data(), x_.data(), v_.data());
   return StepResult::success();
 }
 
