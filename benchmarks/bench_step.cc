@@ -208,7 +208,7 @@ void step_benchmark(benchmark::State& state, const std::string& name, const Scen
 
 // Why the method refuses the scene before its first step, or "" when it
 // does not: the fast solvers need the scene's projective form
-// (MechanicalSystem::projective_form), up to the first ';' of its message.
+// (FastSolverViews::projective_form), up to the first ';' of its message.
 std::string refusal(const IntegratorInfo& info, const SceneCase& c) {
   if (!info.jacobian_free) return {};
   std::vector<DistanceConstraint> constraints;

@@ -171,12 +171,16 @@ struct CommonOptions {
     require_positive("--t-end", run.t_end);
     require_positive("--blowup", run.blowup);
     for (const OptionSpec& spec : integrator_options()) {
+      // Each refusal names the option as the user wrote it: "--name: ".
+      const std::string option = "--" + std::string(spec.name) + ": ";
       if (spec.set != nullptr) {
         const std::string& text = choice_text.at(std::string(spec.name));
-        if (!spec.set(run.options, text)) throw UsageError(choice_refusal(spec, printable(text)));
+        if (!spec.set(run.options, text)) {
+          throw UsageError(option + choice_refusal(spec, printable(text)));
+        }
       }
       const std::string why = check_option_range(spec, run.options, given(std::string(spec.name)));
-      if (!why.empty()) throw UsageError(why);
+      if (!why.empty()) throw UsageError(option + why);
     }
   }
 

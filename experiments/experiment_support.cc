@@ -16,7 +16,8 @@ namespace springlab {
 IntegratorOptions definition_options(const DefinitionObject& o) {
   // Every integrator option the definition gives (its allow_only list says
   // which it may), under the command line's name with '_' for '-'
-  // (integrators/integrator_options.h), checked as the command line checks it.
+  // (integrators/integrator_options.h), checked as the command line checks it;
+  // o.fail names the key where the definition gives it.
   IntegratorOptions options;
   for (const OptionSpec& spec : integrator_options()) {
     std::string key(spec.name);
@@ -27,7 +28,7 @@ IntegratorOptions definition_options(const DefinitionObject& o) {
           using Field = decltype(field);
           if constexpr (std::is_same_v<Field, std::monostate>) {
             if (!spec.set(options, o.string(key.c_str()))) {
-              o.fail(key, choice_refusal(spec, o.string(key.c_str())).substr(spec.name.size() + 4));
+              o.fail(key, choice_refusal(spec, o.string(key.c_str())));
             }
           } else if constexpr (std::is_same_v<Field, bool IntegratorOptions::*>) {
             const nlohmann::json& value = o.raw(key.c_str());
@@ -41,7 +42,7 @@ IntegratorOptions definition_options(const DefinitionObject& o) {
         },
         spec.field);
     const std::string why = check_option_range(spec, options, true);
-    if (!why.empty()) o.fail(key, why.substr(why.find(": ") + 2));
+    if (!why.empty()) o.fail(key, why);
   }
   return options;
 }

@@ -41,18 +41,19 @@ SparseMatrix constraint_laplacian(const std::vector<DistanceConstraint>& constra
 }
 
 StepResult FastSolver::do_initialize() {
-  dim_ = system().dimension_of_state();
+  views_ = system().fast_solver_views();
+  dim_ = views_ != nullptr ? views_->dimension_of_state() : 0;
   std::string why = "this system has no projective form; use implicit-euler";
   position_projections_.clear();
   const bool has_form =
       dim_ >= 1 &&
       (takes_projections_
-           ? system().position_based_form(constraints_, elements_, position_projections_, why)
-           : system().projective_form(constraints_, elements_, why));
+           ? views_->position_based_form(constraints_, elements_, position_projections_, why)
+           : views_->projective_form(constraints_, elements_, why));
   if (!has_form) {
     return StepResult::failure(name() + ": " + why);
   }
-  system().plane_constraints(planes_);
+  views_->plane_constraints(planes_);
   for (const PlaneConstraint& plane : planes_) {
     if (!(plane.stiffness > 0.0)) {
       // A projection puts a particle on the plane, where the barrier's
@@ -71,7 +72,7 @@ StepResult FastSolver::do_initialize() {
 
 void FastSolver::eval_external_force(double t, const Vector& x, const Vector& v, Vector& f) {
   ++mutable_stats().force_evals;
-  system().external_force(t, x, v, f);
+  views_->external_force(t, x, v, f);
 }
 
 Eigen::Vector3d FastSolver::difference(const DistanceConstraint& c, const Vector& x) const {

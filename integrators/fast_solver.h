@@ -1,7 +1,7 @@
 // What the two fast solvers of docs/integrators.md "Fast solvers" share (projective_dynamics.cc,
 // xpbd.cc): the system's stiff forces as distance constraints and
-// projective elements (MechanicalSystem::projective_form), the other forces
-// applied explicitly, the contact planes (MechanicalSystem::
+// projective elements (FastSolverViews::projective_form), the other forces
+// applied explicitly, the contact planes (FastSolverViews::
 // plane_constraints), a refusal where the system has no such form, and the
 // gap of one constraint.
 #pragma once
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "integrators/integrator.h"
+#include "models/fast_solver_views.h"
 
 namespace springlab {
 
@@ -32,9 +33,10 @@ class FastSolver : public Integrator {
   using Integrator::Integrator;
 
   // Reads the distance constraints and the projective elements
-  // (MechanicalSystem::projective_form; with takes_projections_, its
+  // (FastSolverViews::projective_form; with takes_projections_, its
   // position_based_form, whose projections go to position_projections_); a failure
-  // that says what to use when the system's stiff forces have no such form.
+  // that says what to use when the system has no views or its stiff forces
+  // have no such form.
   StepResult do_initialize() override;
 
   // F minus the constraints' forces, counted as a force evaluation.
@@ -49,11 +51,12 @@ class FastSolver : public Integrator {
   // min(max_dv, |v_t|) along -v_t/|v_t| (Mueller et al. 2020, sec. 3.6).
   void slow_tangential_velocity(const PlaneConstraint& plane, Eigen::Index i, double max_dv);
 
+  const FastSolverViews* views_ = nullptr;  // the system's (do_initialize)
   int dim_ = 2;
   std::vector<DistanceConstraint> constraints_;
   std::vector<ProjectiveElement> elements_;
   std::vector<PlaneConstraint> planes_;  // contact planes (xpbd solves them)
-  // Constraints the system projects itself (MechanicalSystem::
+  // Constraints the system projects itself (FastSolverViews::
   // position_based_form): read only by a solver that sets takes_projections_.
   bool takes_projections_ = false;
   std::vector<std::unique_ptr<PositionProjection>> position_projections_;

@@ -131,7 +131,6 @@ const OptionSpec* find_integrator_option(std::string_view name) {
 
 std::string check_option_range(const OptionSpec& spec, const IntegratorOptions& options,
                                bool given) {
-  const std::string option = "--" + std::string(spec.name);
   // The value as a number (flags and choices have no range to check).
   double value = 0.0;
   bool integral = true;
@@ -147,23 +146,23 @@ std::string check_option_range(const OptionSpec& spec, const IntegratorOptions& 
   }
   switch (spec.range) {
     case Range::kPositive:
-      if (!(value > 0.0) || !std::isfinite(value)) return option + ": must be a positive number (got " + number_text(value) + ")";
+      if (!(value > 0.0) || !std::isfinite(value)) return "must be a positive number (got " + number_text(value) + ")";
       break;
     case Range::kAtLeastOne:
-      if (value < 1.0) return option + ": must be >= 1";
+      if (value < 1.0) return "must be >= 1";
       break;
     case Range::kAtLeastOneIfGiven:
-      if (value < 0.0 || (given && value < 1.0)) return option + ": must be >= 1";
+      if (value < 0.0 || (given && value < 1.0)) return "must be >= 1";
       break;
     case Range::kOneToCap:
       if (given && (value < 1.0 || value > kMaxInnerCount)) {
-        return option + ": must be between 1 and " + std::to_string(kMaxInnerCount) + " (got " +
+        return "must be between 1 and " + std::to_string(kMaxInnerCount) + " (got " +
                (integral ? std::to_string(static_cast<long long>(value)) : number_text(value)) +
                ")";
       }
       break;
     case Range::kUnitOpen:
-      if (!(value >= 0.0 && value < 1.0)) return option + ": must be in [0, 1) (0: off)";
+      if (!(value >= 0.0 && value < 1.0)) return "must be in [0, 1) (0: off)";
       break;
     case Range::kAny:
     case Range::kChoice:
@@ -173,8 +172,7 @@ std::string check_option_range(const OptionSpec& spec, const IntegratorOptions& 
 }
 
 std::string choice_refusal(const OptionSpec& spec, const std::string& printable_value) {
-  return "--" + std::string(spec.name) + ": unknown '" + printable_value + "' (" +
-         choices_text(spec) + ")";
+  return "unknown '" + printable_value + "' (" + choices_text(spec) + ")";
 }
 
 }  // namespace springlab

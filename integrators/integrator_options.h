@@ -68,7 +68,8 @@ struct OptionSpec {
   std::variant<std::monostate, double IntegratorOptions::*, int IntegratorOptions::*,
                long IntegratorOptions::*, bool IntegratorOptions::*>
       field;
-  // The values it takes (each refusal reads "--name: ..."):
+  // The values it takes (the refusal's problem, which the caller puts
+  // after its own name of the option: "--name: ..." on the command line):
   enum class Range {
     kAny,         // any value (a method checks its own: --beta, --alpha, ...)
     kPositive,    // > 0 ("must be a positive number (got x)")
@@ -98,11 +99,14 @@ inline constexpr int kMaxInnerCount = 100000;
 
 // Empty when the option's value in `options` is in its range (`given`:
 // whether the user gave it; counts left at 0 mean "the method's own"),
-// otherwise the refusal "--name: must be ..." (a choice's name is checked
-// where it is set: choice_refusal).
+// otherwise the problem only, "must be ..." (a choice's name is checked
+// where it is set: choice_refusal). The caller names the option its own
+// way: the command line "--newton-tol: ", a definition "newton_tol: " in
+// its file-and-place format.
 std::string check_option_range(const OptionSpec& spec, const IntegratorOptions& options,
                                bool given);
-// "--name: unknown 'value' (a, b, c)".
+// The problem with a choice's value: "unknown 'value' (a, b, c)" (the
+// caller names the option, as for check_option_range).
 std::string choice_refusal(const OptionSpec& spec, const std::string& printable_value);
 
 }  // namespace springlab

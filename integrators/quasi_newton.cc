@@ -65,8 +65,9 @@ constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();  // a
 bool Lbfgs::prepare(const MechanicalSystem& system) {
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
-  const int dim = system.dimension_of_state();
-  if (dim < 1 || !system.laplacian_form(constraints, elements)) return false;
+  views_ = system.fast_solver_views();
+  const int dim = views_ != nullptr ? views_->dimension_of_state() : 0;
+  if (dim < 1 || !views_->laplacian_form(constraints, elements)) return false;
   const Eigen::Index n = system.dofs() / dim;
   dim_ = dim;
   particle_mass_.resize(n);
@@ -197,7 +198,7 @@ bool Lbfgs::solve(VelocityStep& step, const CountedModel& model, const Vector& i
   rho_.clear();
   // Start from projective dynamics' inertial prediction: v_n plus what the
   // forces other than the distance constraints' (gravity, ...) add.
-  model.system().external_force(step.t(), step.x(), v_n, q_);
+  views_->external_force(step.t(), step.x(), v_n, q_);
   v = v_n + h * q_.cwiseProduct(inv_mass);
   step.residual(v, r_);
   if (!r_.allFinite() && step.fallback_start(v)) {

@@ -15,7 +15,8 @@ namespace springlab {
 class Lbfgs {
  public:
   // Builds the initial Hessian's Laplacian; false when the system's stiff
-  // forces are not distance constraints or elements (another force).
+  // forces are not distance constraints or elements (another force), or it
+  // has no fast solvers' views (models/fast_solver_views.h).
   bool prepare(const MechanicalSystem& system);
   // Minimizes the step's Phi from projective dynamics' inertial prediction
   // to the tolerance (m/s) in at most max_iterations; true with v the
@@ -42,6 +43,7 @@ class Lbfgs {
 
   // The particles' stiffness Laplacian L of the distance constraints, the
   // factor of M_p + h^2 L (one per step size), and the L-BFGS history.
+  const FastSolverViews* views_ = nullptr;  // the system's (prepare)
   int dim_ = 0;
   SparseMatrix laplacian_;
   Vector particle_mass_;

@@ -15,7 +15,7 @@
 //               x_a += w_a dlambda n,  x_b -= w_b dlambda n,  lambda_c += dlambda
 //               (w = 1/m, n = (x_a - x_b)/|x_a - x_b|),
 //   and sets    v = (x - x_prev) / h_s.
-// Contact planes (MechanicalSystem::plane_constraints) are inequality
+// Contact planes (FastSolverViews::plane_constraints) are inequality
 // constraints C = n.x_i - offset >= 0 of every free particle, projected
 // after the springs in each iteration with compliance 1/k_c (the penalty)
 // and lambda kept >= 0 (they push, never pull). The barrier is refused: its
@@ -27,7 +27,7 @@
 // the force that takes, |dx_t| / (w h_s^2), is at most mu f_n; dynamic,
 // after the substep, v_t loses min(h_s mu f_n / m, |v_t|) along -v_t/|v_t|.
 // Exact Coulomb friction, without the smoothing: a particle sticks exactly.
-// Projective elements (MechanicalSystem::projective_form: corotated's
+// Projective elements (FastSolverViews::projective_form: corotated's
 // as-rigid-as-possible energy w/2 |F - R|^2 and, for poisson > 0,
 // Bouaziz's volume constraint; docs/integrators.md "Fast solvers") are the constraint
 // C = |F - P(F)|, the distance of F to the set it is projected on, with
@@ -38,7 +38,7 @@
 // after the springs as one constraint over all of the element's nodes:
 //   dlambda = (-C - a~ lambda_e) / (sum_i w_i |grad_i C|^2 + a~),
 //   x_i += w_i dlambda grad_i C.
-// Constraints the model projects itself (MechanicalSystem::
+// Constraints the model projects itself (FastSolverViews::
 // position_based_form: a fluid's density constraints, position-based
 // fluids, models/fluid_density_projection.cc) are found at the substep's
 // predicted positions (begin) and projected after the elements in each
@@ -80,7 +80,7 @@ class Xpbd final : public FastSolver {
   // Projects the projective elements once (lambda_elements_ accumulates).
   void project_elements(double hs);
   // The distance constraints as the projection loop reads them, in the
-  // order they are projected (MechanicalSystem::projective_form's: the
+  // order they are projected (FastSolverViews::projective_form's: the
   // scene's order of its springs): offsets a * dim and b * dim into x (b < 0: anchored),
   // inverse masses, rest length, anchor, and the compliance a~ = 1/(k h_s^2)
   // of the current substep length.

@@ -6,7 +6,8 @@
 // kinds (element_kind.h) the scene has, and both Jacobians share one sparsity
 // pattern built here (once, or anew when a term's couplings move: a fluid's
 // neighbours, ForceTerm::pattern_holds). The fast solvers' views
-// (mechanical_system.h, part 3) are gathered here from the same terms.
+// (FastSolverViews, fast_solver_views.h: part 3 of mechanical_system.h's
+// map) are gathered here from the same terms.
 //
 // Not thread-safe: evaluation uses the model's scratch arrays. Use one model
 // per thread (they are cheap to build from the Scene).
@@ -18,13 +19,14 @@
 #include <vector>
 
 #include "models/energies.h"
+#include "models/fast_solver_views.h"
 #include "models/force_term.h"
 #include "models/mechanical_system.h"
 #include "models/scene.h"
 
 namespace springlab {
 
-class ElasticModel final : public MechanicalSystem {
+class ElasticModel final : public MechanicalSystem, public FastSolverViews {
  public:
   explicit ElasticModel(const Scene& scene);
 
@@ -61,6 +63,10 @@ class ElasticModel final : public MechanicalSystem {
   // in scene terms; empty when it is not one.
   std::string forbidden_state(const Vector& x) const;
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
+  void lag_normal_forces(const Vector* x_lag) const override;
+  const FastSolverViews* fast_solver_views() const override { return this; }
+
+  // FastSolverViews (fast_solver_views.h), gathered from the same terms.
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
                        std::string& why) const override;
@@ -71,7 +77,6 @@ class ElasticModel final : public MechanicalSystem {
                            std::vector<std::unique_ptr<PositionProjection>>& projections,
                            std::string& why) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
-  void lag_normal_forces(const Vector* x_lag) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
 

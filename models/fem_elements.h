@@ -81,7 +81,7 @@ struct ElementBlock {
 // an element's energy is conservative, forbids states where a material has
 // no energy (neo-Hookean, J <= 0), couples every pair of its free nodes in
 // dF/dx, and has the forms the fast solvers ask for, built when asked
-// (MechanicalSystem::projective_form and laplacian_form):
+// (FastSolverViews::projective_form and laplacian_form):
 //   - projective: corotated elements store the as-rigid-as-possible energy
 //     W mu |F - R|^2 = w/2 |F - R|^2, w = 2 mu W, R the nearest rotation
 //     (Bouaziz et al. 2014's strain constraint, exactly), and for lambda > 0

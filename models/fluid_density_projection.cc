@@ -1,6 +1,6 @@
 // Position-based fluids (Macklin and Mueller 2013, "Position based fluids",
 // ACM TOG 32(4):104): a fluid's pressure as density constraints that the
-// xpbd integrator projects (MechanicalSystem::position_based_form,
+// xpbd integrator projects (FastSolverViews::position_based_form,
 // docs/integrators.md "Position-based fluids"). One constraint per free
 // particle i of a fluid,
 //

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "models/fast_solver_views.h"
 #include "models/mechanical_system.h"
 
 namespace springlab {
@@ -204,13 +205,13 @@ class ForceTerm {
     return std::numeric_limits<double>::infinity();
   }
   // A stiff conservative term that is a set of distance constraints
-  // (MechanicalSystem::projective_form) appends them with internal
+  // (FastSolverViews::projective_form) appends them with internal
   // particle indices (b may be fixed: the model ties it to its place) and
   // returns true.
   virtual bool distance_constraints(std::vector<DistanceConstraint>& /*out*/) const {
     return false;
   }
-  // A stiff conservative term of projective elements (MechanicalSystem::
+  // A stiff conservative term of projective elements (FastSolverViews::
   // projective_form) appends them with internal node indices (fixed ones
   // too: the model turns them into places) and returns true; false, with
   // `why`, where its energy has no projective form.
@@ -220,15 +221,15 @@ class ForceTerm {
     return false;
   }
   // A stiff conservative term with neither form whose constraints a
-  // position-based solver can project (MechanicalSystem::
+  // position-based solver can project (FastSolverViews::
   // position_based_form) returns them; nullptr where it has none.
   virtual std::unique_ptr<PositionProjection> position_projection() const { return nullptr; }
   virtual bool projects_positions() const { return false; }
-  // The same elements for quasi-Newton's initial Hessian (MechanicalSystem::
+  // The same elements for quasi-Newton's initial Hessian (FastSolverViews::
   // laplacian_form), any material, without a projection.
   virtual bool laplacian_elements(std::vector<ProjectiveElement>& /*out*/) const { return false; }
   virtual double velocity_potential(const Configuration&) const { return 0.0; }
-  // A term the fast solvers see as contact planes (MechanicalSystem::
+  // A term the fast solvers see as contact planes (FastSolverViews::
   // plane_constraints) appends them and returns true; so does friction,
   // which they solve with the planes (appending none).
   virtual bool plane_constraints(std::vector<PlaneConstraint>& /*out*/) const { return false; }

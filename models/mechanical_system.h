@@ -20,14 +20,17 @@
 //      (a symbolic factorization kept per pattern), jacobian_symmetric,
 //      velocity_dependence, has_forbidden_states and admissible_fraction (the
 //      barrier's step cap), lag_normal_forces (friction lagged for one solve).
-//   3. The fast solvers' views of the same forces, each false with the
-//      reason when the model's forces have no such form (the solver then
-//      refuses the scene with it): projective_form (projective dynamics),
-//      position_based_form (xpbd), laplacian_form (quasi-Newton's initial
-//      Hessian), with plane_constraints, external_force and
-//      dimension_of_state for what they solve or add explicitly.
-// A method that needs only part 1 runs every system; parts 2 and 3 have
-// defaults that say "none" for a system without them.
+//   3. The fast solvers' views of the same forces, not in this interface:
+//      FastSolverViews (models/fast_solver_views.h), which a system hands
+//      out through fast_solver_views() (nullptr: none). projective_form
+//      (projective dynamics), position_based_form (xpbd), laplacian_form
+//      (quasi-Newton's initial Hessian), with plane_constraints,
+//      external_force and dimension_of_state for what they solve or add
+//      explicitly; each form false with the reason when the model's forces
+//      have no such form (the solver then refuses the scene with it).
+// A method that needs only part 1 runs every system; part 2 has defaults
+// that say "none" for a system without it, and a system without part 3
+// hands out no views, which the fast solvers refuse.
 #pragma once
 
 #include <Eigen/Core>
@@ -38,6 +41,8 @@
 #include <vector>
 
 namespace springlab {
+
+class FastSolverViews;  // models/fast_solver_views.h
 
 using Vector = Eigen::VectorXd;
 using SparseMatrix = Eigen::SparseMatrix<double>;  // column-major (CSC)
@@ -55,75 +60,6 @@ enum class VelocityDependence {
 // Which forces to evaluate. IMEX methods treat the stiff part (springs,
 // spring damping, drag) implicitly and the rest (gravity, wind) explicitly.
 enum class ForcePart { kAll, kStiff, kNonstiff };
-
-// A distance constraint |x_a - x_b| = length of stiffness k (compliance
-// 1/k): what the fast solvers of docs/integrators.md "Fast solvers" (projective dynamics, XPBD) see
-// of a stiff conservative force that has this form. a is a free particle (its
-// unknowns at a * dim); b a free particle, or -1 with `anchor` the fixed
-// position it is tied to.
-struct DistanceConstraint {
-  int a = 0;
-  int b = -1;
-  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
-  double stiffness = 0.0;
-  double length = 0.0;
-};
-
-// A half-space n.x >= offset that free particles must not enter, as the
-// fast solvers see a contact plane (docs/integrators.md "Fast solvers", "Contact with
-// planes"): with the penalty, a constraint of compliance 1/stiffness active
-// where the gap is negative; the barrier has stiffness 0 (xpbd refuses it).
-// `friction` is the plane's Coulomb mu.
-struct PlaneConstraint {
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  // unit
-  double offset = 0.0;                                // n.point
-  double stiffness = 0.0;                             // k_c; 0: the barrier
-  double friction = 0.0;
-};
-
-// An element energy of projective form (Bouaziz et al., "Projective
-// dynamics: fusing constraint projections for fast simulation", ACM TOG
-// 2014, sec. 4-5), as projective dynamics sees it (docs/integrators.md "Fast solvers"):
-//   E = w/2 |F - project(F)|^2,  F = sum_j x_j g_j^T (dim x k),
-// project(F) a nearest point of F on a constraint set (the rotations: the
-// as-rigid-as-possible strain energy; the matrices of J = 1: the volume
-// constraint). Its global matrix gets w g_i . g_j
-// for nodes i, j (the same for every coordinate); its local step is
-// project(F). A fixed node has index -1 and its place in `fixed`.
-// (Its matrices have at most 4 nodes and 3 x 3 entries: on the stack, so
-// the fast solvers' local steps allocate nothing.)
-struct ProjectiveElement {
-  using Gradients = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 3>;
-  using Deformation = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
-  std::vector<int> nodes;               // internal indices; -1: a fixed node
-  std::vector<Eigen::Vector3d> fixed;   // each node's position where fixed
-  Gradients G;                          // nodes x k, rows g_j
-  double weight = 0.0;                  // w
-  // The projection, dim x k (models/materials/kinematics.h: polar's R,
-  // nearest_unit_volume).
-  Deformation (*project)(const Deformation& F) = nullptr;
-};
-
-// Constraints that a position-based solver (xpbd, docs/integrators.md
-// "Fast solvers") cannot list once, because which particles they couple
-// changes with the state (a fluid's density constraints: one per particle,
-// over its neighbours), so the model projects them itself. In each substep
-// the solver calls
-//   begin(x)               at the predicted positions (the free unknowns):
-//                          finds what stays fixed for the substep (the
-//                          neighbours) and zeroes the multipliers;
-//   project(x, h_s)        once per iteration: moves x toward the
-//                          constraints, compliance a~ = alpha / h_s^2
-//                          (XPBD, Macklin, Mueller and Chentanez 2016);
-//   correct_velocity(x, v) after v = (x - x_prev) / h_s: a velocity filter
-//                          the constraints come with (none by default).
-class PositionProjection {
- public:
-  virtual ~PositionProjection() = default;
-  virtual void begin(const Vector& x) = 0;
-  virtual void project(Vector& x, double hs) = 0;
-  virtual void correct_velocity(const Vector& /*x*/, Vector& /*v*/, double /*hs*/) {}
-};
 
 class MechanicalSystem {
  public:
@@ -236,38 +172,6 @@ class MechanicalSystem {
     return std::numeric_limits<double>::infinity();
   }
 
-  // The fast solvers' view (docs/integrators.md "Fast solvers"): the stiff conservative
-  // forces as distance constraints and projective elements (above), and F
-  // minus their forces and every element's (external_force: gravity, drag,
-  // wind, spring damping, treated explicitly). False, with `why` (one
-  // sentence for the user), when some stiff force has neither form. The
-  // distance constraints come in the scene's order of its springs: XPBD's
-  // Gauss-Seidel pass projects them in this order.
-  virtual bool projective_form(std::vector<DistanceConstraint>& /*constraints*/,
-                               std::vector<ProjectiveElement>& /*elements*/,
-                               std::string& why) const {
-    why = "this system has no projective form; use implicit-euler";
-    return false;
-  }
-  // The position-based solvers' view (xpbd): projective_form's, where a
-  // stiff force without that form may come instead as a PositionProjection
-  // (appended to `projections`, which the solver then owns). The default
-  // has none.
-  virtual bool position_based_form(std::vector<DistanceConstraint>& constraints,
-                                   std::vector<ProjectiveElement>& elements,
-                                   std::vector<std::unique_ptr<PositionProjection>>& projections,
-                                   std::string& why) const {
-    projections.clear();
-    return projective_form(constraints, elements, why);
-  }
-  // Quasi-Newton's initial Hessian (docs/integrators.md "Fast solvers"): the distance
-  // constraints and, for elements of any material, the Laplacian part of a
-  // projective element (no projection): weight w = (lambda + 2 mu) W.
-  // False when some stiff conservative force has neither form.
-  virtual bool laplacian_form(std::vector<DistanceConstraint>& /*constraints*/,
-                              std::vector<ProjectiveElement>& /*elements*/) const {
-    return false;
-  }
   // Lagged normal forces (docs/physics.md "Contact with planes"): with x_lag, Coulomb
   // friction takes its normal force f_n from x_lag instead of from the
   // evaluated state, which makes it the gradient of a dissipation potential
@@ -277,14 +181,10 @@ class MechanicalSystem {
   // change) and clears it after; every other evaluation sees friction live.
   virtual void lag_normal_forces(const Vector* /*x_lag*/) const {}
 
-  // The contact planes as constraints (empty without planes). Their forces,
-  // and friction's, are not in external_force: a fast solver that reads
-  // projective_form must solve these too, or refuse the system.
-  virtual void plane_constraints(std::vector<PlaneConstraint>& out) const { out.clear(); }
-  virtual void external_force(double /*t*/, const Vector& /*x*/, const Vector& /*v*/,
-                              Vector& /*f*/) const {}
-  // Particle count of the free particles and the dimension (dofs = both).
-  virtual int dimension_of_state() const { return 0; }
+  // Part 3: the fast solvers' views of the same forces
+  // (models/fast_solver_views.h), or nullptr when the system has none (a
+  // fast solver then refuses the scene and names implicit-euler).
+  virtual const FastSolverViews* fast_solver_views() const { return nullptr; }
 };
 
 }  // namespace springlab

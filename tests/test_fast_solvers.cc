@@ -601,5 +601,84 @@ TEST(FastSolvers, ChebyshevBringsProjectiveDynamicsCloserAtEqualIterations) {
   }
 }
 
+// The model's physics alone (MechanicalSystem, parts 1 and 2 of
+// models/mechanical_system.h's map), without the fast solvers' views.
+class PhysicsOnly final : public MechanicalSystem {
+ public:
+  explicit PhysicsOnly(const ElasticModel& model) : m_(model) {}
+  using MechanicalSystem::force;
+  using MechanicalSystem::jacobians;
+  Eigen::Index dofs() const override { return m_.dofs(); }
+  const Vector& mass() const override { return m_.mass(); }
+  void force(ForcePart part, double t, const Vector& x, const Vector& v,
+             Vector& f) const override {
+    m_.force(part, t, x, v, f);
+  }
+  void jacobians(ForcePart part, double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                 SparseMatrix* dfdv) const override {
+    m_.jacobians(part, t, x, v, dfdx, dfdv);
+  }
+  void definite_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
+                          SparseMatrix* dfdv) const override {
+    m_.definite_jacobians(t, x, v, dfdx, dfdv);
+  }
+  bool derives_from_potentials() const override { return m_.derives_from_potentials(); }
+  double position_potential(double t, const Vector& x) const override {
+    return m_.position_potential(t, x);
+  }
+  double velocity_potential(double t, const Vector& v) const override {
+    return m_.velocity_potential(t, v);
+  }
+  double nonconservative_power(double t, const Vector& x, const Vector& v) const override {
+    return m_.nonconservative_power(t, x, v);
+  }
+  const SparseMatrix& jacobian_pattern() const override { return m_.jacobian_pattern(); }
+  bool jacobian_symmetric() const override { return m_.jacobian_symmetric(); }
+  VelocityDependence velocity_dependence() const override { return m_.velocity_dependence(); }
+
+ private:
+  const ElasticModel& m_;
+};
+
+// The fast solvers see a system only through its views
+// (MechanicalSystem::fast_solver_views, models/fast_solver_views.h): a
+// system without them is refused with the message that names the method
+// to use, while Newton's implicit Euler, which needs only the physics,
+// steps it exactly as it steps the model.
+TEST(FastSolvers, ASystemWithoutViewsIsRefusedAndNewtonStillRunsIt) {
+  const ElasticModel model(make_builtin_scene("cloth", {{"n", "4"}}));
+  const PhysicsOnly physics(model);
+  ASSERT_EQ(model.fast_solver_views(), static_cast<const FastSolverViews*>(&model));
+  ASSERT_EQ(physics.fast_solver_views(), nullptr);
+  const Vector& x0 = model.initial_positions();
+  const Vector& v0 = model.initial_velocities();
+  for (const char* method : {"projective-dynamics", "xpbd"}) {
+    SCOPED_TRACE(method);
+    EXPECT_TRUE(make_integrator(method)->initialize(model, 0.0, x0, v0, {}).ok);
+    const StepResult refused = make_integrator(method)->initialize(physics, 0.0, x0, v0, {});
+    EXPECT_FALSE(refused.ok);
+    EXPECT_EQ(refused.message,
+              std::string(method) + ": this system has no projective form; use implicit-euler");
+  }
+  IntegratorOptions quasi;
+  quasi.solver = Solver::kQuasiNewton;
+  EXPECT_TRUE(make_integrator("implicit-euler")->initialize(model, 0.0, x0, v0, quasi).ok);
+  const StepResult refused = make_integrator("implicit-euler")->initialize(physics, 0.0, x0, v0,
+                                                                           quasi);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.message.find("use --solver newton"), std::string::npos) << refused.message;
+  auto on_model = make_integrator("implicit-euler");
+  auto on_physics = make_integrator("implicit-euler");
+  ASSERT_TRUE(on_model->initialize(model, 0.0, x0, v0, {}).ok);
+  ASSERT_TRUE(on_physics->initialize(physics, 0.0, x0, v0, {}).ok);
+  for (int k = 1; k <= 5; ++k) {
+    ASSERT_TRUE(on_model->advance_to(k / 60.0).ok);
+    ASSERT_TRUE(on_physics->advance_to(k / 60.0).ok);
+  }
+  EXPECT_GT((on_model->x() - x0).norm(), 1e-3) << "the cloth must have moved";
+  EXPECT_EQ(on_physics->x(), on_model->x());
+  EXPECT_EQ(on_physics->v(), on_model->v());
+}
+
 }  // namespace
 }  // namespace springlab

@@ -62,15 +62,15 @@ TEST(IntegratorOptions, RangesAreCheckedFromTheDeclaration) {
   const OptionSpec& newton_tol = *find_integrator_option("newton-tol");
   EXPECT_EQ(check_option_range(newton_tol, o, false), "");
   o.newton_tol = -1.0;
-  EXPECT_EQ(check_option_range(newton_tol, o, true), "--newton-tol: must be a positive number (got -1)");
+  EXPECT_EQ(check_option_range(newton_tol, o, true), "must be a positive number (got -1)");
   const OptionSpec& substeps = *find_integrator_option("substeps");
   EXPECT_EQ(check_option_range(substeps, o, false), "") << "0: the method's own";
   o.substeps = kMaxInnerCount + 1;
   EXPECT_EQ(check_option_range(substeps, o, true),
-            "--substeps: must be between 1 and 100000 (got 100001)");
+            "must be between 1 and 100000 (got 100001)");
   const OptionSpec& chebyshev = *find_integrator_option("chebyshev");
   o.chebyshev = 1.0;
-  EXPECT_EQ(check_option_range(chebyshev, o, true), "--chebyshev: must be in [0, 1) (0: off)");
+  EXPECT_EQ(check_option_range(chebyshev, o, true), "must be in [0, 1) (0: off)");
 }
 
 TEST(IntegratorOptions, DefinitionsReadTheDeclaredNamesWithUnderscores) {

@@ -2,10 +2,11 @@
 // stiffness k_c from one free particle p to the cursor c,
 //   V_c = k_c/2 |x_p - c|^2,   F_p = -k_c (x_p - c),   dF_p/dx_p = -k_c I,
 // added to a model's forces while the user drags. CursorSpring is the
-// model as the integrators see it (a MechanicalSystem): every call goes to
-// the model, plus the spring where it applies, so every method runs the
-// dragged scene unchanged. The fast solvers (projective dynamics, XPBD)
-// take it with the external forces, explicitly (external_force()).
+// model as the integrators see it (a MechanicalSystem, and its
+// FastSolverViews): every call goes to the model, plus the spring where it
+// applies, so every method runs the dragged scene unchanged. The fast
+// solvers (projective dynamics, XPBD) take it with the external forces,
+// explicitly (external_force()).
 //
 // The stiffness: k_c = m_p w_max^2 / 4, so the spring's own frequency is
 // w_max / 2 and the system's highest frequency grows by at most
@@ -19,7 +20,7 @@
 
 namespace springlab {
 
-class CursorSpring final : public MechanicalSystem {
+class CursorSpring final : public MechanicalSystem, public FastSolverViews {
  public:
   // w_max: the model's highest angular frequency (modal_analysis.h); 0
   // when unknown (k_c is then 100 m_p, a 10 rad/s spring).
@@ -73,6 +74,10 @@ class CursorSpring final : public MechanicalSystem {
   double admissible_fraction(const Vector& x, const Vector& dx) const override {
     return model_.admissible_fraction(x, dx);
   }
+  void lag_normal_forces(const Vector* x_lag) const override { model_.lag_normal_forces(x_lag); }
+  const FastSolverViews* fast_solver_views() const override { return this; }
+
+  // FastSolverViews: the model's, with the spring among the external forces.
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
                        std::string& why) const override {
@@ -88,7 +93,6 @@ class CursorSpring final : public MechanicalSystem {
                       std::vector<ProjectiveElement>& elements) const override {
     return model_.laplacian_form(constraints, elements);
   }
-  void lag_normal_forces(const Vector* x_lag) const override { model_.lag_normal_forces(x_lag); }
   void plane_constraints(std::vector<PlaneConstraint>& out) const override {
     model_.plane_constraints(out);
   }
