@@ -7,7 +7,8 @@ install(TARGETS springlab_core springlab_cholmod EXPORT springlabTargets
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/springlab)
 install(TARGETS springlab RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 foreach(dir models models/materials integrators experiments)
-  file(GLOB headers ${PROJECT_SOURCE_DIR}/${dir}/*.h)
+  # CONFIGURE_DEPENDS: a header added later is installed without a fresh configure.
+  file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/${dir}/*.h)
   install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/springlab/${dir})
 endforeach()
 
