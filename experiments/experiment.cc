@@ -10,6 +10,7 @@
 
 #include "experiments/experiment_support.h"
 #include "experiments/output_files.h"
+#include "models/strict_json.h"
 
 namespace springlab {
 
@@ -52,103 +53,6 @@ Row& Row::add_empty() {
   return *this;
 }
 
-namespace {
-
-// Builds a definition's JSON through nlohmann's SAX interface, refusing a
-// key given twice in one object (the library would keep the last one
-// silently), with the element's path in the message. Paths are built only
-// for a message, so deep nesting costs memory in proportion to the depth.
-class DefinitionBuilder {
- public:
-  DefinitionBuilder(nlohmann::json& root, const std::string& source) : root_(root), source_(source) {}
-
-  bool null() { return add(nullptr); }
-  bool boolean(bool value) { return add(value); }
-  bool number_integer(nlohmann::json::number_integer_t value) { return add(value); }
-  bool number_unsigned(nlohmann::json::number_unsigned_t value) { return add(value); }
-  bool number_float(nlohmann::json::number_float_t value, const std::string&) { return add(value); }
-  bool string(std::string& value) { return add(std::move(value)); }
-  bool binary(nlohmann::json::binary_t& value) { return add(nlohmann::json::binary(std::move(value))); }
-  bool start_object(std::size_t) { return open(nlohmann::json::object()); }
-  bool start_array(std::size_t) { return open(nlohmann::json::array()); }
-  bool end_object() { return close(); }
-  bool end_array() { return close(); }
-
-  bool key(std::string& key) {
-    Frame& top = frames_.back();
-    if (top.container->contains(key)) {
-      const std::string where = path();
-      throw DefinitionError(source_ + ": " + (where.empty() ? "" : where + ": ") + "duplicate key '" +
-                            printable(key) + "'");
-    }
-    top.key = std::move(key);
-    return true;
-  }
-
-  bool parse_error(std::size_t, const std::string&, const nlohmann::json::exception& e) {
-    // parse_error, or out_of_range 406 for a number beyond a double (1e999).
-    std::string what = e.what();
-    const auto bracket = what.find("] ");
-    if (bracket != std::string::npos) what = what.substr(bracket + 2);
-    std::replace(what.begin(), what.end(), '\n', ' ');
-    throw DefinitionError(source_ + ": malformed JSON: " + what);
-  }
-
- private:
-  struct Frame {
-    nlohmann::json* container;
-    std::string key;  // objects: the key of the value being read
-  };
-
-  // The path of the open container, as DefinitionObject writes it: cases[0].scene
-  std::string path() const {
-    std::string out;
-    for (std::size_t k = 1; k < frames_.size(); ++k) {
-      const Frame& parent = frames_[k - 1];
-      if (parent.container->is_array()) {
-        out += '[';
-        out += std::to_string(parent.container->size() - 1);
-        out += ']';
-      } else {
-        if (!out.empty()) out += '.';
-        out += parent.key;
-      }
-    }
-    return out;
-  }
-
-  nlohmann::json* insert(nlohmann::json&& value) {
-    if (frames_.empty()) {
-      root_ = std::move(value);
-      return &root_;
-    }
-    Frame& top = frames_.back();
-    if (top.container->is_array()) {
-      top.container->push_back(std::move(value));
-      return &top.container->back();
-    }
-    return &((*top.container)[top.key] = std::move(value));
-  }
-  bool add(nlohmann::json&& value) {
-    insert(std::move(value));
-    return true;
-  }
-  bool open(nlohmann::json&& container) {
-    frames_.push_back({insert(std::move(container)), {}});
-    return true;
-  }
-  bool close() {
-    frames_.pop_back();
-    return true;
-  }
-
-  nlohmann::json& root_;
-  const std::string& source_;
-  std::vector<Frame> frames_;
-};
-
-}  // namespace
-
 LoadedExperiment parse_experiment(const std::string& json_text, const std::string& source) {
   if (json_text.size() > kMaxDefinitionBytes) {
     throw DefinitionError(source + ": " + std::to_string(json_text.size()) +
@@ -158,9 +62,13 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
   if (const std::optional<std::string> problem = json_text_problem(json_text)) {
     throw DefinitionError(source + ": " + *problem);
   }
-  nlohmann::json json;
-  DefinitionBuilder builder(json, source);
-  nlohmann::json::sax_parse(json_text, &builder);  // every failure throws from the builder
+  // The strict reader refuses a key given twice in one object (the library
+  // would keep the last one silently), naming the object: cases[0].scene.
+  StrictJsonPolicy policy;
+  policy.fail = [&source](const std::string& path, const std::string& message) {
+    throw DefinitionError(source + ": " + (path.empty() ? "" : path + ": ") + message);
+  };
+  const nlohmann::json json = parse_strict_json<nlohmann::json>(json_text, policy);
   const DefinitionObject top(json, source, "");
   const std::string kind = top.string("experiment");
   for (const ExperimentKind& k : experiment_kinds()) {

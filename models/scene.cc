@@ -11,12 +11,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <unordered_set>
 #include <utility>
 
 #include "models/bodies.h"
 #include "models/element_kind.h"
 #include "models/scene_io.h"
+#include "models/strict_json.h"
 
 namespace springlab {
 namespace {
@@ -78,137 +78,18 @@ std::size_t array_cap(const std::string& key) {
 
 // ---- Reading the JSON document. ----
 
-// Builds the document through nlohmann's SAX interface while tracking where
-// it is, to refuse duplicate keys (the library would keep the last silently)
-// and to name the element of a number too large for a double (the library
-// refuses 1e999 before we see it). nlohmann's callback parser would do this
-// too, but it rescans the parent array after every object: quadratic.
-//
-// The resource caps of scene.h are enforced here, as the document grows, so
-// that memory stays bounded whatever the file holds: nesting depth (each open
-// container keeps its path), the number of values, and the length of the
-// particles array and of every element kind's arrays. Keys are looked up in a
-// hash set and appended without a search: an ordered_json object searches
-// linearly, which made an object of 10^5 keys take a minute.
-class DocumentBuilder {
- public:
-  DocumentBuilder(Json& root, const Reporter& r) : root_(root), r_(r) {}
-
-  bool null() { return add(nullptr); }
-  bool boolean(bool value) { return add(value); }
-  bool number_integer(Json::number_integer_t value) { return add(value); }
-  bool number_unsigned(Json::number_unsigned_t value) { return add(value); }
-  bool number_float(Json::number_float_t value, const Json::string_t&) { return add(value); }
-  bool string(Json::string_t& value) { return add(std::move(value)); }
-  bool binary(Json::binary_t& value) { return add(Json::binary(std::move(value))); }
-
-  bool start_object(std::size_t) { return open(Json::object()); }
-  bool start_array(std::size_t) { return open(Json::array()); }
-  bool end_object() { return close(); }
-  bool end_array() { return close(); }
-
-  bool key(Json::string_t& key) {
-    Frame& top = frames_.back();
-    if (!top.keys.insert(key).second)
-      r_.fail(top.path, "duplicate key '" + printable(key) + "'");
-    top.key = std::move(key);
-    return true;
-  }
-
-  bool parse_error(std::size_t, const std::string&, const Json::exception& e) {
-    if (e.id == 406)
-      r_.fail(next_path().empty() ? "top level" : next_path(), "must be a finite number");
-    std::string message = e.what();
-    const auto bracket = message.find("] ");  // drop "[json.exception.parse_error.101] "
-    if (message.rfind("[json.exception.", 0) == 0 && bracket != std::string::npos) {
-      message.erase(0, bracket + 2);
-    }
-    std::replace(message.begin(), message.end(), '\n', ' ');
-    r_.fail("", "malformed JSON: " + message);
-  }
-
- private:
-  struct Frame {
-    Json* container;
-    std::string path;
-    std::string key;                       // objects: the key of the value being read
-    std::unordered_set<std::string> keys;  // objects: the keys read so far
-    // Arrays: at most this many elements (a top-level element array's cap).
-    std::size_t cap = std::numeric_limits<std::size_t>::max();
-  };
-
-  // The path of the value being read now.
-  std::string next_path() const {
-    if (frames_.empty()) return "";
-    const Frame& top = frames_.back();
-    return top.container->is_array() ? element(top.path, top.container->size())
-                                     : field(top.path, top.key);
-  }
-
-  // Only the innermost open container grows, so pointers to the open ones
-  // (each the last element of its parent) stay valid.
-  Json* insert(Json&& value) {
-    if (++values_ > kMaxSceneJsonValues) {
-      r_.fail(next_path().empty() ? "top level" : next_path(),
-              "the file holds more than " + std::to_string(kMaxSceneJsonValues) +
-                  " JSON values, over the cap for a scene file");
-    }
-    if (frames_.empty()) {
-      root_ = std::move(value);
-      return &root_;
-    }
-    Frame& frame = frames_.back();
-    Json& top = *frame.container;
-    if (top.is_array()) {
-      if (top.size() >= frame.cap) {
-        r_.fail(frame.path, "more than " + std::to_string(frame.cap) + " " + frame.path +
-                                ", over the cap of " + std::to_string(frame.cap) + " per scene");
-      }
-      top.push_back(std::move(value));
-      return &top.back();
-    }
-    // key() has refused a duplicate, so the key is new: append, no search.
-    Json::object_t& object = top.get_ref<Json::object_t&>();
-    object.emplace_back(std::move(frame.key), std::move(value));
-    return &object.back().second;
-  }
-
-  bool add(Json&& value) {
-    insert(std::move(value));
-    return true;
-  }
-
-  bool open(Json&& container) {
-    std::string path = next_path();
-    if (frames_.size() >= kMaxSceneNesting) {
-      r_.fail(path, "nested deeper than " + std::to_string(kMaxSceneNesting) +
-                        " levels, over the cap for a scene file");
-    }
-    // A top-level array (the parent is the root object) may be an element array.
-    const bool top_level_array = frames_.size() == 1 && container.is_array() &&
-                                 frames_.back().container->is_object();
-    Json* inserted = insert(std::move(container));
-    frames_.push_back({inserted, std::move(path), {}, {}});
-    if (top_level_array) frames_.back().cap = array_cap(frames_.back().path);
-    return true;
-  }
-
-  bool close() {
-    frames_.pop_back();
-    return true;
-  }
-
-  Json& root_;
-  const Reporter& r_;
-  std::vector<Frame> frames_;
-  std::size_t values_ = 0;
-};
-
+// The strict reader (strict_json.h) refuses duplicate keys and names the
+// element of a number too large for a double (the library refuses 1e999
+// before we see it). The resource caps of scene.h are enforced as the
+// document grows, so that memory stays bounded whatever the file holds:
+// nesting depth, the number of values, and the length of the particles array
+// and of every element kind's arrays.
 Json parse_document(const std::string& text, const Reporter& r) {
-  Json document;
-  DocumentBuilder builder(document, r);
-  Json::sax_parse(text, &builder);  // every failure throws from the builder
-  return document;
+  StrictJsonPolicy policy;
+  policy.fail = [&r](const std::string& path, const std::string& message) { r.fail(path, message); };
+  policy.name_overflowing_number = true;
+  policy.caps = StrictJsonCaps{kMaxSceneNesting, kMaxSceneJsonValues, array_cap, "scene"};
+  return parse_strict_json<Json>(text, policy);
 }
 
 // ---- Particles (docs/physics.md "Scene files"). ----
