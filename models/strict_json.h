@@ -40,9 +40,10 @@ struct StrictJsonPolicy {
   std::optional<StrictJsonCaps> caps;  // none: only the library's limits
 };
 
-// Parses `text` into JsonT (nlohmann::json or nlohmann::ordered_json), keys
-// in a hash set and appended without a search (an object of 10^5 keys is
-// read in linear time). Every failure goes through policy.fail.
+// Parses `text` into JsonT (nlohmann::json or nlohmann::ordered_json). An
+// ordered_json object's keys also go in a hash set and are appended without
+// a search, so an object of 10^5 keys is read in linear time. Every failure
+// goes through policy.fail.
 template <class JsonT>
 JsonT parse_strict_json(const std::string& text, const StrictJsonPolicy& policy);
 

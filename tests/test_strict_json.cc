@@ -93,6 +93,9 @@ TEST(StrictJson, CapsNameTheValueThatGoesOver) {
   EXPECT_EQ(deep.message, "nested deeper than 3 levels, over the cap for a test file");
 
   EXPECT_NO_THROW(parse_strict_json<nlohmann::json>(R"({"xs": [1, 2], "ys": [1, 2, 3]})", policy));
+  // Only an array that is a value of the top-level object is capped.
+  EXPECT_NO_THROW(parse_strict_json<nlohmann::json>(R"({"w": {"xs": [1, 2, 3]}})", policy));
+  EXPECT_NO_THROW(parse_strict_json<nlohmann::json>(R"([[1, 2, 3]])", policy));
   const Refusal long_array = refusal<nlohmann::json>(R"({"xs": [1, 2, 3]})", policy);
   EXPECT_EQ(long_array.path, "xs");
   EXPECT_EQ(long_array.message, "more than 2 xs, over the cap of 2 per test");
