@@ -265,19 +265,21 @@ const Pair kPd = {
 };
 
 // Projected Newton: the largest distance allowed between springlab's and the
-// reference's final positions after 0.3 s (18 steps), 1 % of the cloth's
-// 1 m side. Both stop on an update ||dv||_inf <= 1e-4 m/s, not on the
-// error: each step's positions lie about 1e-4 m/s x h = 1.7e-6 m or more
-// from the exact step's (the reference converges linearly near buckling,
-// so its error is several times its last update), and the folding cloth
-// amplifies the difference where it buckles. Measured on cloth 32 after
-// 0.3 s: 3.6 mm at the largest, 0.07 mm the median particle; springlab
-// itself at --newton-tol 1e-6 and 1e-8 ends 1.6 mm apart at the largest
-// (1e-8 m the median), and the reference at --tol 1e-6 ends within 0.13 mm
-// of springlab at 1e-8: the same physics, the difference is the tolerance's.
-// (The cloth scene has no drag; with drag 1e-3 kg/s added, the two at those
-// tolerances end 0.08 mm apart, and 58 mm from the run without it.)
-constexpr double kNewtonTolerance = 1e-2;  // [m]
+// reference's final positions after 0.3 s (18 steps), 2 % of the cloth's
+// 1 m side, about three times the largest measured. Both stop on an update
+// ||dv||_inf <= 1e-4 m/s, not on the error: each step's positions lie
+// about 1e-4 m/s x h = 1.7e-6 m or more from the exact step's (the
+// reference converges linearly near buckling, so its error is several
+// times its last update), and the folding cloth amplifies the difference
+// where it buckles. Measured (largest, median particle): cloth 32 3.6 mm,
+// 0.07 mm; cloth 64 0.81 mm, 3e-6 m; cloth 128 6.2 mm, 0.22 mm. On cloth
+// 32 springlab itself at --newton-tol 1e-6 and 1e-8 ends 1.6 mm apart at
+// the largest (1e-8 m the median), and the reference at --tol 1e-6 ends
+// within 0.13 mm of springlab at 1e-8: the same physics, the difference is
+// the tolerance's. (The cloth scene has no drag; with drag 1e-3 kg/s added,
+// the two at those tolerances end 0.08 mm apart, and 58 mm from the run
+// without it.)
+constexpr double kNewtonTolerance = 2e-2;  // [m]
 
 const std::string kNewtonTEnd = "0.3";
 
