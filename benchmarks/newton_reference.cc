@@ -8,8 +8,8 @@
 //   newton_reference SCENE.json --dt H --t-end T [--tol TOL] [--positions FILE]
 //
 // The step. Backward Euler in velocity form: x' = x + h v', with v' the
-// minimizer of the incremental potential (Kane et al. 2000; Gast et al.
-// 2015, eq. 4)
+// minimizer of the incremental potential (Kane et al. 2000; Gast et al.,
+// "Optimization integrator for large time steps", 2015)
 //   Phi(v) = 1/2 (v - v_n)^T M (v - v_n) + E(x_n + h v) - h M g . v
 //            + h gamma/2 |v|^2,
 // E = sum over springs (i, j) of k/2 (|x_i - x_j| - L)^2, gravity g, drag
@@ -21,8 +21,9 @@
 //   K_s = k n n^T + k (1 - L/l) (I - n n^T),
 // added to (i, i) and (j, j) and subtracted from (i, j) and (j, i). A
 // compressed spring (l < L) makes the second term negative; projected
-// Newton drops it there (Choi and Ko 2002, sec. 4.3), so every block is
-// positive semidefinite and H is positive definite (M > 0).
+// Newton drops it there (Choi and Ko, "Stable but responsive cloth",
+// SIGGRAPH 2002), so every block is positive semidefinite and H is
+// positive definite (M > 0).
 //
 // Projected Newton from v = v_n, each iteration:
 //   1. assemble H at v with the projected blocks and factor it, LL^T by
@@ -48,8 +49,12 @@
 // kept factor (this program factors at every iteration); and it stops when
 // the update, or, converging linearly at a rate in (0.5, 1), the error that
 // rate leaves, update * rate / (1 - rate), is at most tol (this program:
-// the update alone). Both stop on ||dv||_inf, so both answers lie within
-// about tol of the minimizer in velocity, tol * h in position per step.
+// the update alone, so where it converges slowly its answer lies further
+// from the minimizer than tol: about update * rate / (1 - rate)).
+// springlab also solves a step whose Newton fails again from its start by
+// projected Newton (this program's method), checks that the answer lies
+// below the potential of the step's start, and leaves a saddle of Phi
+// along negative curvature; this program does none of these.
 //
 // The scene: gravity, drag, springs, fixed particles (not unknowns: they
 // stay where they are). Anything else (wind, spring damping, elements,
