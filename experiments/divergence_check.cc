@@ -41,8 +41,9 @@ SPRINGLAB_LANES_INLINE void store(const Lanes& a, double* p) { std::memcpy(p, &a
 // in anyway), and the two sums. It reads x and v once and the masses only
 // when they differ (kWeighted): as separate passes, the copies and the
 // sums ran slower (BM_RunPair's ratio_min 1.23-1.29 against 1.18-1.19), and
-// reading the masses and a reference state as well cost 1.19-1.20
-// (benchmarks/README.md, issue 37).
+// reading the masses and a reference state as well cost 0.15 us more per
+// step of the chain (run - kernel 0.98-1.04 us against 0.84-0.88;
+// benchmarks/README.md, issue 37).
 template <bool kWeighted>
 SPRINGLAB_LANES_INLINE void copy_and_sum(const double* x, const double* v, const double* m,
                                          double* x_copy, double* v_copy, Eigen::Index n,
