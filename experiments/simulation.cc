@@ -164,10 +164,8 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
     result.failure = step.message;
     result.diverged_at = 0.0;
   }
-  DivergenceCheck check(model, bound);
+  DivergenceCheck check(model, bound, energies);  // keeps the last good state, (x0, v0) first
   double t_good = 0.0;
-  Vector x_good = x0, v_good = v0;
-  Vector x_next, v_next;  // the new state's copy, good once checked
   bool good_observed = true;  // has the last good state been written?
   for (long k = 1; k <= grid.steps && result.status == RunStatus::kCompleted; ++k) {
     const double t = grid.at(k);
@@ -184,7 +182,7 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
     }
     const Vector& x = integrator->x();
     const Vector& v = integrator->v();
-    if (check.diverged(x, v, x_next, v_next)) {
+    if (check.diverged(x, v)) {
       result.status = RunStatus::kDiverged;
       result.diverged_at = t;
       // A finite state of infinite energy (a barrier's gap closed): say where.
@@ -208,12 +206,11 @@ RunResult simulate(const ElasticModel& model, const RunSettings& settings,
       break;
     }
     t_good = t;
-    x_good.swap(x_next);
-    v_good.swap(v_next);
     good_observed = k == grid.steps || k % settings.every == 0;
     if (good_observed) notify(t, x, v);
   }
   // A run that stopped early still ends its output at its last good state.
+  Vector x_good = check.x_good(), v_good = check.v_good();
   if (!good_observed) notify(t_good, x_good, v_good);
 
   result.stats = integrator->stats();

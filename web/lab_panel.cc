@@ -34,10 +34,9 @@ LabPanel::LabPanel(const PanelSettings& settings) {
   const StepResult start = integrator_->initialize(
       *cursor_, 0.0, model_->initial_positions(), model_->initial_velocities(), settings.options);
   if (!start.ok) throw RunRefused(start.message);
-  check_ = std::make_unique<DivergenceCheck>(*model_, settings.blowup * model_->energy_scale());
-  x_good_ = model_->initial_positions();
-  v_good_ = model_->initial_velocities();
-  energies_.emplace(model_->energies(x_good_, v_good_));
+  energies_.emplace(model_->energies(model_->initial_positions(), model_->initial_velocities()));
+  check_ = std::make_unique<DivergenceCheck>(*model_, settings.blowup * model_->energy_scale(),
+                                             *energies_);
   store_good_state();
 }
 
@@ -53,7 +52,8 @@ std::vector<int> LabPanel::body_faces() const {
 }
 
 void LabPanel::store_good_state() {
-  model_->energies(x_good_, v_good_, *energies_);
+  const Vector x_good = check_->x_good(), v_good = check_->v_good();
+  model_->energies(x_good, v_good, *energies_);
   positions_.assign(static_cast<std::size_t>(points_) * 3, 0.0);
   speeds_.assign(static_cast<std::size_t>(points_), 0.0);
   // One row per point: x y (z) into positions_, |v| into speeds_.
@@ -63,9 +63,9 @@ void LabPanel::store_good_state() {
       speeds_[first + s] = v.row(s).norm();
     }
   };
-  put(model_->scene_positions(x_good_), model_->scene_velocities(v_good_), 0);
+  put(model_->scene_positions(x_good), model_->scene_velocities(v_good), 0);
   if (bodies_) {
-    bodies_->states(x_good_, v_good_, body_x_, body_v_);
+    bodies_->states(x_good, v_good, body_x_, body_v_);
     put(body_x_, body_v_, model_->particle_count());
   }
 }
@@ -89,7 +89,7 @@ long LabPanel::step(long steps, double dt) {
       diverged_at_ = t;
       break;
     }
-    if (check_->diverged(integrator_->x(), integrator_->v(), x_next_, v_next_)) {
+    if (check_->diverged(integrator_->x(), integrator_->v())) {
       status_ = RunStatus::kDiverged;
       diverged_at_ = t;
       break;
@@ -97,8 +97,6 @@ long LabPanel::step(long steps, double dt) {
     ++k_;
     ++steps_;
     t_ = t;
-    x_good_.swap(x_next_);
-    v_good_.swap(v_next_);
   }
   store_good_state();
   return taken;

@@ -88,7 +88,6 @@ class LabPanel {
   double t_ = 0.0, t_base_ = 0.0, dt_ = 0.0;
   long k_ = 0;      // steps since dt last changed
   long steps_ = 0;  // steps in all
-  Vector x_good_, v_good_, x_next_, v_next_;
   std::optional<Energies> energies_;
   std::vector<double> positions_, speeds_;
   Eigen::MatrixXd body_x_, body_v_;  // scratch: the bodies' surface vertices
