@@ -18,6 +18,29 @@
 // particle's two final positions; above kPdTolerance the benchmark fails
 // (the two run the same algorithm on the same factor; only rounding
 // differs, which the folding cloth amplifies: 2.9e-9 m on cloth 128).
+//
+// BM_QuasiNewtonVsReference/cloth/<n> (the same issue): `springlab run
+// --integrator implicit-euler --solver quasi-newton --newton-tol 1e-3`
+// against benchmarks/lbfgs_reference.cc (a plain single-file L-BFGS on
+// implicit Euler's incremental potential, initial Hessian M + h^2 L by a
+// kept CHOLMOD factor, the same stopping rule at the same 1e-3 m/s), over
+// t_end = 2 s on cloth 32 and 64 and 0.5 s (30 steps) on cloth 128, where
+// one 2 s run takes about 30 s of CPU per side. Counters as above (per step
+// of the run's own length), and springlab_iterations /
+// reference_iterations, the L-BFGS iterations per step each reports.
+// Final positions compared as for projective dynamics, but the two solve
+// each step only to a tolerance: where a convergence test falls on the
+// other side of 1e-3 m/s in one of them (rounding decides), they stop at
+// different iterates, and the folding cloth carries that apart. Then they
+// are as far apart as the tolerance leaves a trajectory from the converged
+// one. The bound, kQuasiNewtonTolerance = 5 cm, is twice the largest
+// distance measured between springlab's own final positions at 1e-3 and
+// at 1e-4 m/s (after 2 s: 2.0 cm on cloth 32, 2.3 cm on cloth 64; at
+// 1e-4 cloth 128 fails to converge at t = 0.17 s). Measured against the
+// reference: 1.9e-8 m on cloth 32 (the same 4,296 iterations), 1.9 cm on
+// cloth 64 (5,426 against 5,421 iterations), 2.8e-10 m on cloth 128 over
+// 0.5 s (1,040 each). A reference solving another problem (a wrong drag,
+// gravity or initial Hessian, a missing spring) ends decimetres away.
 #include <sys/resource.h>
 #include <sys/time.h>
 #include <sys/wait.h>
@@ -47,13 +70,14 @@
 #ifndef PD_REFERENCE_EXE
 #error "PD_REFERENCE_EXE must name the pd_reference executable"
 #endif
+#ifndef LBFGS_REFERENCE_EXE
+#error "LBFGS_REFERENCE_EXE must name the lbfgs_reference executable"
+#endif
 
 namespace springlab::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr long kSteps = 120;
 
 // Runs argv with stdout to `out`; the wall time in seconds, < 0 on failure,
 // and in *cpu (when given) the child's user + system CPU time.
@@ -129,17 +153,38 @@ struct Pair {
   std::vector<std::string> springlab, reference;  // SCENE stands for the scene file
   std::string label;
   bool compare_positions = false;
+  // The largest distance allowed between the final positions (nullptr:
+  // kPdTolerance), and the t_end of the runs by cloth size (nullptr: 2 s;
+  // T_END in the arguments stands for it).
+  double (*tolerance)(int n) = nullptr;
+  double (*t_end)(int n) = nullptr;
+  // The iterations each run reports in its JSON line (empty: none):
+  // counters springlab_iterations and reference_iterations, per step.
+  std::string springlab_iterations{}, reference_iterations{};
 };
 
 // Projective dynamics: the largest distance allowed between springlab's and
 // the reference's final positions after 2 s (120 steps of 10 iterations).
 constexpr double kPdTolerance = 1e-8;  // [m]
+// Quasi-Newton: the bound on the final positions' distance, and the
+// shorter t_end of cloth 128 (see the header).
+constexpr double kQuasiNewtonTolerance = 0.05;  // [m]
+constexpr double kQuasiNewtonTEnd128 = 0.5;     // [s]
 
-std::vector<std::string> with_scene(std::vector<std::string> args, const std::string& scene) {
+std::vector<std::string> with_scene(std::vector<std::string> args, const std::string& scene,
+                                    const std::string& t_end = "2") {
   for (std::string& a : args) {
     if (a == "SCENE") a = scene;
+    if (a == "T_END") a = t_end;
   }
   return args;
+}
+
+// The number after "key": in a run's JSON line (NaN where it is missing).
+double json_number(const std::string& text, const std::string& key) {
+  const std::size_t at = text.find("\"" + key + "\":");
+  if (at == std::string::npos) return std::numeric_limits<double>::quiet_NaN();
+  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
 }
 
 void versus_reference(benchmark::State& state, const Pair& pair, int n) {
@@ -151,8 +196,13 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
     state.SkipWithError("springlab scene failed");
     return;
   }
-  const std::vector<std::string> springlab = with_scene(pair.springlab, scene);
-  const std::vector<std::string> reference = with_scene(pair.reference, scene);
+  const double t_end = pair.t_end != nullptr ? pair.t_end(n) : 2.0;
+  const long steps = std::lround(t_end * 60.0);
+  std::ostringstream t_end_text;
+  t_end_text << t_end;
+  const std::vector<std::string> springlab = with_scene(pair.springlab, scene, t_end_text.str());
+  const std::vector<std::string> reference = with_scene(pair.reference, scene, t_end_text.str());
+  const double tolerance = pair.tolerance != nullptr ? pair.tolerance(n) : kPdTolerance;
   if (pair.compare_positions) {
     std::vector<std::string> s = springlab, r = reference;
     s.insert(s.end(), {"--trajectory", (dir / "springlab.csv").string(), "--every", "1000000"});
@@ -165,7 +215,7 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
     const double difference = max_difference(final_positions(dir / "springlab.csv", 1, 3),
                                               final_positions(dir / "reference.csv", 0, 3));
     state.counters["max_difference_m"] = difference;
-    if (!(difference <= kPdTolerance)) {
+    if (!(difference <= tolerance)) {
       state.SkipWithError(("final positions differ by " + std::to_string(difference) + " m").c_str());
       fs::remove_all(dir);
       return;
@@ -174,6 +224,7 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
   double best_springlab = 1e300, best_reference = 1e300;
   double cpu_springlab = 1e300, cpu_reference = 1e300;
   bool springlab_first = true;
+  double iterations_springlab = 0.0, iterations_reference = 0.0;
   for (auto _ : state) {
     for (int side = 0; side < 2; ++side) {
       const bool is_springlab = (side == 0) == springlab_first;
@@ -193,20 +244,28 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
           std::min(is_springlab ? best_springlab : best_reference, s);
       (is_springlab ? cpu_springlab : cpu_reference) =
           std::min(is_springlab ? cpu_springlab : cpu_reference, cpu);
+      const std::string& key = is_springlab ? pair.springlab_iterations : pair.reference_iterations;
+      if (!key.empty()) {
+        (is_springlab ? iterations_springlab : iterations_reference) = json_number(text, key);
+      }
     }
     springlab_first = !springlab_first;
   }
   fs::remove_all(dir);
   // The CPU times too: on a loaded machine the wall time also counts the
   // time the process waited for a core.
-  state.counters["springlab_cpu_ms"] = 1e3 * cpu_springlab / kSteps;
-  state.counters["reference_cpu_ms"] = 1e3 * cpu_reference / kSteps;
+  state.counters["springlab_cpu_ms"] = 1e3 * cpu_springlab / steps;
+  state.counters["reference_cpu_ms"] = 1e3 * cpu_reference / steps;
   state.counters["cpu_ratio"] = cpu_springlab / cpu_reference;
-  state.counters["springlab_ms"] = 1e3 * best_springlab / kSteps;
-  state.counters["reference_ms"] = 1e3 * best_reference / kSteps;
+  state.counters["springlab_ms"] = 1e3 * best_springlab / steps;
+  state.counters["reference_ms"] = 1e3 * best_reference / steps;
   state.counters["ratio"] = best_springlab / best_reference;
+  if (!pair.springlab_iterations.empty()) {
+    state.counters["springlab_iterations"] = iterations_springlab / steps;
+    state.counters["reference_iterations"] = iterations_reference / steps;
+  }
   state.SetLabel("whole processes, min of each; dt=1/60, " + pair.label + ", " +
-                 std::to_string(kSteps) + " steps");
+                 std::to_string(steps) + " steps");
 }
 
 const std::string kDt = "0.016666666666666666";
@@ -229,11 +288,30 @@ const Pair kPd = {
     .compare_positions = true,
 };
 
+// Quasi-Newton: both solve each step to 1e-3 m/s, so they agree to that
+// tolerance's effect, not to round-off (see the header).
+double quasi_newton_tolerance(int) { return kQuasiNewtonTolerance; }
+double quasi_newton_t_end(int n) { return n >= 128 ? kQuasiNewtonTEnd128 : 2.0; }
+
+const Pair kQuasiNewton = {
+    .tag = "qn",
+    .springlab = {SPRINGLAB_EXE, "run", "SCENE", "--integrator", "implicit-euler", "--solver",
+                  "quasi-newton", "--newton-tol", "1e-3", "--dt", kDt, "--t-end", "T_END", "--json"},
+    .reference = {LBFGS_REFERENCE_EXE, "SCENE", "--dt", kDt, "--t-end", "T_END", "--tol", "1e-3"},
+    .label = "L-BFGS to 1e-3 m/s",
+    .compare_positions = true,
+    .tolerance = quasi_newton_tolerance,
+    .t_end = quasi_newton_t_end,
+    .springlab_iterations = "newton_iterations",
+    .reference_iterations = "lbfgs_iterations",
+};
+
 }  // namespace
 
 void register_fast_reference_benchmarks() {
   for (const auto& [family, pair] : {std::pair{"BM_XpbdVsReference", &kXpbd},
-                                      std::pair{"BM_PdVsReference", &kPd}}) {
+                                      std::pair{"BM_PdVsReference", &kPd},
+                                      std::pair{"BM_QuasiNewtonVsReference", &kQuasiNewton}}) {
     for (int n : {32, 64, 128}) {
       benchmark::RegisterBenchmark((std::string(family) + "/cloth/" + std::to_string(n)).c_str(),
                                    [n, pair](benchmark::State& s) { versus_reference(s, *pair, n); })
