@@ -45,8 +45,11 @@
 // 200), or a failed search, or no descent even from H0, the step has
 // stalled: this program then keeps the last iterate and counts the stall
 // (springlab solves such a step again by Newton; on the benchmark's cloths
-// neither stalls). Then v = u, x = x + h u. Wind and spring damping are
-// not modelled: such a scene is refused.
+// neither stalls). springlab also refuses an answer whose potential lies
+// above the step's start (then Newton solves the step); this program does
+// not check it. Then v = u, x = x + h u. Only gravity, drag, springs and
+// fixed particles are modelled: a scene with any other key (wind, planes,
+// elements, ...) or with spring damping is refused with one line.
 // It stops when the state turns non-finite or the kinetic + spring energy
 // passes 1000 times the scene's energy scale (as `springlab run` does by
 // default) and prints one JSON line:
@@ -60,6 +63,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
+#include <exception>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -84,9 +88,22 @@ constexpr double kArmijo = 1e-4;
 constexpr int kHalvings = 30;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
+int run(int argc, char** argv);
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {  // a scene file that is no JSON, or lacks a key
+    std::fprintf(stderr, "lbfgs_reference: error: %s: %s\n", argc > 1 ? argv[1] : "", e.what());
+    return 1;
+  }
+}
+
+namespace {
+
+int run(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: lbfgs_reference SCENE.json --dt H --t-end T [--tol TOL] "
@@ -111,6 +128,13 @@ int main(int argc, char** argv) {
   // The scene: particles (the free ones numbered in scene order), springs.
   std::ifstream file(argv[1]);
   const nlohmann::json scene = nlohmann::json::parse(file);
+  for (const auto& [key, value] : scene.items()) {
+    if (key != "name" && key != "dimension" && key != "gravity" && key != "drag" &&
+        key != "particles" && key != "springs") {
+      std::fprintf(stderr, "lbfgs_reference: error: %s: \"%s\" is not modelled\n", argv[1], key.c_str());
+      return 2;
+    }
+  }
   const int D = scene.at("dimension").get<int>();
   const int n = static_cast<int>(scene.at("particles").size());
   std::vector<double> x0(n * D), v0(n * D, 0.0), m(n);
@@ -136,14 +160,10 @@ int main(int argc, char** argv) {
       rest = std::sqrt(rest);
     }
     if (s.value("damping", 0.0) != 0.0) {
-      std::fprintf(stderr, "lbfgs_reference: spring damping is not modelled\n");
+      std::fprintf(stderr, "lbfgs_reference: error: %s: spring damping is not modelled\n", argv[1]);
       return 2;
     }
     springs.push_back({i, j, s.at("k").get<double>(), rest});
-  }
-  if (scene.contains("wind")) {
-    std::fprintf(stderr, "lbfgs_reference: wind is not modelled\n");
-    return 2;
   }
   double g[3] = {0, 0, 0};
   const double drag = scene.value("drag", 0.0);
@@ -429,3 +449,5 @@ int main(int argc, char** argv) {
               kinetic_plus_spring() + gravity_energy(x), seconds, x_sum, iterations, stalls);
   return 0;
 }
+
+}  // namespace
