@@ -225,7 +225,8 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
   const std::vector<std::string> reference = with_scene(pair.reference, scene, text_of(t_end));
   const double tolerance = pair.tolerance != nullptr ? pair.tolerance(n) : kPdTolerance;
   if (pair.compare_positions) {
-    const std::string compared_t_end = text_of(pair.compared_t_end != nullptr ? pair.compared_t_end(n) : t_end);
+    const std::string compared_t_end =
+        text_of(pair.compared_t_end != nullptr ? pair.compared_t_end(n) : t_end);
     std::vector<std::string> s = with_scene(pair.springlab, scene, compared_t_end);
     std::vector<std::string> r = with_scene(pair.reference, scene, compared_t_end);
     s.insert(s.end(), {"--trajectory", (dir / "springlab.csv").string(), "--every", "1000000"});
