@@ -30,6 +30,37 @@
 // iterations per step) and springlab_factorizations and
 // reference_factorizations (per step), and max_difference_m, which must
 // stay below kNewtonTolerance (see there).
+//
+// BM_QuasiNewtonVsReference/cloth/<n> (the same issue): `springlab run
+// --integrator implicit-euler --solver quasi-newton --newton-tol 1e-3`
+// against benchmarks/lbfgs_reference.cc (a plain single-file L-BFGS on
+// implicit Euler's incremental potential, initial Hessian M + h^2 L by a
+// kept CHOLMOD factor, the same stopping rule at the same 1e-3 m/s), timed
+// over t_end = 2 s on cloth 32 and 64 and 0.5 s (30 steps) on cloth 128,
+// where one 2 s run takes about 30 s of CPU per side. Counters as above
+// (per step of the run's own length), and springlab_iterations /
+// reference_iterations, the L-BFGS iterations per step each reports; where
+// they differ by more than 5 % the benchmark fails.
+//
+// The final positions are compared after 10 steps (1/6 s; untimed runs),
+// not after the timed runs: the two stop each step at a tolerance, and
+// where rounding puts a stopping test on the other side of 1e-3 m/s in one
+// of them, they stop at different iterates and the folding cloth carries
+// them apart, as far as the tolerance leaves a trajectory from the
+// converged one. On cloth 64 they agree to 4e-12 m after 30 steps and 2e-7
+// m after 44 (rounding, amplified), and in step 45 that decides a stopping
+// test (64 iterations against 68): after 2 s they are 2.3 cm apart, as far
+// as springlab's own 1e-3 m/s run from its 1e-4 one (2.0 cm on cloth 32,
+// 2.3 cm on cloth 64). A bound of that size would not see a reference
+// solving another problem: on cloth 32 after 2 s, gravity 2 % weaker ends
+// 3.8 cm away, the last of the 5,826 springs left out 2.3 cm, all 10 % softer
+// 1.0 cm. After 10 steps the two are 4.1e-13, 3.2e-14 and 1.8e-13 m apart
+// on cloth 32, 64 and 128 (the same 254, 274 and 268 iterations), while
+// those three changes end 3.8 mm, 2.5e-6 m and 4.0 mm away: the bound
+// kQuasiNewtonTolerance = 1e-8 m (as projective dynamics') lies between.
+// The timed runs' iterations are the same as well (35.8 and 45.2 per step
+// on cloth 32 and 64 over 2 s, 34.7 on cloth 128 over 0.5 s; over the
+// first second of cloth 64, 2,453 against 2,484).
 #include <sys/resource.h>
 #include <sys/time.h>
 #include <sys/wait.h>
@@ -38,6 +69,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <utility>
@@ -59,6 +91,9 @@
 #endif
 #ifndef PD_REFERENCE_EXE
 #error "PD_REFERENCE_EXE must name the pd_reference executable"
+#endif
+#ifndef LBFGS_REFERENCE_EXE
+#error "LBFGS_REFERENCE_EXE must name the lbfgs_reference executable"
 #endif
 #ifndef NEWTON_REFERENCE_EXE
 #error "NEWTON_REFERENCE_EXE must name the newton_reference executable"
@@ -152,6 +187,18 @@ struct Pair {
   long steps = kSteps;                 // the runs' steps (their --t-end / dt)
   double tolerance = kPdTolerance;     // the largest max_difference_m allowed [m]
   bool newton_counters = false;        // Newton iterations and factorizations per step
+  // The t_end of the runs by cloth size (nullptr: steps / 60 s; T_END in
+  // the arguments stands for it).
+  double (*t_end)(int n) = nullptr;
+  // The t_end of the untimed runs whose final positions are compared
+  // (nullptr: that of the timed runs).
+  double (*compared_t_end)(int n) = nullptr;
+  // The iterations each run reports in its JSON line (empty: none):
+  // counters springlab_iterations and reference_iterations, per step;
+  // where their relative difference passes iterations_tolerance (> 0),
+  // the benchmark fails.
+  std::string springlab_iterations{}, reference_iterations{};
+  double iterations_tolerance = 0.0;
 };
 
 // The number after "key": in a run's JSON line (either spacing); -1 if absent.
@@ -160,10 +207,19 @@ double json_number(const std::string& text, const std::string& key) {
   if (at == std::string::npos) return -1.0;
   return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
 }
+// Quasi-Newton (see the header): the bound on the distance of the final
+// positions after kQuasiNewtonComparedTEnd (10 steps), the shorter t_end
+// of cloth 128, and the bound on the iterations' relative difference.
+constexpr double kQuasiNewtonTolerance = 1e-8;              // [m]
+constexpr double kQuasiNewtonComparedTEnd = 10.0 / 60.0;    // [s]
+constexpr double kQuasiNewtonTEnd128 = 0.5;                 // [s]
+constexpr double kQuasiNewtonIterationsTolerance = 0.05;
 
-std::vector<std::string> with_scene(std::vector<std::string> args, const std::string& scene) {
+std::vector<std::string> with_scene(std::vector<std::string> args, const std::string& scene,
+                                    const std::string& t_end = "2") {
   for (std::string& a : args) {
     if (a == "SCENE") a = scene;
+    if (a == "T_END") a = t_end;
   }
   return args;
 }
@@ -177,10 +233,20 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
     state.SkipWithError("springlab scene failed");
     return;
   }
-  const std::vector<std::string> springlab = with_scene(pair.springlab, scene);
-  const std::vector<std::string> reference = with_scene(pair.reference, scene);
+  const double t_end = pair.t_end != nullptr ? pair.t_end(n) : 2.0;
+  const long steps = pair.t_end != nullptr ? std::lround(t_end * 60.0) : pair.steps;
+  auto text_of = [](double value) {
+    std::ostringstream text;
+    text << std::setprecision(17) << value;
+    return text.str();
+  };
+  const std::vector<std::string> springlab = with_scene(pair.springlab, scene, text_of(t_end));
+  const std::vector<std::string> reference = with_scene(pair.reference, scene, text_of(t_end));
   if (pair.compare_positions) {
-    std::vector<std::string> s = springlab, r = reference;
+    const std::string compared_t_end =
+        text_of(pair.compared_t_end != nullptr ? pair.compared_t_end(n) : t_end);
+    std::vector<std::string> s = with_scene(pair.springlab, scene, compared_t_end);
+    std::vector<std::string> r = with_scene(pair.reference, scene, compared_t_end);
     s.insert(s.end(), {"--trajectory", (dir / "springlab.csv").string(), "--every", "1000000"});
     r.insert(r.end(), {"--positions", (dir / "reference.csv").string()});
     if (run_process(s, dir / "springlab.json") < 0 || run_process(r, dir / "reference.json") < 0) {
@@ -201,6 +267,7 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
   double cpu_springlab = 1e300, cpu_reference = 1e300;
   std::string springlab_text, reference_text;  // the last runs' JSON
   bool springlab_first = true;
+  double iterations_springlab = 0.0, iterations_reference = 0.0;
   for (auto _ : state) {
     for (int side = 0; side < 2; ++side) {
       const bool is_springlab = (side == 0) == springlab_first;
@@ -221,19 +288,33 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
           std::min(is_springlab ? best_springlab : best_reference, s);
       (is_springlab ? cpu_springlab : cpu_reference) =
           std::min(is_springlab ? cpu_springlab : cpu_reference, cpu);
+      const std::string& key = is_springlab ? pair.springlab_iterations : pair.reference_iterations;
+      if (!key.empty()) {
+        (is_springlab ? iterations_springlab : iterations_reference) = json_number(text, key);
+      }
     }
     springlab_first = !springlab_first;
   }
   fs::remove_all(dir);
+  if (pair.iterations_tolerance > 0.0 &&
+      !(std::abs(iterations_springlab - iterations_reference) <=
+        pair.iterations_tolerance * iterations_springlab)) {
+    state.SkipWithError(("L-BFGS iterations differ: " + std::to_string(iterations_springlab) +
+                         " against " + std::to_string(iterations_reference)).c_str());
+    return;
+  }
   // The CPU times too: on a loaded machine the wall time also counts the
   // time the process waited for a core.
-  const double steps = static_cast<double>(pair.steps);
   state.counters["springlab_cpu_ms"] = 1e3 * cpu_springlab / steps;
   state.counters["reference_cpu_ms"] = 1e3 * cpu_reference / steps;
   state.counters["cpu_ratio"] = cpu_springlab / cpu_reference;
   state.counters["springlab_ms"] = 1e3 * best_springlab / steps;
   state.counters["reference_ms"] = 1e3 * best_reference / steps;
   state.counters["ratio"] = best_springlab / best_reference;
+  if (!pair.springlab_iterations.empty()) {
+    state.counters["springlab_iterations"] = iterations_springlab / steps;
+    state.counters["reference_iterations"] = iterations_reference / steps;
+  }
   if (pair.newton_counters) {
     state.counters["springlab_newton"] = json_number(springlab_text, "newton_iterations") / steps;
     state.counters["reference_newton"] = json_number(reference_text, "newton_iterations") / steps;
@@ -241,7 +322,7 @@ void versus_reference(benchmark::State& state, const Pair& pair, int n) {
     state.counters["reference_factorizations"] = json_number(reference_text, "factorizations") / steps;
   }
   state.SetLabel("whole processes, min of each; dt=1/60, " + pair.label + ", " +
-                 std::to_string(pair.steps) + " steps");
+                 std::to_string(steps) + " steps");
 }
 
 const std::string kDt = "0.016666666666666666";
@@ -295,11 +376,30 @@ const Pair kNewton = {
     .newton_counters = true,
 };
 
+double quasi_newton_t_end(int n) { return n >= 128 ? kQuasiNewtonTEnd128 : 2.0; }
+double quasi_newton_compared_t_end(int) { return kQuasiNewtonComparedTEnd; }
+
+const Pair kQuasiNewton = {
+    .tag = "qn",
+    .springlab = {SPRINGLAB_EXE, "run", "SCENE", "--integrator", "implicit-euler", "--solver",
+                  "quasi-newton", "--newton-tol", "1e-3", "--dt", kDt, "--t-end", "T_END", "--json"},
+    .reference = {LBFGS_REFERENCE_EXE, "SCENE", "--dt", kDt, "--t-end", "T_END", "--tol", "1e-3"},
+    .label = "L-BFGS to 1e-3 m/s",
+    .compare_positions = true,
+    .tolerance = kQuasiNewtonTolerance,
+    .t_end = quasi_newton_t_end,
+    .compared_t_end = quasi_newton_compared_t_end,
+    .springlab_iterations = "newton_iterations",
+    .reference_iterations = "lbfgs_iterations",
+    .iterations_tolerance = kQuasiNewtonIterationsTolerance,
+};
+
 }  // namespace
 
 void register_fast_reference_benchmarks() {
   for (const auto& [family, pair] : {std::pair{"BM_XpbdVsReference", &kXpbd},
-                                      std::pair{"BM_PdVsReference", &kPd}}) {
+                                      std::pair{"BM_PdVsReference", &kPd},
+                                      std::pair{"BM_QuasiNewtonVsReference", &kQuasiNewton}}) {
     for (int n : {32, 64, 128}) {
       benchmark::RegisterBenchmark((std::string(family) + "/cloth/" + std::to_string(n)).c_str(),
                                    [n, pair](benchmark::State& s) { versus_reference(s, *pair, n); })
