@@ -136,7 +136,13 @@ StepResult VelocityImplicitMethod::checked_newton(NewtonPolicy::Matrices matrice
 // why, and the failure is counted): Newton solves the step from its start.
 StepResult VelocityImplicitMethod::quasi_newton(Vector& v, std::string& rejected) {
   if (!lbfgs_.solve(step_, model_, inv_mass(), options().newton_tol, options().max_newton, v)) {
-    return StepResult::failure("L-BFGS stalled");
+    // Newton solves the step; should it fail too, its message says that
+    // L-BFGS stalled first.
+    std::ostringstream message;
+    message << name() << ": L-BFGS stalled at t = " << t_ << " (h = " << step_.h()
+            << ": no descent, a failed search or --max-newton iterations)";
+    rejected = message.str();
+    return StepResult::failure(rejected);
   }
   const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
   if (rise.empty()) return StepResult::success();

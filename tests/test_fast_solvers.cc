@@ -511,6 +511,29 @@ TEST(QuasiNewton, OneIterationOnALinearSpring) {
   EXPECT_EQ(r.stats.newton_iterations, 2);
 }
 
+// Where L-BFGS stalls and Newton then fails too, the run's message says
+// both, so that a user of --solver quasi-newton learns that L-BFGS gave the
+// step up first: with --max-newton 1 neither reaches 1e-6 m/s on the first
+// step of a falling cloth.
+TEST(QuasiNewton, AStallThenANewtonFailureAreBothNamed) {
+  const ElasticModel cloth(make_builtin_scene("cloth", {{"n", "8"}}));
+  RunSettings s;
+  s.integrator = "implicit-euler";
+  s.dt = 1.0 / 60.0;
+  s.t_end = 1.0 / 60.0;
+  s.options.solver = Solver::kQuasiNewton;
+  s.options.newton_tol = 1e-6;
+  s.options.max_newton = 1;
+  const RunResult r = simulate(cloth, s);
+  ASSERT_EQ(r.status, RunStatus::kFailed);
+  EXPECT_EQ(r.failure.rfind("implicit-euler: L-BFGS stalled at t = 0 (h = 0.0166667: ", 0), 0u)
+      << r.failure;
+  EXPECT_NE(r.failure.find(", and Newton failed at t = 0 (h = 0.0166667): no convergence in 1 "
+                           "iterations"),
+            std::string::npos)
+      << r.failure;
+}
+
 // Implicit Euler on `model` to t_end at dt, solved by Newton and by
 // quasi-Newton to one --newton-tol; both runs must complete.
 void newton_and_quasi_newton(const ElasticModel& model, double dt, double t_end, double tol,
