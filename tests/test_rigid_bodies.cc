@@ -161,6 +161,21 @@ TEST(Rigidity, ForceAndJacobiansMatchCentralDifferences) {
   }
 }
 
+// Two states of one body far apart, for the discrete-gradient tests: x
+// its rest state with A strained by up to 0.4, y that turned by up to 1 rad
+// about a random axis and strained by up to 0.1 more.
+void two_far_states(const ElasticModel& model, std::mt19937& rng,
+                    std::uniform_real_distribution<double>& u, Vector& x, Vector& y) {
+  x = model.initial_positions();
+  for (Eigen::Index k = 3; k < 12; ++k) x[k] += 0.4 * u(rng);
+  const Eigen::Matrix3d Q =
+      Eigen::AngleAxisd(u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+          .toRotationMatrix();
+  y = x;
+  for (int i = 0; i < 4; ++i) y.segment<3>(3 * i) = Q * x.segment<3>(3 * i);
+  for (Eigen::Index k = 3; k < 12; ++k) y[k] += 0.1 * u(rng);
+}
+
 // The rigidity's own discrete gradient g(x, y) = 4 kappa V A_m G_avg
 // (bodies.cc), seen through the model as the discrete-gradient method sees
 // it: F(x_m) + d, d = add_own_discrete_gradient_difference, is -g. Between
@@ -187,13 +202,8 @@ TEST(Rigidity, OwnDiscreteGradientIsExactAndTorqueFree) {
     return tau;
   };
   for (int trial = 0; trial < 5; ++trial) {
-    Vector x = model.initial_positions(), y = x;
-    for (Eigen::Index k = 3; k < 12; ++k) x[k] += 0.4 * u(rng);
-    const Eigen::Matrix3d Q =
-        Eigen::AngleAxisd(u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
-            .toRotationMatrix();
-    for (int i = 0; i < 4; ++i) y.segment<3>(3 * i) = Q * x.segment<3>(3 * i);
-    for (Eigen::Index k = 3; k < 12; ++k) y[k] += 0.1 * u(rng);
+    Vector x, y;
+    two_far_states(model, rng, u, x, y);
     const Vector xm = 0.5 * (x + y), D = y - x;
     Vector f, d = Vector::Zero(x.size());
     model.force(0.0, xm, v, f);
@@ -242,13 +252,8 @@ TEST(Rigidity, OwnDiscreteGradientJacobianMatchesCentralDifferences) {
     return A;
   };
   for (int trial = 0; trial < 5; ++trial) {
-    Vector x = model.initial_positions(), y = x;
-    for (Eigen::Index k = 3; k < 12; ++k) x[k] += 0.4 * u(rng);
-    const Eigen::Matrix3d Q =
-        Eigen::AngleAxisd(u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
-            .toRotationMatrix();
-    for (int i = 0; i < 4; ++i) y.segment<3>(3 * i) = Q * x.segment<3>(3 * i);
-    for (Eigen::Index k = 3; k < 12; ++k) y[k] += 0.1 * u(rng);
+    Vector x, y;
+    two_far_states(model, rng, u, x, y);
     const Vector xm = 0.5 * (x + y);
     // -g(x, 2 m - x) as the model gives it.
     auto minus_g = [&](const Vector& m) {
