@@ -16,10 +16,11 @@ constexpr double kLinearRtol = 1e-6;
 // dissipation potential, and Newton minimizes.
 class LagNormalForces {
  public:
-  LagNormalForces(const MechanicalSystem& system, const Vector& x) : system_(system) {
-    system_.lag_normal_forces(&x);
+  LagNormalForces(const MechanicalSystem& system, const Vector& x, const Vector& v, double h)
+      : system_(system) {
+    system_.lag_normal_forces(&x, &v, h);
   }
-  ~LagNormalForces() { system_.lag_normal_forces(nullptr); }
+  ~LagNormalForces() { system_.lag_normal_forces(nullptr, nullptr, 0.0); }
   LagNormalForces(const LagNormalForces&) = delete;
   LagNormalForces& operator=(const LagNormalForces&) = delete;
 
@@ -54,7 +55,7 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const
 
 StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplicitScheme& s,
                                                   Vector& v, bool quasi) {
-  const LagNormalForces lag(system(), x_);
+  const LagNormalForces lag(system(), x_, v_, h);
   step_.begin(t_, x_, v_, h, s);
   const bool lbfgs = quasi && system().derives_from_potentials();
   check_.begin(step_, options().newton_tol);

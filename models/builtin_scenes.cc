@@ -26,6 +26,8 @@ Scene build_slope(const std::map<std::string, double>& p);
 Scene build_tumbling_box(const std::map<std::string, double>& p);
 Scene build_box_on_slope(const std::map<std::string, double>& p);
 Scene build_box_pile(const std::map<std::string, double>& p);
+Scene build_box_tower(const std::map<std::string, double>& p);
+Scene build_box_drop(const std::map<std::string, double>& p);
 // builtin_fluids.cc: the fluid scenes.
 Scene build_dam_break(const std::map<std::string, double>& p);
 Scene build_tank(const std::map<std::string, double>& p);
@@ -242,6 +244,25 @@ ParameterSpec param(const char* name, double value, const char* meaning, Range r
   return {{name, value, meaning}, range, min, max};
 }
 
+// The box scenes' common parameters after their own: material, friction,
+// gravity and contact (builtin_bodies.cc set_box_contact).
+std::vector<ParameterSpec> box_params(std::vector<ParameterSpec> own) {
+  const std::vector<ParameterSpec> common = {
+      param("density", 1000, "density [kg/m^3]", Range::kPositive),
+      param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+      param("friction", 0.5, "Coulomb coefficient mu of the ground and of every box",
+            Range::kNonNegative),
+      param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+      param("contact", 1, "contact model of the ground and between boxes: 0 penalty, 1 barrier "
+                          "(IPC)", Range::kZeroOrOne),
+      param("contact_stiffness", 1e5, "contact stiffness: the penalty's k_c or the barrier's "
+                                      "kappa [N/m]", Range::kPositive),
+      param("distance", 1e-3, "contact distance: the barrier's dhat, or the penalty's skin "
+                              "between boxes [m]", Range::kPositive)};
+  own.insert(own.end(), common.begin(), common.end());
+  return own;
+}
+
 // The fluid scenes' shared parameters (builtin_fluids.cc).
 std::vector<ParameterSpec> fluid_params(double spacing, double alpha) {
   return {param("spacing", spacing, "particle spacing l [m] (smoothing length 1.3 l)",
@@ -452,18 +473,41 @@ const std::vector<Generator>& generators() {
           "n boxes, each shrink times the one below, turned and tilted, dropped onto one "
           "another and onto the ground, with friction",
           {}},
-         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
-          param("size", 0.2, "longest side of the bottom box (sides size, 0.75 size, 0.5 size) [m]",
-                Range::kPositive),
-          param("shrink", 0.7, "each box's sides over the one's below, in (0, 1]", Range::kPositive),
-          param("density", 1000, "density [kg/m^3]", Range::kPositive),
-          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
-          param("friction", 0.5, "Coulomb coefficient mu of the ground and of every box",
-                Range::kNonNegative),
-          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
-          param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
-                Range::kPositive)},
+         box_params({param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+                     param("size", 0.2,
+                           "longest side of the bottom box (sides size, 0.5 size, 0.75 size) [m]",
+                           Range::kPositive),
+                     param("shrink", 0.8, "each box's sides over the one's below, in (0, 1]",
+                           Range::kPositive),
+                     param("drop", 0.1, "each box's start above the one below, in its heights",
+                           Range::kNonNegative),
+                     param("tilt", 0.05, "each box but the first tilted about x [rad]",
+                           Range::kAny)}),
          build_box_pile},
+        {{"box-tower",
+          "n equal boxes, each turned against the one below, dropped onto one another into a "
+          "tower",
+          {}},
+         box_params({param("n", 10, "number of boxes", Range::kWhole, 1, 1000),
+                     param("size", 0.2, "longest side of each box (sides size, 0.5 size, "
+                                        "0.75 size) [m]", Range::kPositive),
+                     param("turn", 0.1, "each box turned about the vertical by +-turn [rad]",
+                           Range::kAny),
+                     param("gap", 0.1, "each box's start above the one below, in its heights",
+                           Range::kPositive)}),
+         build_box_tower},
+        {{"box-drop",
+          "n boxes dropped in layers, each turned its own way, into a square bin (the ground "
+          "and four walls), coming to rest",
+          {}},
+         box_params({param("n", 100, "number of boxes", Range::kWhole, 1, 10000),
+                     param("size", 0.1, "longest side of each box (sides size, 0.7 size, "
+                                        "0.5 size) [m]", Range::kPositive),
+                     param("columns", 5, "boxes along each side of a layer", Range::kWhole, 1, 100),
+                     param("width", 0.8, "the bin's inner width [m]", Range::kPositive),
+                     param("height", 0.15, "height of the lowest layer's centres [m]",
+                           Range::kPositive)}),
+         build_box_drop},
         {{"box-chain",
           "n boxes hinged end to end by stiff zero-length springs between body points, the "
           "first to a fixed point, released from horizontal: a multiple pendulum",

@@ -71,6 +71,9 @@ class FluidViscosityForce final : public ForceTerm {
   void bind_jacobian(const SparseMatrix& pattern) override { pattern_matrix_ = &pattern; }
   // Neighbours couple: fluid_pattern.h.
   bool pattern_varies() const override { return true; }
+  std::string pattern_change() const override {
+    return "its particles change neighbours (a fluid)";
+  }
   bool pattern_holds(const Configuration& c) const override { return pattern_.holds(fluids_, c.x); }
   void follow_pattern(const Configuration& c) override { pattern_.follow(fluids_, c.x); }
 
