@@ -41,7 +41,7 @@
 // iterations with the supernodal factor and more than 200 with the
 // simplicial one (the same matrices, other rounding).
 //
-// Where springlab's implicit-euler (integrators/newton_loop.cc) differs in
+// Where springlab's implicit-euler (integrators/newton/newton_loop.cc) differs in
 // how, not what: it uses the exact Hessian after a full update and the
 // projected one only after a cut step (this program: the projected one
 // always, so it converges linearly near a buckling state, not

@@ -26,18 +26,18 @@
 #include <string>
 #include <vector>
 
-#include "experiments/stability.h"
-#include "experiments/definition.h"
+#include "experiments/analysis/stability.h"
+#include "experiments/kinds/definition.h"
 #include "csv_fields.h"
 #include "experiment_tasks.h"
 #include "run_process.h"
-#include "experiments/experiment.h"
-#include "experiments/experiment_runner.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/springs.h"
+#include "experiments/kinds/experiment.h"
+#include "experiments/kinds/experiment_runner.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/springs/springs.h"
 
 namespace springlab {
 namespace {
@@ -719,7 +719,7 @@ TEST(ExperimentKinds, MotionRecordsEveryFrameAndTheFramesPastTheBlowUp) {
     EXPECT_NEAR(number(implicit[1][k].at("t")), 0.04 * static_cast<double>(k), 1e-15);
     EXPECT_EQ(implicit[1][k].at("past_blowup"), "0");
   }
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.02;

@@ -3,7 +3,7 @@
 // one line X(name) in this table.
 
 #include "models/materials/material.h"
-#include "models/materials/tangent3.h"
+#include "models/materials/kernels/tangent3.h"
 
 namespace springlab {
 

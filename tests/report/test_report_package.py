@@ -1166,7 +1166,7 @@ class Registry(unittest.TestCase):
             self.assertTrue(callable(module.render))
         # Every kind the program has is one this report draws.
         kinds = set(re.findall(r'\{"([a-z-]+)", &make_', (Path(__file__).resolve().parents[2]
-                                                          / "experiments"
+                                                          / "experiments" / "kinds"
                                                           / "experiment_registry.cc").read_text()))
         self.assertEqual(kinds, set(KINDS))
 
