@@ -133,9 +133,13 @@ TEST(ExperimentDefinition, TopLevelMustBeAnObjectWithAKind) {
 
 TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
-            "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
+            "def.json: experiment: unknown kind 'energi' (did you mean 'energy'?) (kinds: energy, "
+            "convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
             "motion, contact, mode, rotation, solver-error, spectral, rigid, fluid)");
+  // Nothing close: no guess.
+  EXPECT_EQ(definition_error(Json{{"experiment", "frobnicate"}}).find("did you mean"),
+            std::string::npos);
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {

@@ -169,4 +169,9 @@ std::unique_ptr<Experiment> make_cloth_showcase_experiment(const DefinitionObjec
   return std::make_unique<ClothShowcaseExperiment>(d);
 }
 
+const ExperimentKind& cloth_showcase_experiment_kind() {
+  static const ExperimentKind kind{"cloth-showcase", &make_cloth_showcase_experiment};
+  return kind;
+}
+
 }  // namespace springlab

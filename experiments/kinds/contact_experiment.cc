@@ -199,4 +199,9 @@ std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject& d) {
   return std::make_unique<ContactExperiment>(d);
 }
 
+const ExperimentKind& contact_experiment_kind() {
+  static const ExperimentKind kind{"contact", &make_contact_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -149,4 +149,9 @@ std::unique_ptr<Experiment> make_convergence_experiment(const DefinitionObject& 
   return std::make_unique<ConvergenceExperiment>(d);
 }
 
+const ExperimentKind& convergence_experiment_kind() {
+  static const ExperimentKind kind{"convergence", &make_convergence_experiment};
+  return kind;
+}
+
 }  // namespace springlab

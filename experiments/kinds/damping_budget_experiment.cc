@@ -80,4 +80,9 @@ std::unique_ptr<Experiment> make_damping_budget_experiment(const DefinitionObjec
   return std::make_unique<DampingBudgetExperiment>(d);
 }
 
+const ExperimentKind& damping_budget_experiment_kind() {
+  static const ExperimentKind kind{"damping-budget", &make_damping_budget_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -87,4 +87,9 @@ std::unique_ptr<Experiment> make_energy_experiment(const DefinitionObject& d) {
   return std::make_unique<EnergyExperiment>(d);
 }
 
+const ExperimentKind& energy_experiment_kind() {
+  static const ExperimentKind kind{"energy", &make_energy_experiment};
+  return kind;
+}
+
 }  // namespace springlab

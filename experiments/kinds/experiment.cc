@@ -11,6 +11,7 @@
 #include "experiments/kinds/experiment_support.h"
 #include "experiments/io/output_files.h"
 #include "models/core/strict_json.h"
+#include "models/core/registry.h"
 
 namespace springlab {
 
@@ -71,7 +72,8 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
   const nlohmann::json json = parse_strict_json<nlohmann::json>(json_text, policy);
   const DefinitionObject top(json, source, "");
   const std::string kind = top.string("experiment");
-  for (const ExperimentKind& k : experiment_kinds()) {
+  for (const ExperimentKind* entry : experiment_kinds()) {
+    const ExperimentKind& k = *entry;
     if (kind != k.name) continue;
     LoadedExperiment loaded;
     loaded.name = top.string("name", kind);
@@ -101,8 +103,13 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
     return loaded;
   }
   std::string kinds;
-  for (const ExperimentKind& k : experiment_kinds()) kinds += (kinds.empty() ? "" : ", ") + std::string(k.name);
-  top.fail("experiment", "unknown kind '" + printable(kind) + "' (kinds: " + kinds + ")");
+  std::vector<std::string> names;
+  for (const ExperimentKind* k : experiment_kinds()) {
+    kinds += (kinds.empty() ? "" : ", ") + std::string(k->name);
+    names.emplace_back(k->name);
+  }
+  top.fail("experiment", "unknown kind '" + printable(kind) + "'" + did_you_mean(kind, names) +
+                             " (kinds: " + kinds + ")");
 }
 
 LoadedExperiment load_experiment(const std::string& path) {

@@ -84,6 +84,6 @@ struct ExperimentKind {
   const char* name;
   ExperimentFactory make;
 };
-const std::vector<ExperimentKind>& experiment_kinds();
+std::vector<const ExperimentKind*> experiment_kinds();
 
 }  // namespace springlab

@@ -1,45 +1,33 @@
+// The experiment kinds by the name a definition's "kind" gives, in the
+// one registration idiom of springlab (models/core/registry.h). Adding a
+// kind: its file (a factory and `const ExperimentKind& NAME_experiment_kind()`
+// at its end, experiment.h) and one line X(ExperimentKind, NAME_experiment_kind)
+// in this table.
 #include "experiments/kinds/experiment.h"
+#include "models/core/registry.h"
+
+#define SPRINGLAB_EXPERIMENT_KINDS(X)                 \
+  X(ExperimentKind, energy_experiment_kind)           \
+  X(ExperimentKind, convergence_experiment_kind)      \
+  X(ExperimentKind, work_precision_experiment_kind)   \
+  X(ExperimentKind, stability_experiment_kind)        \
+  X(ExperimentKind, damping_budget_experiment_kind)   \
+  X(ExperimentKind, cloth_showcase_experiment_kind)   \
+  X(ExperimentKind, stability_region_experiment_kind) \
+  X(ExperimentKind, step_energy_experiment_kind)      \
+  X(ExperimentKind, motion_experiment_kind)           \
+  X(ExperimentKind, contact_experiment_kind)          \
+  X(ExperimentKind, mode_experiment_kind)             \
+  X(ExperimentKind, rotation_experiment_kind)         \
+  X(ExperimentKind, solver_error_experiment_kind)     \
+  X(ExperimentKind, spectral_experiment_kind)         \
+  X(ExperimentKind, rigid_experiment_kind)            \
+  X(ExperimentKind, fluid_experiment_kind)
 
 namespace springlab {
 
-// Each factory lives in its experiment's own file.
-std::unique_ptr<Experiment> make_energy_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_convergence_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_work_precision_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_stability_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_damping_budget_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_cloth_showcase_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_stability_region_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_step_energy_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_contact_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_solver_error_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_spectral_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_rigid_experiment(const DefinitionObject&);
-std::unique_ptr<Experiment> make_fluid_experiment(const DefinitionObject&);
+SPRINGLAB_REGISTRY(ExperimentKind, SPRINGLAB_EXPERIMENT_KINDS, experiment_registry)
 
-const std::vector<ExperimentKind>& experiment_kinds() {
-  static const std::vector<ExperimentKind> kinds = {
-      {"energy", &make_energy_experiment},
-      {"convergence", &make_convergence_experiment},
-      {"work-precision", &make_work_precision_experiment},
-      {"stability", &make_stability_experiment},
-      {"damping-budget", &make_damping_budget_experiment},
-      {"cloth-showcase", &make_cloth_showcase_experiment},
-      {"stability-region", &make_stability_region_experiment},
-      {"step-energy", &make_step_energy_experiment},
-      {"motion", &make_motion_experiment},
-      {"contact", &make_contact_experiment},
-      {"mode", &make_mode_experiment},
-      {"rotation", &make_rotation_experiment},
-      {"solver-error", &make_solver_error_experiment},
-      {"spectral", &make_spectral_experiment},
-      {"rigid", &make_rigid_experiment},
-      {"fluid", &make_fluid_experiment},
-  };
-  return kinds;
-}
+std::vector<const ExperimentKind*> experiment_kinds() { return experiment_registry().entries(); }
 
 }  // namespace springlab

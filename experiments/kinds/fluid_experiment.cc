@@ -506,4 +506,9 @@ std::unique_ptr<Experiment> make_fluid_experiment(const DefinitionObject& d) {
   return std::make_unique<FluidExperiment>(d);
 }
 
+const ExperimentKind& fluid_experiment_kind() {
+  static const ExperimentKind kind{"fluid", &make_fluid_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -259,4 +259,9 @@ std::unique_ptr<Experiment> make_mode_experiment(const DefinitionObject& d) {
   return std::make_unique<ModeExperiment>(d);
 }
 
+const ExperimentKind& mode_experiment_kind() {
+  static const ExperimentKind kind{"mode", &make_mode_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -147,4 +147,9 @@ std::unique_ptr<Experiment> make_motion_experiment(const DefinitionObject& d) {
   return std::make_unique<MotionExperiment>(d);
 }
 
+const ExperimentKind& motion_experiment_kind() {
+  static const ExperimentKind kind{"motion", &make_motion_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -348,4 +348,9 @@ std::unique_ptr<Experiment> make_rigid_experiment(const DefinitionObject& d) {
   return std::make_unique<RigidExperiment>(d);
 }
 
+const ExperimentKind& rigid_experiment_kind() {
+  static const ExperimentKind kind{"rigid", &make_rigid_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -188,4 +188,9 @@ std::unique_ptr<Experiment> make_rotation_experiment(const DefinitionObject& d) 
   return std::make_unique<RotationExperiment>(d);
 }
 
+const ExperimentKind& rotation_experiment_kind() {
+  static const ExperimentKind kind{"rotation", &make_rotation_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -284,4 +284,9 @@ std::unique_ptr<Experiment> make_solver_error_experiment(const DefinitionObject&
   return std::make_unique<SolverErrorExperiment>(d);
 }
 
+const ExperimentKind& solver_error_experiment_kind() {
+  static const ExperimentKind kind{"solver-error", &make_solver_error_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -133,4 +133,9 @@ std::unique_ptr<Experiment> make_spectral_experiment(const DefinitionObject& d) 
   return std::make_unique<SpectralExperiment>(d);
 }
 
+const ExperimentKind& spectral_experiment_kind() {
+  static const ExperimentKind kind{"spectral", &make_spectral_experiment};
+  return kind;
+}
+
 }  // namespace springlab

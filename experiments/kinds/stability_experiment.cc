@@ -249,4 +249,9 @@ std::unique_ptr<Experiment> make_stability_experiment(const DefinitionObject& d)
   return std::make_unique<StabilityExperiment>(d);
 }
 
+const ExperimentKind& stability_experiment_kind() {
+  static const ExperimentKind kind{"stability", &make_stability_experiment};
+  return kind;
+}
+
 }  // namespace springlab

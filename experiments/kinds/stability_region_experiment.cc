@@ -284,4 +284,9 @@ std::unique_ptr<Experiment> make_stability_region_experiment(const DefinitionObj
   return std::make_unique<StabilityRegionExperiment>(d);
 }
 
+const ExperimentKind& stability_region_experiment_kind() {
+  static const ExperimentKind kind{"stability-region", &make_stability_region_experiment};
+  return kind;
+}
+
 }  // namespace springlab

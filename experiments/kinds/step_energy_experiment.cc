@@ -173,4 +173,9 @@ std::unique_ptr<Experiment> make_step_energy_experiment(const DefinitionObject& 
   return std::make_unique<StepEnergyExperiment>(d);
 }
 
+const ExperimentKind& step_energy_experiment_kind() {
+  static const ExperimentKind kind{"step-energy", &make_step_energy_experiment};
+  return kind;
+}
+
 }  // namespace springlab

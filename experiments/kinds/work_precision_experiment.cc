@@ -103,4 +103,9 @@ std::unique_ptr<Experiment> make_work_precision_experiment(const DefinitionObjec
   return std::make_unique<WorkPrecisionExperiment>(d);
 }
 
+const ExperimentKind& work_precision_experiment_kind() {
+  static const ExperimentKind kind{"work-precision", &make_work_precision_experiment};
+  return kind;
+}
+
 }  // namespace springlab

@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 ProjectiveDynamics::ProjectiveDynamics()
@@ -293,5 +295,7 @@ StepResult ProjectiveDynamics::do_step(double h) {
   x_.swap(x_new_);
   return StepResult::success();
 }
+
+SPRINGLAB_INTEGRATOR(ProjectiveDynamics, projective_dynamics_integrator)
 
 }  // namespace springlab

@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include "integrators/core/integrator_entry.h"
 
 namespace springlab {
 
@@ -28,7 +29,6 @@ Xpbd::Xpbd()
                                     "are explicit"}) {
   takes_projections_ = true;
 }
-
 
 StepResult Xpbd::do_initialize() {
   StepResult result = FastSolver::do_initialize();
@@ -221,5 +221,7 @@ void Xpbd::apply_friction(double hs) {
     }
   }
 }
+
+SPRINGLAB_INTEGRATOR(Xpbd, xpbd_integrator)
 
 }  // namespace springlab

@@ -1,5 +1,7 @@
 #include "integrators/methods/bdf2.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 Bdf2::Bdf2()
@@ -41,5 +43,7 @@ StepResult Bdf2::do_step(double h) {
   have_previous_ = true;
   return result;
 }
+
+SPRINGLAB_INTEGRATOR(Bdf2, bdf2_integrator)
 
 }  // namespace springlab

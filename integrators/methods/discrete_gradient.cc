@@ -1,5 +1,7 @@
 #include "integrators/methods/discrete_gradient.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 DiscreteGradient::DiscreteGradient()
@@ -37,5 +39,7 @@ StepResult DiscreteGradient::do_step(double h) {
   v_.swap(v_new_);
   return result;
 }
+
+SPRINGLAB_INTEGRATOR(DiscreteGradient, discrete_gradient_integrator)
 
 }  // namespace springlab

@@ -1,5 +1,7 @@
 #include "integrators/methods/explicit_euler.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 ExplicitEuler::ExplicitEuler()
@@ -16,5 +18,7 @@ StepResult ExplicitEuler::do_step(double h) {
   v_ += h * a_;
   return StepResult::success();
 }
+
+SPRINGLAB_INTEGRATOR(ExplicitEuler, explicit_euler_integrator)
 
 }  // namespace springlab

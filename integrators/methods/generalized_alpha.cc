@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 namespace {
 
@@ -56,5 +58,9 @@ std::string GeneralizedAlpha::check_options(const IntegratorOptions& o, Eigen::I
   why << "--rho-inf: must be in [0, 1] (the spectral radius at infinity), got " << o.rho_inf;
   return why.str();
 }
+
+SPRINGLAB_INTEGRATOR(GeneralizedAlpha, generalized_alpha_integrator)
+
+SPRINGLAB_INTEGRATOR(HhtAlpha, hht_alpha_integrator)
 
 }  // namespace springlab

@@ -1,5 +1,7 @@
 #include "integrators/methods/implicit_euler.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 ImplicitEuler::ImplicitEuler()
@@ -38,5 +40,7 @@ StepResult ImplicitEuler::do_step(double h) {
   v_.swap(v_new_);
   return result;
 }
+
+SPRINGLAB_INTEGRATOR(ImplicitEuler, implicit_euler_integrator)
 
 }  // namespace springlab

@@ -1,5 +1,7 @@
 #include "integrators/methods/implicit_midpoint.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 ImplicitMidpoint::ImplicitMidpoint()
@@ -22,5 +24,7 @@ StepResult ImplicitMidpoint::do_step(double h) {
   v_.swap(v_new_);
   return result;
 }
+
+SPRINGLAB_INTEGRATOR(ImplicitMidpoint, implicit_midpoint_integrator)
 
 }  // namespace springlab

@@ -2,6 +2,8 @@
 
 #include <sstream>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 LinearImplicitEuler::LinearImplicitEuler()
@@ -32,5 +34,7 @@ StepResult LinearImplicitEuler::do_step(double h) {
   x_ += h * v_;
   return StepResult::success();
 }
+
+SPRINGLAB_INTEGRATOR(LinearImplicitEuler, linear_implicit_euler_integrator)
 
 }  // namespace springlab

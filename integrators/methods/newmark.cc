@@ -4,6 +4,8 @@
 #include <functional>
 #include <sstream>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 namespace {
 
@@ -82,5 +84,13 @@ FoxGoodwin::FoxGoodwin()
                      .stability = StabilityKind::kConditional,
                      .stability_limit = newmark_limit(1.0 / 12.0),
                      .energy_excursion = newmark_excursion(1.0 / 12.0)}) {}
+
+SPRINGLAB_INTEGRATOR(CentralDifference, central_difference_integrator)
+
+SPRINGLAB_INTEGRATOR(FoxGoodwin, fox_goodwin_integrator)
+
+SPRINGLAB_INTEGRATOR(LinearAcceleration, linear_acceleration_integrator)
+
+SPRINGLAB_INTEGRATOR(Newmark, newmark_integrator)
 
 }  // namespace springlab

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 RungeKutta4::RungeKutta4()
@@ -87,5 +89,7 @@ StepResult RungeKutta4::do_step(double h) {
              v_.data());
   return StepResult::success();
 }
+
+SPRINGLAB_INTEGRATOR(RungeKutta4, rk4_integrator)
 
 }  // namespace springlab

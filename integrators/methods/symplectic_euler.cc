@@ -1,5 +1,7 @@
 #include "integrators/methods/symplectic_euler.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 SymplecticEuler::SymplecticEuler()
@@ -34,5 +36,7 @@ StepResult SymplecticEuler::do_step(double h) {
   kick_drift(x_.size(), h, f_.data(), inv_mass().data(), x_.data(), v_.data());
   return StepResult::success();
 }
+
+SPRINGLAB_INTEGRATOR(SymplecticEuler, symplectic_euler_integrator)
 
 }  // namespace springlab

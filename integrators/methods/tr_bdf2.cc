@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 namespace {
 
@@ -64,5 +66,7 @@ StepResult TrBdf2::do_step(double h) {
   v_.swap(v_new_);
   return result;
 }
+
+SPRINGLAB_INTEGRATOR(TrBdf2, tr_bdf2_integrator)
 
 }  // namespace springlab

@@ -1,5 +1,7 @@
 #include "integrators/methods/verlet.h"
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 VelocityVerlet::VelocityVerlet()
@@ -121,5 +123,7 @@ StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vect
                              std::to_string(options().max_newton) +
                              " iterations; try a smaller --dt or a larger --max-newton");
 }
+
+SPRINGLAB_INTEGRATOR(VelocityVerlet, verlet_integrator)
 
 }  // namespace springlab

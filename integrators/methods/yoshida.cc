@@ -3,6 +3,8 @@
 #include <cmath>
 #include <functional>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 std::vector<double> yoshida4_weights() {
@@ -82,5 +84,9 @@ Yoshida6::Yoshida6()
                           .stability_limit = 2.269057996397671,
                           .energy_excursion = composition_excursion(yoshida6_weights())},
                          yoshida6_weights()) {}
+
+SPRINGLAB_INTEGRATOR(Yoshida4, yoshida4_integrator)
+
+SPRINGLAB_INTEGRATOR(Yoshida6, yoshida6_integrator)
 
 }  // namespace springlab

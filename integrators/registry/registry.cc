@@ -1,104 +1,67 @@
+// Every method by name (docs/integrators.md "The integrators"), one line
+// each, in the one registration idiom of springlab (models/core/registry.h):
+// a method's file ends with SPRINGLAB_INTEGRATOR(Class, accessor) and its
+// line here is X(IntegratorEntry, accessor). Sorted by name; SUNDIALS's
+// methods after, absent from the web build (web/), which has no SUNDIALS.
 #include "integrators/registry/registry.h"
 
 #include <algorithm>
-#include <functional>
 #include <stdexcept>
 
-#include "integrators/methods/bdf2.h"
-#include "integrators/methods/discrete_gradient.h"
-#include "integrators/methods/explicit_euler.h"
-#include "integrators/methods/generalized_alpha.h"
-#include "integrators/methods/implicit_euler.h"
-#include "integrators/methods/implicit_midpoint.h"
-#include "integrators/methods/linear_implicit_euler.h"
-#include "integrators/methods/newmark.h"
-#include "integrators/fast/projective_dynamics.h"
-#include "integrators/methods/rk4.h"
-#include "integrators/methods/symplectic_euler.h"
-#include "integrators/methods/tr_bdf2.h"
-#include "integrators/methods/verlet.h"
-#include "integrators/fast/xpbd.h"
-#include "integrators/methods/yoshida.h"
-// SUNDIALS's adaptive methods: absent from the web build (web/), which has
-// no SUNDIALS.
+#include "integrators/core/integrator_entry.h"
+#include "models/core/registry.h"
+
+#define SPRINGLAB_HAND_WRITTEN_INTEGRATORS(X)           \
+  X(IntegratorEntry, bdf2_integrator)                   \
+  X(IntegratorEntry, central_difference_integrator)     \
+  X(IntegratorEntry, discrete_gradient_integrator)      \
+  X(IntegratorEntry, explicit_euler_integrator)         \
+  X(IntegratorEntry, fox_goodwin_integrator)            \
+  X(IntegratorEntry, generalized_alpha_integrator)      \
+  X(IntegratorEntry, hht_alpha_integrator)              \
+  X(IntegratorEntry, implicit_euler_integrator)         \
+  X(IntegratorEntry, implicit_midpoint_integrator)      \
+  X(IntegratorEntry, linear_acceleration_integrator)    \
+  X(IntegratorEntry, linear_implicit_euler_integrator)  \
+  X(IntegratorEntry, newmark_integrator)                \
+  X(IntegratorEntry, projective_dynamics_integrator)    \
+  X(IntegratorEntry, rk4_integrator)                    \
+  X(IntegratorEntry, symplectic_euler_integrator)       \
+  X(IntegratorEntry, tr_bdf2_integrator)                \
+  X(IntegratorEntry, verlet_integrator)                 \
+  X(IntegratorEntry, xpbd_integrator)                   \
+  X(IntegratorEntry, yoshida4_integrator)               \
+  X(IntegratorEntry, yoshida6_integrator)
 #ifndef SPRINGLAB_NO_SUNDIALS
-#include "integrators/sundials/arkode_ark.h"
-#include "integrators/sundials/arkode_erk.h"
-#include "integrators/sundials/cvode_integrator.h"
-#include "integrators/sundials/ida_integrator.h"
+#define SPRINGLAB_SUNDIALS_INTEGRATORS(X)               \
+  X(IntegratorEntry, arkode_dirk_integrator)            \
+  X(IntegratorEntry, arkode_erk_integrator)             \
+  X(IntegratorEntry, arkode_imex_integrator)            \
+  X(IntegratorEntry, cvode_adams_integrator)            \
+  X(IntegratorEntry, cvode_bdf_integrator)              \
+  X(IntegratorEntry, ida_integrator)
+#else
+#define SPRINGLAB_SUNDIALS_INTEGRATORS(X)
 #endif
+#define SPRINGLAB_INTEGRATORS(X) SPRINGLAB_HAND_WRITTEN_INTEGRATORS(X) SPRINGLAB_SUNDIALS_INTEGRATORS(X)
 
 namespace springlab {
-namespace {
 
-struct Entry {
-  std::string name;
-  std::function<std::unique_ptr<Integrator>()> make;
-};
+SPRINGLAB_REGISTRY(IntegratorEntry, SPRINGLAB_INTEGRATORS, integrator_registry)
 
-// The name comes from the method's own IntegratorInfo, so it is written once.
-template <class Method>
-Entry entry() {
-  return {Method().name(), [] { return std::unique_ptr<Integrator>(new Method()); }};
-}
-
-// One line per method, sorted by name (hand-written methods, then SUNDIALS's;
-// integrator_names() sorts them all).
-const std::vector<Entry>& registry() {
-  static const std::vector<Entry> entries = {
-      entry<Bdf2>(),
-      entry<CentralDifference>(),
-      entry<DiscreteGradient>(),
-      entry<ExplicitEuler>(),
-      entry<FoxGoodwin>(),
-      entry<GeneralizedAlpha>(),
-      entry<HhtAlpha>(),
-      entry<ImplicitEuler>(),
-      entry<ImplicitMidpoint>(),
-      entry<LinearAcceleration>(),
-      entry<LinearImplicitEuler>(),
-      entry<Newmark>(),
-      entry<ProjectiveDynamics>(),
-      entry<RungeKutta4>(),
-      entry<SymplecticEuler>(),
-      entry<TrBdf2>(),
-      entry<VelocityVerlet>(),
-      entry<Xpbd>(),
-      entry<Yoshida4>(),
-      entry<Yoshida6>(),
-#ifndef SPRINGLAB_NO_SUNDIALS
-      entry<ArkodeDirk>(),
-      entry<ArkodeErk>(),
-      entry<ArkodeImex>(),
-      entry<CvodeAdams>(),
-      entry<CvodeBdf>(),
-      entry<IdaIntegrator>(),
-#endif
-  };
-  return entries;
-}
-
-}  // namespace
+void register_integrator(const IntegratorEntry& entry) { integrator_registry().add(entry); }
 
 std::vector<std::string> integrator_names() {
-  std::vector<std::string> names;
-  for (const Entry& e : registry()) names.push_back(e.name);
+  std::vector<std::string> names = integrator_registry().names();
   std::sort(names.begin(), names.end());
   return names;
 }
 
-bool is_integrator(const std::string& name) {
-  const auto& r = registry();
-  return std::any_of(r.begin(), r.end(), [&](const Entry& e) { return name == e.name; });
-}
+bool is_integrator(const std::string& name) { return integrator_registry().find(name) != nullptr; }
 
 std::unique_ptr<Integrator> make_integrator(const std::string& name) {
-  for (const Entry& e : registry()) {
-    if (name == e.name) return e.make();
-  }
-  std::string valid;
-  for (const std::string& n : integrator_names()) valid += (valid.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("unknown integrator '" + name + "' (integrators: " + valid + ")");
+  if (const IntegratorEntry* e = integrator_registry().find(name)) return e->make();
+  throw std::invalid_argument(integrator_registry().unknown("integrator", name));
 }
 
 }  // namespace springlab

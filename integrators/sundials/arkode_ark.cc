@@ -2,6 +2,8 @@
 
 #include <arkode/arkode_arkstep.h>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 using sundials::check;
@@ -88,5 +90,9 @@ void ArkodeArk::attach_jacobian(bool matrix_free) {
     check(ARKStepSetJacFn(memory(), ode_jacobian), "ARKStepSetJacFn", log_.last);
   }
 }
+
+SPRINGLAB_INTEGRATOR(ArkodeDirk, arkode_dirk_integrator)
+
+SPRINGLAB_INTEGRATOR(ArkodeImex, arkode_imex_integrator)
 
 }  // namespace springlab

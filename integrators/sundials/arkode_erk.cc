@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 using sundials::check_created;
@@ -51,5 +53,7 @@ void ArkodeErk::create() {
   adopt(check_created(ERKStepCreate(ode_rhs, t_, y_.get(), context_.get()), "ERKStepCreate"),
         ERKStepFree);
 }
+
+SPRINGLAB_INTEGRATOR(ArkodeErk, arkode_erk_integrator)
 
 }  // namespace springlab

@@ -4,6 +4,8 @@
 #include <cvode/cvode_ls.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 using sundials::check;
@@ -88,5 +90,9 @@ void CvodeIntegrator::attach_jacobian(bool matrix_free) {
     check(CVodeSetJacFn(memory(), ode_jacobian), "CVodeSetJacFn", log_.last);
   }
 }
+
+SPRINGLAB_INTEGRATOR(CvodeAdams, cvode_adams_integrator)
+
+SPRINGLAB_INTEGRATOR(CvodeBdf, cvode_bdf_integrator)
 
 }  // namespace springlab

@@ -3,6 +3,8 @@
 #include <ida/ida.h>
 #include <ida/ida_ls.h>
 
+#include "integrators/core/integrator_entry.h"
+
 namespace springlab {
 
 using sundials::check;
@@ -102,5 +104,7 @@ int IdaIntegrator::jtimes(double, N_Vector, N_Vector, N_Vector, N_Vector v, N_Ve
                            N_VGetArrayPointer(Gv));
   return 0;
 }
+
+SPRINGLAB_INTEGRATOR(IdaIntegrator, ida_integrator)
 
 }  // namespace springlab

@@ -8,12 +8,16 @@
 #include <vector>
 
 #include "models/core/element_kind.h"
+#include "models/core/registry.h"
 
 namespace springlab {
 
+// The registry itself (the idiom of models/core/registry.h).
+Registry<ElementKind>& element_registry();
+
 // Every registered kind, in registry order (element_registry.cc): the order
 // of keys in files and messages, of energy columns, and of the model's terms.
-const std::vector<const ElementKind*>& element_kinds();
+std::vector<const ElementKind*> element_kinds();
 
 // The element arrays of a scene ("springs", ...) with their counts and caps,
 // in registry order.
