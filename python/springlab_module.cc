@@ -189,13 +189,10 @@ PYBIND11_MODULE(springlab, m) {
           }
         }
         const Model model(scene);
-        std::string notes;
+        std::vector<std::string> notes;
         const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
-        for (std::size_t at = 0; at < notes.size();) {  // "springlab: note: ..." as Python warnings
-          const std::size_t end = notes.find('\n', at);
-          const std::string line = notes.substr(at, end - at);
-          PyErr_WarnEx(PyExc_UserWarning, line.substr(line.find("note: ") + 6).c_str(), 1);
-          at = end == std::string::npos ? notes.size() : end + 1;
+        for (const std::string& note : notes) {  // `run`'s "springlab: note: ..." as warnings
+          PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1);
         }
         const TimeGrid grid = make_time_grid(dt, t_end);
         const double frames = 1.0 + std::floor(static_cast<double>(grid.steps) / every) + 1.0;

@@ -36,7 +36,6 @@
 #include "integrators/newton/velocity_implicit_method.h"
 #include "integrators/registry/registry.h"
 #include "integrators/linear/sparse_direct_solver.h"
-#include "integrators/fast/xpbd.h"
 #include "models/scenes/builtin_scenes.h"
 #include "models/core/element_kind.h"
 #include "models/model/model.h"
@@ -100,6 +99,11 @@ std::string number_text(double value) {
   std::ostringstream s;
   s << value;
   return s.str();
+}
+
+// Notes for the user on stderr, one line each.
+void print_notes(const std::vector<std::string>& notes) {
+  for (const std::string& note : notes) std::cerr << "springlab: note: " << note << std::endl;
 }
 
 void require_positive(const std::string& option, double value) {
@@ -189,8 +193,9 @@ struct CommonOptions {
   bool given(const std::string& option) const { return command->count("--" + option) > 0; }
 
   // Option values the method cannot take are refused (exit 1, before any
-  // file is touched); options it does not read are named on stderr.
-  void check_against_method(const Model& model, std::ostream& notes = std::cerr) const {
+  // file is touched); the options it does not read are returned, one note
+  // each (`run` prints them on stderr, Python warns).
+  std::vector<std::string> check_against_method(const Model& model) const {
     const auto integrator = make_integrator(run.integrator);
     if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
       throw UsageError(why);
@@ -203,10 +208,8 @@ struct CommonOptions {
         ignored += std::string(ignored.empty() ? "" : ", ") + "--" + option;
       }
     }
-    if (!ignored.empty()) {
-      notes << "springlab: note: " << run.integrator << " does not use " << ignored
-            << " (ignored)" << std::endl;
-    }
+    if (ignored.empty()) return {};
+    return {run.integrator + " does not use " + ignored + " (ignored)"};
   }
 };
 
@@ -264,19 +267,16 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
         if (!scene_arg.empty() && s.name == scene_arg) builtin = &s;
       }
     }
-    auto has = [&](const char* parameter) {
-      if (builtin == nullptr) return false;
-      for (const SceneParameter& p : builtin->parameters) {
-        if (p.name == parameter) return true;
-      }
-      return false;
-    };
+    // The remedy is data (models/core/refusal.h): told as the built-in
+    // scene's parameter of the same name, where it has one.
+    const SceneRemedy& remedy = e.remedy();
     std::string fix;
-    if (why.find("no projective form") != std::string::npos && has("model")) {
-      fix = why.find("(corotated, poisson -") != std::string::npos ? "-p poisson=0.3"
-                                                                   : "-p model=corotated";
-    } else if (why.find("is the barrier") != std::string::npos && has("contact")) {
-      fix = "-p contact=0 (penalty)";
+    if (builtin != nullptr && !remedy.empty()) {
+      for (const SceneParameter& p : builtin->parameters) {
+        if (p.name != remedy.field) continue;
+        fix = "-p " + remedy.field + "=" + remedy.value;
+        if (!remedy.meaning.empty()) fix += " (" + remedy.meaning + ")";
+      }
     }
     if (!fix.empty()) why += " (for this scene: " + fix + ")";
     throw UsageError("--integrator " + run.integrator + ": " + why);
@@ -370,8 +370,13 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   }
   const Model model(scene);
   check_initial_energy(model, common.scene);
-  common.check_against_method(model);
+  print_notes(common.check_against_method(model));
   std::unique_ptr<Integrator> integrator = prepare_or_refuse(model, common.run, common.scene);
+  // docs/command-line.md: a method with substeps (xpbd) reports them per step.
+  const std::vector<std::string> read = integrator->options_read();
+  const int substeps = std::find(read.begin(), read.end(), "substeps") != read.end()
+                           ? integrator->substeps(common.run.options)
+                           : 0;
 
   // Files are opened (regular files as temporaries) before any step runs.
   std::unique_ptr<OutputFile> energy_file, trajectory_file;
@@ -421,10 +426,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["status"] = to_string(r.status);
     const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
     for (const auto& [key, value] : stats.items()) j[key] = value;
-    if (r.integrator == "xpbd") {  // docs/command-line.md: xpbd adds its substeps per step
-      j["substeps"] = common.run.options.substeps > 0 ? common.run.options.substeps
-                                                      : Xpbd::kDefaultSubsteps;
-    }
+    if (substeps > 0) j["substeps"] = substeps;
     j["wall_seconds"] = r.wall_seconds;
     j["diverged"] = r.diverged();
     j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
@@ -522,7 +524,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   const Scene scene = resolve_scene(common.scene, common.parameters);
   const Model model(scene);
   check_initial_energy(model, common.scene);
-  common.check_against_method(model);
+  print_notes(common.check_against_method(model));
   prepare_or_refuse(model, common.run, common.scene);  // a refusal is not "diverged even at --dt-min"
   s.run = common.run;
   std::unique_ptr<StabilityProgress> progress;
@@ -748,7 +750,7 @@ Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>
 RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,
                              double t_end, int every,
                              const std::vector<std::pair<std::string, std::string>>& options,
-                             std::string* notes) {
+                             std::vector<std::string>* notes) {
   CLI::App app{"springlab run"};
   app.option_defaults()->always_capture_default();
   CommonOptions common;
@@ -779,9 +781,12 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  std::ostringstream note_lines;
-  common.check_against_method(model, notes != nullptr ? note_lines : std::cerr);
-  if (notes != nullptr) *notes = note_lines.str();
+  std::vector<std::string> method_notes = common.check_against_method(model);
+  if (notes != nullptr) {
+    *notes = std::move(method_notes);
+  } else {
+    print_notes(method_notes);
+  }
   return common.run;
 }
 

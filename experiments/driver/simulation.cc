@@ -92,7 +92,7 @@ std::unique_ptr<Integrator> prepare_integrator(const Model& model,
   auto integrator = make_integrator(settings.integrator);
   const StepResult step = integrator->initialize(model, 0.0, model.initial_positions(),
                                                  model.initial_velocities(), run_options(settings));
-  if (!step.ok) throw RunRefused(step.message);
+  if (!step.ok) throw RunRefused(step.message, step.remedy);
   return integrator;
 }
 

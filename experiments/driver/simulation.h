@@ -91,9 +91,15 @@ RunResult simulate(const Model& model, const RunSettings& settings,
 // A pairing the method refuses before its first step (a material it has no
 // form for, the barrier with a projection method): prepare_integrator's
 // error. what() is the method's one line ("xpbd: ... use ...").
+// remedy(): the scene setting that would make it work, as data (or empty).
 class RunRefused : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit RunRefused(const std::string& what, SceneRemedy remedy = {})
+      : std::runtime_error(what), remedy_(std::move(remedy)) {}
+  const SceneRemedy& remedy() const { return remedy_; }
+
+ private:
+  SceneRemedy remedy_;
 };
 
 // What simulate() does before its first step: the settings' integrator,

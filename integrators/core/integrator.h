@@ -18,6 +18,7 @@
 
 #include "integrators/core/integrator_options.h"
 #include "models/core/mechanical_system.h"
+#include "models/core/refusal.h"
 
 namespace springlab {
 
@@ -38,8 +39,14 @@ struct IntegratorStats {
 struct StepResult {
   bool ok = true;
   std::string message;  // why it failed, naming the call / condition
+  // A refusal before the first step: the scene setting that would make the
+  // pairing work (models/core/refusal.h), or empty.
+  SceneRemedy remedy;
   static StepResult success() { return {}; }
-  static StepResult failure(std::string why) { return {false, std::move(why)}; }
+  static StepResult failure(std::string why) { return {false, std::move(why), {}}; }
+  static StepResult refusal(std::string why, SceneRemedy remedy) {
+    return {false, std::move(why), std::move(remedy)};
+  }
 };
 
 // What a method's stability region {z : |R(z)| <= 1} covers, R being one
@@ -139,6 +146,9 @@ class Integrator {
   // The command-line options (without "--") this method reads, so a caller
   // can say which of the given ones it ignores.
   virtual std::vector<std::string> options_read() const;
+  // The substeps one step takes with these options, for a method that reads
+  // --substeps (`run --json` reports it); 1 for the others.
+  virtual int substeps(const IntegratorOptions&) const { return 1; }
 
   // Binds the integrator to `system` and sets the initial state. An
   // integrator serves one system for one run: its caches (a symbolic

@@ -169,8 +169,8 @@ class RigidityForce final : public ForceTerm {
   std::string_view name() const override { return "rigidity"; }
   bool conservative() const override { return true; }
 
-  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
-    why = "rigid bodies have no projective form (the affine body's rigidity kappa V |A^T A - I|^2 "
+  bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
+    why.text = "rigid bodies have no projective form (the affine body's rigidity kappa V |A^T A - I|^2 "
           "is not a projective energy of particles); use implicit-euler or another Newton method";
     return false;
   }

@@ -148,8 +148,8 @@ class BodyContactForce final : public ForceTerm {
   std::string_view name() const override { return "body contact"; }
   bool conservative() const override { return true; }
   bool forbids_states() const override { return law_.model == ContactModel::kBarrier; }
-  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
-    why = "rigid bodies' contact has no projective form; use implicit-euler or another Newton "
+  bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
+    why.text = "rigid bodies' contact has no projective form; use implicit-euler or another Newton "
           "method";
     return false;
   }

@@ -442,25 +442,25 @@ bool Model::has_forbidden_states() const {
 
 bool Model::projective_form(std::vector<DistanceConstraint>& constraints,
                                    std::vector<ProjectiveElement>& elements,
-                                   std::string& why) const {
+                                   Refusal& why) const {
   return stiff_forms(constraints, elements, ElementForm::kProjective, why);
 }
 
 bool Model::laplacian_form(std::vector<DistanceConstraint>& constraints,
                                   std::vector<ProjectiveElement>& elements) const {
-  std::string why;
+  Refusal why;
   return stiff_forms(constraints, elements, ElementForm::kLaplacian, why);
 }
 
 bool Model::position_based_form(
     std::vector<DistanceConstraint>& constraints, std::vector<ProjectiveElement>& elements,
-    std::vector<std::unique_ptr<PositionProjection>>& projections, std::string& why) const {
+    std::vector<std::unique_ptr<PositionProjection>>& projections, Refusal& why) const {
   return stiff_forms(constraints, elements, ElementForm::kProjective, why, &projections);
 }
 
 bool Model::stiff_forms(std::vector<DistanceConstraint>& out,
                                std::vector<ProjectiveElement>& elements, ElementForm form,
-                               std::string& why,
+                               Refusal& why,
                                std::vector<std::unique_ptr<PositionProjection>>* projections) const {
   out.clear();
   elements.clear();

@@ -70,13 +70,13 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   // FastSolverViews (fast_solver_views.h), gathered from the same terms.
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
-                       std::string& why) const override;
+                       Refusal& why) const override;
   bool laplacian_form(std::vector<DistanceConstraint>& constraints,
                       std::vector<ProjectiveElement>& elements) const override;
   bool position_based_form(std::vector<DistanceConstraint>& constraints,
                            std::vector<ProjectiveElement>& elements,
                            std::vector<std::unique_ptr<PositionProjection>>& projections,
-                           std::string& why) const override;
+                           Refusal& why) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
@@ -165,7 +165,7 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   // With `projections`, a term that projects positions itself adds its
   // projection instead of failing.
   bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>& elements,
-                   ElementForm form, std::string& why,
+                   ElementForm form, Refusal& why,
                    std::vector<std::unique_ptr<PositionProjection>>* projections = nullptr) const;
   // Which terms the fast solvers solve as constraints (distance
   // constraints, elements, position projections, contact planes:
