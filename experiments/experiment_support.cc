@@ -8,6 +8,7 @@
 #include <string>
 
 #include "experiments/output_files.h"
+#include "experiments/run_warnings.h"
 #include "models/element_kind.h"
 #include "models/springs.h"
 
@@ -151,6 +152,14 @@ void check_time_grid(const DefinitionObject& o, const char* key, double dt, doub
   } catch (const std::invalid_argument& e) {
     o.fail(key, e.what());
   }
+}
+
+std::string warnings_cell(const RunResult& r) {
+  std::string cell;
+  for (const std::string& line : warning_texts(r.warnings, r.integrator)) {
+    cell += (cell.empty() ? "" : "; ") + line;
+  }
+  return cell;
 }
 
 }  // namespace springlab

@@ -1,5 +1,7 @@
 #include "experiments/integrator_table.h"
 
+#include "experiments/divergence.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -120,7 +122,8 @@ nlohmann::ordered_json integrator_table_json() {
     }
     scenes.push_back({{"name", s.name}, {"description", s.description}, {"parameters", parameters}});
   }
-  return {{"integrators", integrators}, {"scenes", scenes}};
+  // docs/command-line.md "Divergence": the rule for each kind of matter.
+  return {{"integrators", integrators}, {"scenes", scenes}, {"divergence", divergence_sentences()}};
 }
 
 }  // namespace springlab
