@@ -185,9 +185,12 @@ std::optional<Verdict> DivergenceCheck::judge(const Vector& x, const Vector& v, 
     const double spring = sqrt_u_ref_ + sqrt_kappa_ * drift_[next];
     const double certificate = 0.5 * velocity2 + spring * spring;
     if (std::isfinite(certificate) && certificate <= (1.0 - kRoundingMargin) * bound_) {
-      // Within the bound (an excursion above it, if one was under way, ends).
-      window_.breaks({.rule = VerdictRule::kEnergy, .value = certificate, .bound = bound_},
-                     step_, t);
+      // Within the bound (an excursion above it, if one was under way, ends;
+      // without an allowance there is none).
+      if (window_.steps() > 0) {
+        window_.breaks({.rule = VerdictRule::kEnergy, .value = certificate, .bound = bound_},
+                       step_, t);
+      }
       good_ = next;
       return std::nullopt;
     }
