@@ -24,13 +24,15 @@
 #include <string>
 #include <vector>
 
-#include "experiments/cli.h"
-#include "experiments/experiment_runner.h"
-#include "experiments/integrator_table.h"
-#include "experiments/simulation.h"
-#include "models/elastic_model.h"
-#include "models/element_kind.h"
-#include "models/scene.h"
+#include "experiments/cli/cli.h"
+#include "experiments/kinds/experiment_runner.h"
+#include "experiments/cli/integrator_table.h"
+#include "experiments/driver/simulation.h"
+#include "models/model/model.h"
+#include "models/core/element_kind.h"
+#include "models/core/scene.h"
+#include "models/model/scene_file.h"
+#include "models/model/element_registry.h"
 
 namespace py = pybind11;
 using namespace springlab;
@@ -56,7 +58,7 @@ std::string option_text(const py::handle& value) {
 // The state at each output time, and the energies there.
 class Recorder final : public Observer {
  public:
-  explicit Recorder(const ElasticModel& model) : model_(model) {}
+  explicit Recorder(const Model& model) : model_(model) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     t_.push_back(t);
     x_.push_back(model_.scene_positions(x));
@@ -68,7 +70,7 @@ class Recorder final : public Observer {
   std::vector<std::vector<double>> e_;
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
 };
 
 py::array_t<double> stack(const std::vector<Eigen::MatrixXd>& frames, Eigen::Index rows,
@@ -97,7 +99,7 @@ Scene load_scene(const py::object& source, const py::kwargs& parameters) {
   return resolve_scene(path, p);
 }
 
-py::dict run_result(const ElasticModel& model, const RunResult& r, const Recorder& rec) {
+py::dict run_result(const Model& model, const RunResult& r, const Recorder& rec) {
   py::dict out;
   const Eigen::Index n = model.particle_count(), d = model.dimension();
   py::array_t<double> t(static_cast<py::ssize_t>(rec.t_.size()));
@@ -190,7 +192,7 @@ PYBIND11_MODULE(springlab, m) {
             typed.emplace_back(option, option_text(value));
           }
         }
-        const ElasticModel model(scene);
+        const Model model(scene);
         std::string notes;
         const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
         for (std::size_t at = 0; at < notes.size();) {  // "springlab: note: ..." as Python warnings

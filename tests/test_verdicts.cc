@@ -1,5 +1,5 @@
 // Verdicts per kind of matter (docs/command-line.md "Divergence", issue 46
-// items 1-4): the driver's plain rule (experiments/divergence.h) against its
+// items 1-4): the driver's plain rule (experiments/driver/divergence.h) against its
 // fast check, the fluids' and bodies' rules on the issue's commands, E_s
 // from the scene's extent of motion, the Newmark-alpha overshoot, the run's
 // warnings, and the stability answer's wording (issue 52). Each case runs
@@ -15,22 +15,22 @@
 #include <string>
 #include <vector>
 
-#include "experiments/divergence.h"
-#include "experiments/divergence_check.h"
-#include "experiments/run_warnings.h"
-#include "experiments/simulation.h"
-#include "experiments/stability.h"
-#include "integrators/newmark_family.h"
-#include "integrators/registry.h"
-#include "models/bodies.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/fluids.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/scene_io.h"
-#include "models/springs.h"
-#include "models/wind.h"
+#include "experiments/driver/divergence.h"
+#include "experiments/driver/divergence_check.h"
+#include "experiments/driver/run_warnings.h"
+#include "experiments/driver/simulation.h"
+#include "experiments/analysis/stability.h"
+#include "integrators/methods/newmark_family.h"
+#include "integrators/registry/registry.h"
+#include "models/bodies/bodies.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/fluids/fluids.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/core/scene_io.h"
+#include "models/springs/springs.h"
+#include "models/springs/wind.h"
 #include "random_scenes.h"
 #include "run_process.h"
 
@@ -56,7 +56,7 @@ Scene builtin(const std::string& name, std::vector<std::pair<std::string, std::s
 // DivergenceCheck (the certificate and the kinds' rules, with the method's
 // overshoot allowance) gives divergence()'s verdict at every step: the same
 // step, the same rule, the same particle or body.
-void expect_same_verdicts(const ElasticModel& model, const std::string& integrator, double dt,
+void expect_same_verdicts(const Model& model, const std::string& integrator, double dt,
                           long steps, double blowup, const IntegratorOptions& options = {}) {
   auto method = make_integrator(integrator);
   ASSERT_TRUE(method->initialize(model, 0.0, model.initial_positions(),
@@ -106,7 +106,7 @@ TEST(Verdicts, TheFastCheckDecidesAsThePlainRuleOnRealRuns) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene.name + " " + c.integrator);
-    const ElasticModel model(c.scene);
+    const Model model(c.scene);
     expect_same_verdicts(model, c.integrator, c.dt, c.steps, c.blowup);
   }
 }
@@ -119,7 +119,7 @@ TEST(Verdicts, TheFastCheckDecidesAsThePlainRuleOnRandomStates) {
   for (int dim : {2, 3}) {
     for (unsigned seed = 1; seed <= 12; ++seed) {
       SCOPED_TRACE(std::to_string(dim) + "-D seed " + std::to_string(seed));
-      const ElasticModel model(testing::random_scene(dim, seed));
+      const Model model(testing::random_scene(dim, seed));
       const double bound = 3.0 * model.energy_scale();
       DivergenceCheck check(model, bound,
                             model.energies(model.initial_positions(), model.initial_velocities()));
@@ -172,7 +172,7 @@ TEST(Verdicts, TheIssuesFluidBlowUpsDiverge) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene + " " + c.integrator);
-    const ElasticModel model(builtin(c.scene, c.p));
+    const Model model(builtin(c.scene, c.p));
     RunSettings s = settings(c.integrator, c.dt, c.t_end);
     s.options.substeps = c.substeps;
     const RunResult r = simulate(model, s);
@@ -191,7 +191,7 @@ TEST(Verdicts, TheIssuesFluidBlowUpsDiverge) {
         << r.failure;
   }
   // Below the CFL step the dam break completes, its energy falling.
-  const ElasticModel dam(builtin("dam-break", {{"spacing", "0.02"}}));
+  const Model dam(builtin("dam-break", {{"spacing", "0.02"}}));
   const RunResult fine = simulate(dam, settings("symplectic-euler", 0.0005, 0.3));
   EXPECT_EQ(fine.status, RunStatus::kCompleted) << fine.failure;
   EXPECT_LT(fine.energy_final, fine.energy_initial);
@@ -202,7 +202,7 @@ TEST(Verdicts, TheIssuesFluidBlowUpsDiverge) {
 // another by a fifth of a spacing ... its density error is measured.
 TEST(Verdicts, TheFluidsRuleMeasuresTheWallsBoxAndTheDensity) {
   const Scene scene = builtin("tank", {{"spacing", "0.05"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   std::vector<Verdict> measured;
   const Vector x0 = model.initial_positions(), v0 = model.initial_velocities();
   model.measure_divergence(x0, v0, 0.0, measured);
@@ -234,7 +234,7 @@ TEST(Verdicts, TheFluidsRuleMeasuresTheWallsBoxAndTheDensity) {
 
 TEST(Verdicts, TheIssuesBodyBlowUpsDiverge) {
   // Boxes stretched 38 % and 547 E_s in an unforced scene: the strain rule.
-  const ElasticModel chain(builtin("box-chain"));
+  const Model chain(builtin("box-chain"));
   const RunResult a = simulate(chain, settings("generalized-alpha", 0.25, 5.0));
   ASSERT_EQ(a.status, RunStatus::kDiverged);
   ASSERT_TRUE(a.verdict.has_value());
@@ -242,7 +242,7 @@ TEST(Verdicts, TheIssuesBodyBlowUpsDiverge) {
   EXPECT_GT(a.verdict->value, 0.1);
   EXPECT_NE(a.failure.find("no longer rigid"), std::string::npos) << a.failure;
   // 0.987 -> 32.1 J with no force to feed it: the energy rule.
-  const ElasticModel box(builtin("tumbling-box"));
+  const Model box(builtin("tumbling-box"));
   const RunResult b = simulate(box, settings("newmark", 0.25, 5.0));
   ASSERT_EQ(b.status, RunStatus::kDiverged);
   ASSERT_TRUE(b.verdict.has_value());
@@ -260,7 +260,7 @@ TEST(Verdicts, TheBodiesEnergyRuleNeedsAnUnforcedScene) {
   Scene scene = builtin("tumbling-box");
   std::vector<Verdict> measured;
   {
-    const ElasticModel model(scene);
+    const Model model(scene);
     model.measure_divergence(model.initial_positions(), model.initial_velocities(), 0.0, measured);
     ASSERT_EQ(measured.size(), 2u);
     EXPECT_EQ(measured[1].rule, VerdictRule::kBodyEnergy);
@@ -269,7 +269,7 @@ TEST(Verdicts, TheBodiesEnergyRuleNeedsAnUnforcedScene) {
   leaf.x = Eigen::Vector3d(2.0, 0.0, 0.0);
   scene.particles.push_back(leaf);
   scene.block<Wind>() = {.velocity = Eigen::Vector3d(1.0, 0.0, 0.0), .coefficient = 0.1};
-  const ElasticModel model(scene);
+  const Model model(scene);
   model.measure_divergence(model.initial_positions(), model.initial_velocities(), 0.0, measured);
   ASSERT_EQ(measured.size(), 1u);
   EXPECT_EQ(measured[0].rule, VerdictRule::kBodyStrain);
@@ -285,7 +285,7 @@ TEST(Verdicts, TheEnergyScaleTakesTheHeightABodyCanFall) {
           "planes": [{"point": [0, 0, 0], "normal": [0, 1, 0]}],
           "bodies": [{"shape": "box", "size": [0.01, 0.01, 0.01], "position": [0, 20, 0]}]})",
       "drop");
-  const ElasticModel model(drop);
+  const Model model(drop);
   const double m = 1000.0 * 1e-6;
   const double d = std::sqrt(0.01 * 0.01 * 2 + 20.005 * 20.005);  // the box's x, z; top to foot
   EXPECT_NEAR(model.energy_scale(), m * 9.81 * d, 1e-9 * m * 9.81 * d);
@@ -299,7 +299,7 @@ TEST(Verdicts, TheEnergyScaleTakesTheHeightABodyCanFall) {
   // Without a plane below nothing changes: the initial positions' box.
   Scene no_floor = drop;
   no_floor.block<Planes>().clear();
-  const ElasticModel floating(no_floor);
+  const Model floating(no_floor);
   EXPECT_NEAR(floating.energy_scale(), m * 9.81 * std::sqrt(3e-4), 1e-9);
 }
 
@@ -311,7 +311,7 @@ TEST(Verdicts, TheEnergyScaleTakesTheHeightABodyCanFall) {
 // with the own gradient: |L| and E kept to Newton's tolerance, and no step
 // fell back to the generic gradient (no warning).
 TEST(Verdicts, DiscreteGradientKeepsTheAngularMomentumWhenNewtonFails) {
-  const ElasticModel model(builtin("tumbling-box"));
+  const Model model(builtin("tumbling-box"));
   const RunResult r = simulate(model, settings("discrete-gradient", 0.05, 2.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_GT(r.stats.nonlinear_failures, 0) << "the case must exercise the fallback";
@@ -357,14 +357,14 @@ TEST(Verdicts, TheAlphaMethodsOvershootForAFewStepsAndNewmarkDoesNot) {
   };
   for (const Case& c : {Case{"hht-alpha", 1e3, 343.2, 5}, Case{"generalized-alpha", 1e4, 3.906e5, 1}}) {
     SCOPED_TRACE(c.method);
-    const ElasticModel model(builtin("oscillator"));
+    const Model model(builtin("oscillator"));
     class Peak final : public Observer {
      public:
-      explicit Peak(const ElasticModel& m) : model_(m) {}
+      explicit Peak(const Model& m) : model_(m) {}
       void observe(double, const Vector& x, const Vector& v) override {
         e.push_back(model_.energies(x, v).total());
       }
-      const ElasticModel& model_;
+      const Model& model_;
       std::vector<double> e;
     } peak(model);
     RunSettings s = settings(c.method, c.wh / 10.0, 12 * c.wh / 10.0, 1e300);
@@ -409,7 +409,7 @@ TEST(Verdicts, TheOvershootWindowForgivesARiseOfKStepsThatDecays) {
   OvershootWindow none(0);
   EXPECT_TRUE(none.breaks(energy(1.5), 1, 0.0));
 
-  const ElasticModel model(builtin("oscillator"));
+  const Model model(builtin("oscillator"));
   const std::string text =
       verdict_text(energy(2.0), model, {"hht-alpha", 1000.0, 5}, model.initial_positions(),
                    model.initial_velocities());
@@ -438,7 +438,7 @@ TEST(Verdicts, ABodyInsideABarrierPlaneIsRefusedByName) {
 
 // newmark --beta 0 is the central difference: theory 2 / w_max, as measured.
 TEST(Verdicts, StabilityTheoryFollowsNewmarksBetaAndGamma) {
-  const ElasticModel model(builtin("oscillator"));
+  const Model model(builtin("oscillator"));
   StabilitySettings s;
   s.run.integrator = "newmark";
   s.run.t_end = 5.0;
@@ -459,9 +459,9 @@ TEST(Verdicts, TheStabilityAnswerSaysWhenNoStepIsStable) {
   StabilitySettings s;
   s.run.integrator = "explicit-euler";
   s.run.t_end = 1.0;
-  const StabilityResult undamped = find_max_stable_dt(ElasticModel(builtin("cloth", {{"n", "4"}})), s);
+  const StabilityResult undamped = find_max_stable_dt(Model(builtin("cloth", {{"n", "4"}})), s);
   EXPECT_TRUE(undamped.no_stable_step);
-  const StabilityResult damped = find_max_stable_dt(ElasticModel(builtin("spring")), s);
+  const StabilityResult damped = find_max_stable_dt(Model(builtin("spring")), s);
   EXPECT_FALSE(damped.no_stable_step);
   ASSERT_TRUE(damped.theory.dt.has_value());
   if (damped.max_stable_dt > 1.01 * *damped.theory.dt) {
@@ -523,7 +523,7 @@ TEST(Verdicts, TheCommandLineStatesTheRulesAndPrintsWarningsAndVerdicts) {
 TEST(Verdicts, TheFluidStabilitySearchReadsTheSameLimitAtTheRunsRule) {
   Scene scene = builtin("dam-break", {{"a", "0.1"}, {"spacing", "0.02"}, {"sound", "10"}});
   scene.block<Fluids>().front().density *= 1.0 - 1e-9;  // as the experiment does
-  const ElasticModel model(scene);
+  const Model model(scene);
   const Fluid& fluid = scene.get<Fluids>().front();
   const double h = 1.3 * fluid.spacing;
   StabilitySettings s;

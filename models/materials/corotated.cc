@@ -7,7 +7,7 @@
 // negative and the element is pushed back. Kim and Eberle, "Dynamic
 // Deformables", SIGGRAPH course 2022, §5.
 
-#include "models/materials/tet_kernel.h"
+#include "models/materials/kernels/tet_kernel.h"
 
 namespace springlab {
 namespace {
