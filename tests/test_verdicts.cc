@@ -29,6 +29,7 @@
 #include "models/model/model.h"
 #include "models/springs/gravity.h"
 #include "models/core/scene_io.h"
+#include "models/model/scene_file.h"
 #include "models/springs/springs.h"
 #include "models/springs/wind.h"
 #include "random_scenes.h"
