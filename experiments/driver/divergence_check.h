@@ -3,7 +3,7 @@
 // fast. simulate() (simulation.h) checks it after every step; the lab page
 // (web/) checks its panels' steps with the same object, which also keeps the
 // last good state. Its verdicts equal divergence()'s at every step
-// (tests/test_divergence.cc compares them on random and real runs).
+// (tests/test_verdicts.cc compares them on random and real runs).
 #pragma once
 
 #include <memory>

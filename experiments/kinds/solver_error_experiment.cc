@@ -223,7 +223,7 @@ class SolverErrorExperiment final : public Experiment {
     row.raw(prefix);
     if (make_integrator(variant.integrator)->info().adaptive) {
       return row.add("skipped").add_empty().add_empty().add_empty().add_empty().add_empty()
-          .add("adaptive methods are not run whole").str();
+          .add("adaptive methods are not run whole").add_empty().str();
     }
     RunSettings run;
     run.integrator = variant.integrator;
