@@ -123,6 +123,10 @@ py::dict run_result(const Model& model, const RunResult& r, const Recorder& rec)
   out["diverged"] = r.diverged();
   out["diverged_at"] = r.diverged_at ? py::object(py::float_(*r.diverged_at)) : py::object(py::none());
   out["failure"] = r.failure.empty() ? py::object(py::none()) : py::object(py::str(r.failure));
+  out["verdict"] = r.verdict ? from_json_text(verdict_json(*r.verdict).dump()) : py::object(py::none());
+  py::list warnings;
+  for (const std::string& w : warning_texts(r.warnings, r.integrator)) warnings.append(w);
+  out["warnings"] = warnings;
   out["t_final"] = r.t_final;
   out["energy_scale"] = model.energy_scale();
   out["wall_seconds"] = r.wall_seconds;
@@ -246,7 +250,9 @@ PYBIND11_MODULE(springlab, m) {
       "Runs a scene with one integrator, as `springlab run` does. Keywords are run's options\n"
       "(newton_tol=1e-6 is --newton-tol 1e-6, stald=True is --stald). Returns a dict: t (frames,),\n"
       "x and v (frames, particles, dimension), energies (column -> (frames,)), stats (the\n"
-      "statistics every integrator reports), status, diverged, diverged_at, failure, t_final,\n"
+      "statistics every integrator reports), status, diverged, diverged_at, failure, verdict\n"
+      "(the rule that ended a diverged run: rule, value, bound, where), warnings (one line\n"
+      "each, as `run --json`), t_final,\n"
       "energy_scale, wall_seconds. A divergence or a solver failure is a result, not an error;\n"
       "a pairing the method refuses before its first step raises springlab.Error.");
 

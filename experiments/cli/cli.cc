@@ -1,5 +1,7 @@
 #include "experiments/cli/cli.h"
 
+#include "experiments/driver/divergence.h"
+
 #include <sched.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -431,6 +433,8 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["diverged"] = r.diverged();
     j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
     j["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
+    if (r.verdict) j["verdict"] = verdict_json(*r.verdict);
+    j["warnings"] = warning_texts(r.warnings, r.integrator);
     j["t_final"] = r.t_final;
     j["outputs_complete"] = outputs_complete;
     j["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
@@ -459,6 +463,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
         << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
         << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
         << "), wall " << r.wall_seconds << " s\n";
+    for (const std::string& w : warning_texts(r.warnings, r.integrator)) out << "warning: " << w << '\n';
     if (any_output && !outputs_complete) {
       out << "output files incomplete: rows up to t = " << r.t_final << ", the last good state\n";
     }
@@ -567,8 +572,22 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     out << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end << ": ";
     switch (r.outcome) {
       case StabilityOutcome::kBracketed:
+        if (r.no_stable_step) {
+          // Issue 52: not "largest stable dt" beside "unstable at every step".
+          out << "no step is stable without damping (every undamped mode grows at every step); "
+                 "the largest step whose trial stayed within the blow-up bound is "
+              << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi << "], " << r.runs
+              << runs << "): it shrinks as the trial grows, a property of --t-end and --blowup, "
+                 "not a stability limit\n";
+          break;
+        }
         out << "largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi
             << "], " << r.runs << runs << ")\n";
+        if (r.growth_at_lo > 1.0 + 1e-9) {
+          out << "at " << r.lo << " the fastest mode's energy still grows x" << r.growth_at_lo
+              << " per step: unstable, but too slowly to pass the blow-up bound within the trial "
+                 "(a longer --t-end or a smaller --blowup reads nearer the limit)\n";
+        }
         break;
       case StabilityOutcome::kStableUpToDtMax:
         out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << runs << ")\n";
@@ -617,6 +636,9 @@ int command_list(bool json) {
         << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "")
         << ", " << stability_text(i) << "\n      " << i.scheme << '\n';
   }
+  out << "divergence: a run stops at the first step that breaks a rule (docs/command-line.md "
+         "\"Divergence\"):\n";
+  for (const std::string& rule : divergence_sentences()) out << "  " << rule << '\n';
   out << "built-in scenes:\n";
   for (const BuiltinScene& s : builtin_scenes()) {
     out << "  " << s.name << "  " << s.description << '\n';
@@ -793,6 +815,13 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
 std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& settings,
                                         const std::string& scene_arg) {
   return prepare_or_refuse(model, settings, scene_arg);
+}
+
+Json verdict_json(const Verdict& v) {
+  Json j{{"rule", std::string(to_string(v.rule))}, {"value", v.value}, {"bound", v.bound}};
+  if (v.where >= 0) j["where"] = v.where;
+  if (v.plane >= 0) j["plane"] = v.plane;
+  return j;
 }
 
 Json stats_json(const IntegratorStats& s) {

@@ -43,6 +43,9 @@ std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& s
 
 // The statistics every integrator reports, by the names of `run --json`.
 nlohmann::ordered_json stats_json(const IntegratorStats& s);
+// The rule that ended a diverged run (`run --json`'s "verdict": rule,
+// value, bound, and where: the particle or body, plane).
+nlohmann::ordered_json verdict_json(const Verdict& v);
 
 // Rows one output of a run may hold (docs/reliability.md "Reliability"): about 1 GB of CSV.
 inline constexpr double kMaxOutputRows = 10'000'000;

@@ -1,5 +1,7 @@
 #include "experiments/cli/integrator_table.h"
 
+#include "experiments/driver/divergence.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -122,7 +124,8 @@ nlohmann::ordered_json integrator_table_json() {
     }
     scenes.push_back({{"name", s.name}, {"description", s.description}, {"parameters", parameters}});
   }
-  return {{"integrators", integrators}, {"scenes", scenes}};
+  // docs/command-line.md "Divergence": the rule for each kind of matter.
+  return {{"integrators", integrators}, {"scenes", scenes}, {"divergence", divergence_sentences()}};
 }
 
 }  // namespace springlab

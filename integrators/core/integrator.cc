@@ -82,6 +82,8 @@ StepResult Integrator::initialize(const MechanicalSystem& system, double t0, con
   return do_initialize();
 }
 
+IntegratorInfo Integrator::info_for(const IntegratorOptions&) const { return info_; }
+
 StepResult Integrator::advance_to(double t_out) {
   const double h = t_out - t_;
   if (!(h > 0.0)) return StepResult::failure(name() + ": step size must be positive");

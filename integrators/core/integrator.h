@@ -36,6 +36,20 @@ struct IntegratorStats {
   long nonlinear_failures = 0;  // nonlinear solves that did not converge
 };
 
+// A weaker variant of a method that some of a run's steps fell back to
+// (docs/command-line.md "Warnings": the run reports it, with the number of
+// steps). Data, not prose: the driver's warnings print it.
+enum class Fallback {
+  // discrete-gradient: Gonzalez's generic discrete gradient for every force
+  // instead of a force's own (the rigid bodies' rigidity): energy still
+  // exact, but the step's angular momentum is not kept.
+  kGenericDiscreteGradient,
+};
+struct FallbackCount {
+  Fallback fallback = Fallback::kGenericDiscreteGradient;
+  long steps = 0;
+};
+
 struct StepResult {
   bool ok = true;
   std::string message;  // why it failed, naming the call / condition
@@ -138,6 +152,10 @@ class Integrator {
 
   const IntegratorInfo& info() const { return info_; }
   const std::string& name() const { return info_.name; }
+  // What the method claims when run with `options`, where they change it
+  // (newmark's --beta and --gamma: --beta 0 is the central difference,
+  // stable for w h <= 2); by default info().
+  virtual IntegratorInfo info_for(const IntegratorOptions& options) const;
 
   // Option values this method cannot take on a system of `dofs` position
   // unknowns, checked before any run: empty when they are fine, otherwise
@@ -161,6 +179,16 @@ class Integrator {
   // Advances to t_out. A fixed-step method takes exactly one step of
   // h = t_out - t(); an adaptive one as many as it needs.
   virtual StepResult advance_to(double t_out);
+
+  // The steps that fell back to a weaker variant of the method so far, one
+  // entry per variant used (empty: none).
+  virtual std::vector<FallbackCount> fallbacks() const { return {}; }
+  // The method's overshoot (docs/command-line.md "Divergence"; the
+  // Newmark-alpha family, Hilber and Hughes 1978): the most steps an
+  // undamped stiff mode's energy can keep rising, at large w h, before the
+  // method damps it, with the options it was initialized with; 0: its steps
+  // do not overshoot.
+  virtual int overshoot_steps() const { return 0; }
 
   double t() const { return t_; }
   const Vector& x() const { return x_; }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <sstream>
 
 #include "integrators/core/integrator_entry.h"
@@ -41,6 +42,23 @@ Newmark::Newmark()
 
 NewmarkParameters Newmark::parameters(const IntegratorOptions& o) const {
   return {.beta = std::isnan(o.beta) ? 0.25 : o.beta, .gamma = std::isnan(o.gamma) ? 0.5 : o.gamma};
+}
+
+IntegratorInfo Newmark::info_for(const IntegratorOptions& o) const {
+  const NewmarkParameters p = parameters(o);
+  IntegratorInfo info = this->info();
+  if (p.beta == 0.25 && p.gamma == 0.5) return info;
+  std::ostringstream note;
+  note << "at --beta " << p.beta << " --gamma " << p.gamma;
+  info.stability_note = note.str();
+  info.stability_function = {};
+  info.spectral_radius_infinity = std::numeric_limits<double>::quiet_NaN();
+  if (p.gamma > 0.5) info.order = 1;
+  if (p.beta >= 0.5 * p.gamma) return info;  // A-stable (Hughes 9.1.2)
+  info.stability = StabilityKind::kConditional;
+  info.stability_limit = 1.0 / std::sqrt(0.5 * p.gamma - p.beta);
+  if (p.gamma == 0.5) info.energy_excursion = newmark_excursion(p.beta);
+  return info;
 }
 
 std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) const {

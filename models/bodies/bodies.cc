@@ -691,6 +691,12 @@ void add_random_body(Scene& scene, std::mt19937& rng, RandomStates states) {
   add_random_body_with(scene, rng, states, true);
 }
 
+// Its divergence rule: rigidity strain and, unforced, energy (body_verdict.cc).
+std::unique_ptr<DivergenceRule> make_body_divergence_rule(const Scene& scene,
+                                                          const ParticleOrder& order,
+                                                          const VerdictScale& scale);
+extern const char kBodyDivergenceSentence[];
+
 const ElementKind& body_kind() {
   static const ElementKind kind = {
       .name = "body",
@@ -701,6 +707,8 @@ const ElementKind& body_kind() {
       .write = write_bodies,
       .make = make_rigidity_force,
       .energy = {.name = "rigidity", .counts_with_spring = true},
+      .divergence_rule = make_body_divergence_rule,
+      .divergence_sentence = kBodyDivergenceSentence,
       .add_random = add_random_body,
   };
   return kind;

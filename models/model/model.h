@@ -24,6 +24,7 @@
 #include "models/core/mechanical_system.h"
 #include "models/core/scene.h"
 #include "models/model/energy_layout.h"
+#include "models/core/verdict.h"
 
 namespace springlab {
 
@@ -105,9 +106,19 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   // The same into `out` (made by energies() once), without allocating.
   void energies(const Vector& x, const Vector& v, Energies& out) const;
 
-  // docs/command-line.md "The command line"'s energy scale E_s = T(0) + U_spring(0) + sum_free m
-  // (|g| d + |w_max|^2/2) (U_spring: every potential that counts with the spring energy).
+  // docs/command-line.md "Divergence"'s energy scale E_s = T(0) + U_spring(0) + sum_free m
+  // (|g| d + |w_max|^2/2) (U_spring: every potential that counts with the spring energy; d the
+  // scene's extent of motion, scene_extent.h).
   double energy_scale() const { return energy_scale_; }
+
+  // The divergence rules of the scene's kinds (verdict.h: fluids, bodies),
+  // measured on the state (x, v) whose total energy (energies(x, v).total())
+  // is `total`: one Verdict per quantity into `out` (cleared first), each
+  // with its value, bound and where. Empty when no kind of the scene has a
+  // rule (springs and elements: the energy rule alone).
+  bool has_divergence_rules() const { return !rules_.empty(); }
+  void measure_divergence(const Vector& x, const Vector& v, double total,
+                          std::vector<Verdict>& out) const;
 
   // Positions/velocities of all particles in scene order, one row each
   // (fixed particles at their fixed place, with zero velocity).
@@ -143,6 +154,8 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   mutable bool derives_from_potentials_ = true;
   VelocityDependence velocity_dependence_ = VelocityDependence::kNone;
   double energy_scale_ = 0.0;
+  std::vector<std::unique_ptr<DivergenceRule>> rules_;
+  bool fed_ = false;  // a term of a kind that feeds energy in (wind): not unforced
 
   // Sum of the constant terms (gravity) in each ForcePart, all particles:
   // force() starts f from it (see ForceTerm::constant()).
