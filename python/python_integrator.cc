@@ -100,6 +100,8 @@ IntegratorInfo info_of(const py::object& method, const std::string& name) {
   info.scheme = scheme.empty() ? "a method written in Python" : scheme;
   info.order = method.attr("order").cast<int>();
   info.implicit = method.attr("implicit").cast<bool>();
+  // An implicit method reads --newton-tol and --max-newton (model.newton_tol).
+  info.iterates_to_tolerance = info.implicit;
   info.symplectic = method.attr("symplectic").cast<bool>();
   if (method.attr("a_stable").cast<bool>()) {
     info.stability = StabilityKind::kA;
@@ -163,7 +165,7 @@ class ModelView {
       : method_(method), system_(system), model_(dynamic_cast<const Model*>(&system)), d_(d) {}
 
   // One copy per run, read-only: constant through the run.
-  py::array mass() {
+  py::object mass() {
     if (!mass_) {
       mass_ = owning(std::make_unique<Vector>(system_.mass()), d_);
       py::detail::array_proxy(mass_.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
@@ -199,7 +201,7 @@ class ModelView {
   const Model* model_;
   int d_;
   Vector xs_, vs_;
-  py::array mass_;
+  py::object mass_;  // null until asked for
 };
 
 class PythonMethod final : public Integrator {
@@ -383,9 +385,12 @@ std::string register_python_method(const py::object& given) {
   py::object method = given;
   if (py::isinstance<py::type>(given)) method = given();
   if (!py::isinstance(method, integrator_base())) {
-    throw py::type_error("an integrator is a registered name (str) or an instance of a "
-                         "springlab.Integrator subclass, not " +
-                         py::str(py::type::of(method).attr("__name__")).cast<std::string>());
+    // TypeError itself (a C++ exception would become springlab.Error).
+    const std::string what = "an integrator is a registered name (str) or an instance of a "
+                             "springlab.Integrator subclass, not " +
+                             py::str(py::type::of(method).attr("__name__")).cast<std::string>();
+    PyErr_SetString(PyExc_TypeError, what.c_str());
+    throw py::error_already_set();
   }
   const py::object attribute = method.attr("name");
   const std::string name = attribute.is_none()
