@@ -7,6 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <vector>
 #include <nlohmann/json.hpp>
 
 #include "experiments/analysis/claims.h"
@@ -190,9 +194,51 @@ TEST(CheckCommand, PluginMistakesAreOneLine) {
   r = run_springlab({"run", "spring", "--integrator", "x", "--dt", "0.1", "--t-end", "1", "--plugin", "missing.so"}, dir, dir);
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("springlab: error: missing.so: no such plug-in file"), std::string::npos) << r.err;
-  // A plug-in whose method takes a built-in's name is refused, naming both.
+  // The same plug-in named twice is loaded once (its names are not taken twice).
   r = run_springlab({"check", "verlet", "--plugin", SPRINGLAB_EXAMPLE_PLUGIN, "--plugin", SPRINGLAB_EXAMPLE_PLUGIN, "--order", "2"}, dir, dir);
   EXPECT_EQ(r.status, 0) << "loading the same plug-in twice is loading it once: " << r.err;
+}
+
+// An experiment definition's "plugins": the plug-in's method runs beside the
+// built-in it reimplements (the same energy at every output, to round-off),
+// and the settings file lists its facts under "own_integrators" (the report
+// draws it in its family); the built-ins are not listed there.
+TEST(OwnMethods, DefinitionPluginsRunBesideTheBuiltins) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "own-methods-definition";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  write_text(dir / "d.json",
+             std::string(R"({"experiment": "energy", "name": "own", "plugins": [")") +
+                 SPRINGLAB_EXAMPLE_PLUGIN +
+                 R"("], "integrators": ["symplectic-euler", "my-symplectic-euler"],
+                 "cases": [{"scene": "oscillator", "dt": 0.05, "t_end": 2}]})");
+  const ProcessResult r = run_springlab({"experiment", "d.json", "--out", "out"}, dir, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream settings_file(dir / "out" / "own.json");
+  const nlohmann::json settings = nlohmann::json::parse(settings_file);
+  ASSERT_TRUE(settings.contains("own_integrators")) << settings.dump(2);
+  const nlohmann::json& own = settings.at("own_integrators");
+  ASSERT_EQ(own.size(), 1u) << own.dump();
+  EXPECT_EQ(own[0].at("name"), "my-symplectic-euler");
+  EXPECT_EQ(own[0].at("family"), "symplectic");
+  EXPECT_EQ(own[0].at("stability").at("limit_wh").get<double>(), 2.0);
+  std::ifstream table(dir / "out" / "own.csv");
+  std::string line;
+  std::getline(table, line);  // task,scene,integrator,dt,t,kinetic,spring,gravity,total
+  std::map<std::string, std::vector<double>> total;
+  while (std::getline(table, line)) {
+    std::vector<std::string> cell;
+    std::stringstream row(line);
+    for (std::string c; std::getline(row, c, ',');) cell.push_back(c);
+    ASSERT_EQ(cell.size(), 9u) << line;
+    total[cell[2]].push_back(std::stod(cell[8]));
+  }
+  ASSERT_EQ(total.size(), 2u);
+  ASSERT_EQ(total["my-symplectic-euler"].size(), 41u);  // t = 0, 0.05, ..., 2
+  ASSERT_EQ(total["symplectic-euler"].size(), 41u);
+  for (std::size_t k = 0; k < 41; ++k) {
+    EXPECT_NEAR(total["my-symplectic-euler"][k], total["symplectic-euler"][k], 1e-12) << k;
+  }
 }
 
 }  // namespace

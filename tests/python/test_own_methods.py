@@ -9,6 +9,7 @@ fails seeded mistakes written in Python, naming the claim.
 Run by ctest with SPRINGLAB set and the module on PYTHONPATH.
 """
 import csv
+import json
 import os
 import random
 import signal
@@ -206,6 +207,11 @@ class Experiments(unittest.TestCase):
             self.assertEqual(set(by), {"my-euler", "symplectic-euler"})
             np.testing.assert_allclose(np.array(by["my-euler"], float),
                                        np.array(by["symplectic-euler"], float), rtol=1e-12)
+            # The class's facts, for the report (it draws my-euler among the symplectic).
+            with open(os.path.join(out, "energy.json")) as f:
+                own = json.load(f)["own_integrators"]
+            self.assertEqual([(e["name"], e["family"], e["order"], e["stability"]["limit_wh"])
+                              for e in own], [("my-euler", "symplectic", 1, 2.0)])
 
     def test_a_definition_names_python_files(self):
         with tempfile.TemporaryDirectory() as folder:
