@@ -4,7 +4,7 @@
 // BM_PythonStepOverhead/cloth/<n>: the Python symplectic Euler of the
 // tutorial (examples/my_methods.py's MyEuler: one model.force call, the
 // kick and drift in NumPy) and the built-in symplectic-euler, each run by
-// springlab.run over the same steps of the built-in cloth (n x n, dt 1e-3,
+// springlab.run over the same 200 steps of the built-in cloth (n x n, dt 2e-4,
 // output only at the start and the end), alternating within one iteration.
 // The built-in's step is the force call plus a fused kick-drift loop, so
 // the difference per step is what the Python method adds beyond the force
@@ -12,12 +12,16 @@
 // arrays, the force's array, NumPy's kick and drift and the copy back.
 // Counters (microseconds per step): python_us, builtin_us, overhead_us =
 // python_us - builtin_us (target <= 30 on cloth 32), and the fastest
-// batch of each (python_min_us, builtin_min_us, overhead_min_us), steadier
-// on a busy machine.
+// batch of each (python_min_us, builtin_min_us, overhead_min_us); the same
+// in the process's CPU time (python_cpu_us, builtin_cpu_us, overhead_cpu_us,
+// overhead_cpu_min_us: user + system of every thread, getrusage), which a
+// busy machine's time slicing does not inflate (resolution ~1 ms per
+// 200-step run: read the means).
 //
 // The interpreter is embedded here (pybind11::embed) and imports the
 // module built beside it (SPRINGLAB_PYTHON_DIR), as a notebook would.
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 #include <pybind11/embed.h>
 
 #include <algorithm>
@@ -55,33 +59,57 @@ py::object& globals() {
   return *g;
 }
 
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 void BM_PythonStepOverhead(benchmark::State& state) {
   py::object& g = globals();
   const long n = state.range(0);
   const int steps = 200;
-  const double dt = 1e-3, t_end = steps * dt;
+  const double dt = 2e-4, t_end = steps * dt;  // stable on cloth 64 too (1e-3 is not past n = 16)
   const py::object springlab = g["springlab"];
   const py::object scene = springlab.attr("load_scene")("cloth", py::arg("n") = n);
   const py::object run = springlab.attr("run");
   const py::object mine = g["MyEuler"]();
+  // Wall seconds of one run, and the process's CPU seconds (user + system,
+  // every thread: the run steps in a worker thread), which a busy machine's
+  // time slicing does not inflate.
+  double cpu = 0;
   auto seconds = [&](const py::object& method) {
+    const double cpu_start = process_cpu_seconds();
     const auto start = std::chrono::steady_clock::now();
     const py::dict r = run(scene, method, py::arg("dt") = dt, py::arg("t_end") = t_end,
                            py::arg("every") = steps);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    cpu = process_cpu_seconds() - cpu_start;
     if (r["status"].cast<std::string>() != "completed") state.SkipWithError("the run did not complete");
     return s;
   };
   seconds(mine);  // the first run registers the class and warms the caches
   double python = 0, builtin = 0, python_min = std::numeric_limits<double>::infinity(),
          builtin_min = std::numeric_limits<double>::infinity();
+  double python_cpu = 0, builtin_cpu = 0, python_cpu_min = std::numeric_limits<double>::infinity(),
+         builtin_cpu_min = std::numeric_limits<double>::infinity();
   long batches = 0;
   for (auto _ : state) {
-    const double p = seconds(mine), b = seconds(py::str("symplectic-euler"));
+    const double p = seconds(mine);
+    const double pc = cpu;
+    const double b = seconds(py::str("symplectic-euler"));
+    const double bc = cpu;
     python += p, builtin += b, ++batches;
     python_min = std::min(python_min, p), builtin_min = std::min(builtin_min, b);
+    python_cpu += pc, builtin_cpu += bc;
+    python_cpu_min = std::min(python_cpu_min, pc), builtin_cpu_min = std::min(builtin_cpu_min, bc);
   }
   const double per = 1e6 / steps;
+  state.counters["python_cpu_us"] = python_cpu / batches * per;
+  state.counters["builtin_cpu_us"] = builtin_cpu / batches * per;
+  state.counters["overhead_cpu_us"] = (python_cpu - builtin_cpu) / batches * per;
+  state.counters["overhead_cpu_min_us"] = (python_cpu_min - builtin_cpu_min) * per;
   state.counters["python_us"] = python / batches * per;
   state.counters["builtin_us"] = builtin / batches * per;
   state.counters["overhead_us"] = (python - builtin) / batches * per;
