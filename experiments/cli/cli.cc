@@ -29,6 +29,7 @@
 
 #include "experiments/io/body_output.h"
 #include "experiments/kinds/experiment_runner.h"
+#include "experiments/cli/check_command.h"
 #include "experiments/cli/integrator_table.h"
 #include "experiments/io/output_files.h"
 #include "experiments/io/vtk_series.h"
@@ -36,6 +37,7 @@
 #include "experiments/driver/simulation.h"
 #include "experiments/analysis/stability.h"
 #include "integrators/newton/velocity_implicit_method.h"
+#include "integrators/registry/plugins.h"
 #include "integrators/registry/registry.h"
 #include "integrators/linear/sparse_direct_solver.h"
 #include "models/scenes/builtin_scenes.h"
@@ -137,6 +139,7 @@ Json rows(const Eigen::MatrixXd& m) {
 struct CommonOptions {
   std::string scene;
   std::vector<std::string> parameters;
+  std::vector<std::string> plugins;
   RunSettings run;
   std::map<std::string, std::string> choice_text;  // the choices as given (--stiffness ...)
   bool json = false;
@@ -146,6 +149,9 @@ struct CommonOptions {
     command = &cmd;
     cmd.add_option("SCENE", scene, "scene file, - for stdin, or a built-in scene's name")->required();
     cmd.add_option("--integrator", run.integrator, "integrator name (springlab list)")->required();
+    cmd.add_option("--plugin", plugins, "a plug-in of your own integrators (repeatable)")
+        ->allow_extra_args(false)
+        ->default_str("");
     cmd.add_option("--t-end", run.t_end, "simulated time [s]")->required()->default_str("");
     cmd.add_option("-p", parameters, "built-in scene parameter key=value (repeatable)")
         ->allow_extra_args(false)
@@ -175,6 +181,7 @@ struct CommonOptions {
   }
 
   void validate() {
+    for (const std::string& plugin : plugins) load_plugin(plugin);
     require_integrator(run.integrator);
     require_positive("--t-end", run.t_end);
     require_positive("--blowup", run.blowup);
@@ -895,6 +902,8 @@ int run_cli(int argc, char** argv) {
                          "merge N shards into the full tables instead of running")
       ->default_str("");
   experiment->add_flag("--no-progress", no_progress, "no progress line on stderr")->default_str("");
+  CheckCommand check_options;
+  CLI::App* check = add_check_command(app, check_options);
   for (CLI::App* cmd : {run, stability}) {
     for (const char* flag : {"--dq-jacobian", "--stald", "--json"}) cmd->get_option(flag)->default_str("");
   }
@@ -933,6 +942,7 @@ int run_cli(int argc, char** argv) {
       return 0;
     }
     if (*list) return command_list(list_json);
+    if (*check) return run_check_command(check_options);
     if (*experiment) {
       const bool merging = experiment->count("--merge") > 0;
       if (merging && experiment_options.merge < 1) throw UsageError("--merge: must be >= 1");
