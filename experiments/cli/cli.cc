@@ -31,6 +31,7 @@
 #include "experiments/kinds/experiment_runner.h"
 #include "experiments/cli/check_command.h"
 #include "experiments/cli/integrator_table.h"
+#include "experiments/cli/parse_errors.h"
 #include "experiments/io/output_files.h"
 #include "experiments/io/vtk_series.h"
 #include "experiments/io/signals.h"
@@ -688,72 +689,6 @@ int usable_cpus() {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-// An option on the command line that the chosen command does not have
-// (CLI11 would first complain about a missing required option instead).
-std::string unknown_option(const CLI::App& app, int argc, char** argv) {
-  const CLI::App* command = &app;
-  for (int k = 1; k < argc; ++k) {
-    const std::string arg = argv[k];
-    if (command == &app && !arg.empty() && arg[0] != '-') {
-      for (const CLI::App* sub : app.get_subcommands({})) {
-        if (sub->get_name() == arg) command = sub;
-      }
-      continue;
-    }
-    if (arg.size() < 2 || arg[0] != '-' || arg == "--" || std::isdigit(static_cast<unsigned char>(arg[1])) ||
-        arg[1] == '.') {
-      continue;  // a value, a negative number, or "-" (stdin)
-    }
-    const std::string name = arg.substr(0, arg.find('='));
-    if (command->get_option_no_throw(name) == nullptr && app.get_option_no_throw(name) == nullptr) {
-      return name;
-    }
-  }
-  return "";
-}
-
-// CLI11's parse errors as one line, in springlab's words.
-std::string parse_error_line(const CLI::ParseError& e, const CLI::App& app, int argc, char** argv) {
-  std::string what = e.what();
-  std::replace(what.begin(), what.end(), '\n', ' ');
-  const std::vector<const CLI::App*> chosen = app.get_subcommands({});
-  std::string help = "springlab --help";
-  for (const CLI::App* sub : chosen) {
-    if (sub->parsed()) help = "springlab " + sub->get_name() + " --help";
-  }
-  if (const std::string name = unknown_option(app, argc, argv); !name.empty()) {
-    return "unknown option " + printable(name) + " (" + help + " lists the options)";
-  }
-  // "--dt: At Most 1 required but received 2"
-  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr &&
-      what.find("At Most 1 required") != std::string::npos) {
-    return what.substr(0, what.find(':')) + ": given more than once";
-  }
-  // "Could not convert: --dt = abc"
-  if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr &&
-      what.rfind("Could not convert: ", 0) == 0) {
-    const std::string rest = what.substr(19);
-    const auto eq = rest.find(" = ");
-    if (eq != std::string::npos) {
-      return rest.substr(0, eq) + ": '" + printable(rest.substr(eq + 3)) + "' is not a number";
-    }
-  }
-  if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
-    const auto colon = what.find(": ");
-    return "unexpected argument" +
-           (colon == std::string::npos ? std::string() : " " + printable(what.substr(colon + 2))) +
-           " (" + help + " lists the arguments)";
-  }
-  if (what == "A subcommand is required" && argc > 1 && argv[1][0] != '-') {
-    return "unknown command '" + printable(argv[1]) +
-           "' (commands: run, stability, scene, list, experiment; springlab --help)";
-  }
-  if (what == "A subcommand is required") {
-    return "a command is required: run, stability, scene, list or experiment (springlab --help)";
-  }
-  return printable(what) + " (" + help + ")";
-}
-
 }  // namespace
 
 Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>& parameters) {
@@ -801,11 +736,7 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
   try {
     app.parse(static_cast<int>(argv.size()), argv.data());
   } catch (const CLI::ParseError& e) {
-    std::string line = parse_error_line(e, app, static_cast<int>(argv.size()), argv.data());
-    if (const auto at = line.find("(springlab --help"); at != std::string::npos) {
-      line.replace(at, 17, "(springlab run --help");
-    }
-    throw UsageError(line);
+    throw UsageError(parse_error_line(e, app, static_cast<int>(argv.size()), argv.data(), "run"));
   }
   common.validate();
   require_positive("--dt", common.run.dt);
