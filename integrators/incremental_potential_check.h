@@ -38,6 +38,12 @@
 //     tolerance. (The bound ||r||_1 tol / 2 does not do: a direction the
 //     matrix makes stiff has a large r but a small error, and on the
 //     tetrahedron it allowed 5e4 J to an answer 2,600 J above its start.)
+//   - where Phi (or H) rose beyond the compared terms' round-off, that of
+//     the stored energy's own terms, which its sum hides where they cancel
+//     (VelocityStep::stored_magnitude, at the answer and at v_kept): a
+//     cantilever's static step rose by 1.4e-13 J on -0.246 J under one
+//     BLAS kernel (issue 46.15), 600 units of round-off of the sum but 2.5
+//     of its terms' (+-25 J of gravity);
 //   - the kinetic energy of a velocity error of tol, tol^2 sum(m) / 2: no
 //     check can see below it (a turned neo-Hookean block at rest: Phi
 //     1.4e-15 J -> 3.6e-15 J, the round-off of the stored energy's terms of

@@ -144,9 +144,15 @@ bool NewtonLoop::converged(NewtonProblem& problem, const LineSearch::Line& line,
                   ? ""
                   : "its linear solve stopped short of its own tolerance";
   if (!solved_.converged && !solved_.negative_curvature) return false;
-  // A tolerance below the round-off of v is met at that round-off.
+  // A tolerance below the round-off of v is met at that round-off: that of
+  // v itself, and the v below which the positions the forces see do not
+  // move beyond their own round-off (an iterate there is as good as the
+  // state can resolve; the update is then noise of the residual mapped by
+  // J^-1: 1.28e-12 m/s, stalled, on a box hung from a stiff spring at
+  // newton_tol 1e-12, depending on the BLAS kernel).
   const double floor = kRoundoff * (line.v.lpNorm<Eigen::Infinity>() +
-                                    problem.start().lpNorm<Eigen::Infinity>());
+                                    problem.start().lpNorm<Eigen::Infinity>() +
+                                    problem.position_resolution());
   const bool small = remaining <= settings_.tol || update <= floor;
   if (!small) return false;
   // Where states are forbidden, the last update must not end in one (a

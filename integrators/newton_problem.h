@@ -19,6 +19,12 @@ class NewtonProblem {
   // Where the iteration starts (the step's v_n); ||start||_inf also sets
   // the scale of v's round-off.
   virtual const Vector& start() const = 0;
+  // The velocity whose effect on the states the forces are evaluated at is
+  // one unit of their round-off: ||x_n||_inf / (h |b|) for a stage
+  // x_n + h b v (velocity_step.h). An update below round-off units of it
+  // moves no position by more than round-off, so the loop stops there
+  // whatever its tolerance (newton_loop.cc). 0: none.
+  virtual double position_resolution() const { return 0.0; }
   // Another start, where r(start()) is not finite (a state with no
   // energy); false when there is none.
   virtual bool fallback_start(Vector& v) const = 0;

@@ -23,6 +23,26 @@ void VelocityStep::begin(double t, const Vector& x, const Vector& v, double h,
   }
 }
 
+double VelocityStep::position_resolution() const {
+  const double moved = h_ * s_.weight * std::abs(s_.b);
+  if (!(moved > 0.0)) return 0.0;
+  double x = x_->lpNorm<Eigen::Infinity>();
+  if (s_.x_offset != nullptr) x += s_.x_offset->lpNorm<Eigen::Infinity>();
+  return x / moved;
+}
+
+double VelocityStep::stored_magnitude() {
+  const MechanicalSystem& system = model_->system();
+  if (!(s_.b != 0.0)) return 0.0;
+  const double t = t_ + s_.t_eval_offset * h_;
+  double sum = 0.0;
+  for (ForcePart part : {ForcePart::kStiff, ForcePart::kNonstiff}) {
+    system.force(part, t, xs_, vs_, f_part_);
+    sum += f_part_.cwiseAbs().dot(xs_.cwiseAbs());
+  }
+  return std::abs(s_.weight / s_.b) * sum;
+}
+
 bool VelocityStep::fallback_start(Vector& v) const {
   if (!(s_.b > 0.0)) return false;
   v = (-s_.a / s_.b) * *v_;

@@ -66,6 +66,9 @@ class VelocityStep final : public NewtonProblem {
   const MechanicalSystem& system() const { return model_->system(); }
 
   const Vector& start() const override { return *v_; }
+  // (||x_n||_inf + ||x_o||_inf) / (h w |b|): the stage moves by h w b per
+  // unit of v (its positions' round-off, newton_problem.h).
+  double position_resolution() const override;
   // The v that keeps the stage at x_n, a v_n + b v = 0: a state the last
   // step accepted (where v_n leaves the states with an energy).
   bool fallback_start(Vector& v) const override;
@@ -85,6 +88,15 @@ class VelocityStep final : public NewtonProblem {
 
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
+  // The scale of the round-off of Phi's stored term at the stage (after
+  // stage() or residual()): (w / |b|) sum_parts |F_part(x*)| . |x*|, the
+  // stiff and the non-stiff forces apart (MechanicalSystem's ForcePart).
+  // For a force that is linear in x (gravity) it is the sum of its
+  // potential's terms' magnitudes, which cancel in the sum where the
+  // positions straddle the origin (a beam centred on y = 0: terms of
+  // +-25 J summing to -0.5 J); for any other, V's sensitivity to the
+  // rounding of x* (|dV| <= |F| . |dx|). Two force evaluations.
+  double stored_magnitude();
 
   // The discrete gradient's correction coefficient (DiscreteGradientPhases,
   // newton_policy.h): frozen (Phi then includes c |D|^2, r its gradient) or
@@ -107,7 +119,7 @@ class VelocityStep final : public NewtonProblem {
   const Vector* x_ = nullptr;  // x_n
   const Vector* v_ = nullptr;  // v_n
   VelocityImplicitScheme s_{};
-  Vector xs_, vs_, f_;
+  Vector xs_, vs_, f_, f_part_;
   Vector x_end_;           // a trial's step end (allowed)
   Vector x_cap_, dx_cap_;  // the step cap's state and step (admissible_fraction)
   // The discrete gradient's: D = y - x_n, y = x_n + D, the correction's
