@@ -139,6 +139,11 @@ class Integrator {
   // The command-line options (without "--") this method reads, so a caller
   // can say which of the given ones it ignores.
   virtual std::vector<std::string> options_read() const;
+  // Whether a run on `system` assembles its Jacobians, and so makes the
+  // model build its pattern (ElasticModel builds it only when asked): the
+  // memory estimate counts the pattern only then (issue 46.5). By default
+  // the implicit methods that are not Jacobian-free.
+  virtual bool assembles_jacobians(const MechanicalSystem& system) const;
 
   // Binds the integrator to `system` and sets the initial state. An
   // integrator serves one system for one run: its caches (a symbolic

@@ -91,7 +91,6 @@ ElasticModel::ElasticModel(const Scene& scene) : scene_(scene), order_(make_orde
     }
   }
 
-  build_pattern();
   for (const auto& term : terms_) {
     pattern_varies_ = pattern_varies_ || term->pattern_varies();
     symmetric_ = symmetric_ && term->symmetric_jacobians();
@@ -174,6 +173,7 @@ void ElasticModel::build_pattern() const {
   pattern_.makeCompressed();
   std::fill(pattern_.valuePtr(), pattern_.valuePtr() + pattern_.nonZeros(), 0.0);
   for (const auto& term : terms_) term->bind_jacobian(pattern_);
+  pattern_built_ = true;
 }
 
 Configuration ElasticModel::stored_configuration(double t) const {
@@ -276,6 +276,7 @@ double ElasticModel::velocity_potential(double t, const Vector& v) const {
 void ElasticModel::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
                                          const Vector& v, SparseMatrix* dfdx,
                                          SparseMatrix* dfdv) const {
+  ensure_pattern();
   const Configuration c = configure(t, x, v);
   if (pattern_varies_) {
     // A term whose couplings moved past its declared blocks declares anew
@@ -382,6 +383,7 @@ void ElasticModel::add_own_discrete_gradient_jacobian_difference(double t, const
                                                                  SparseMatrix& out) const {
   // -dF_k/dx(x_m) (exact or definite), then -2 dg_k/dy(x, y), of the terms
   // with their own discrete gradient, on out's pattern (the model's).
+  ensure_pattern();
   const Eigen::Index n = dofs();
   own_values_.setZero(out.nonZeros());
   x_all_.head(n) = x_m;

@@ -29,6 +29,7 @@
 
 #include "models/energies.h"
 #include "models/force_term.h"
+#include "models/memory_estimate.h"
 #include "models/scene.h"
 #include "models/scene_io.h"
 
@@ -94,6 +95,11 @@ struct ElementKind {
   // Its term of docs/command-line.md "The command line"'s energy scale E_s per unit of free mass,
   // given the diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
   double (*energy_scale_per_mass)(const Scene& scene, double diameter) = nullptr;
+
+  // Adds the kind's parts of the model's memory (memory_estimate.h), from
+  // the scene alone: the bytes its term will hold and the Jacobian blocks it
+  // will declare, named in the scene's words. nullptr: nothing that counts.
+  void (*memory)(const Scene& scene, MemoryEstimate& out) = nullptr;
 
   // Appends the cells of the kind's elements, in file order. nullptr: the
   // kind joins no particles (gravity) or draws none of its own (spring
