@@ -1,11 +1,20 @@
 #include "integrators/newmark.h"
 
+#include <charconv>
 #include <cmath>
 #include <functional>
 #include <sstream>
+#include <string>
 
 namespace springlab {
 namespace {
+
+// The shortest decimal that reads back as `value`: a refusal prints the
+// value as given (--beta 0.5000001, not the rounded 0.5).
+std::string given_text(double value) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
 
 // The trapezoidal rule's R(z) on y' = lambda y: average acceleration is the
 // trapezoidal rule applied to (x, v)' = (v, M^-1 F).
@@ -46,9 +55,9 @@ std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) con
   std::ostringstream why;
   if (!(p.gamma >= 0.5 && p.gamma <= 1.0)) {
     why << "--gamma: must be in [0.5, 1] (below 1/2 the method amplifies every mode), got "
-        << p.gamma;
+        << given_text(p.gamma);
   } else if (!(p.beta >= 0.0 && p.beta <= 0.5)) {
-    why << "--beta: must be in [0, 0.5], got " << p.beta;
+    why << "--beta: must be in [0, 0.5], got " << given_text(p.beta);
   }
   return why.str();
 }
