@@ -27,16 +27,18 @@
 #include <thread>
 #include <vector>
 
-#include "experiments/body_output.h"
-#include "experiments/cli.h"
-#include "experiments/experiment_runner.h"
-#include "experiments/integrator_table.h"
-#include "experiments/memory_check.h"
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/elastic_model.h"
-#include "models/element_kind.h"
-#include "models/scene.h"
+#include "experiments/io/body_output.h"
+#include "experiments/cli/cli.h"
+#include "experiments/kinds/experiment_runner.h"
+#include "experiments/cli/integrator_table.h"
+#include "experiments/driver/memory_check.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/model/model.h"
+#include "models/core/element_kind.h"
+#include "models/core/scene.h"
+#include "models/model/scene_file.h"
+#include "models/model/element_registry.h"
 
 namespace py = pybind11;
 using namespace springlab;
@@ -71,7 +73,7 @@ std::string option_text(const py::handle& value) {
 // rigid bodies, each body's p and A (bodies.h) too.
 class Recorder final : public Observer {
  public:
-  explicit Recorder(const ElasticModel& model)
+  explicit Recorder(const Model& model)
       : model_(model), layout_(body_layout(model.scene(), model.free_particle_count())) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     t_.push_back(t);
@@ -98,7 +100,7 @@ class Recorder final : public Observer {
   std::vector<std::vector<double>> e_;
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
   BodyLayout layout_;
 };
 
@@ -128,7 +130,7 @@ Scene load_scene(const py::object& source, const py::kwargs& parameters) {
   return resolve_scene(path, p);
 }
 
-py::dict run_result(const ElasticModel& model, const RunResult& r, const Recorder& rec) {
+py::dict run_result(const Model& model, const RunResult& r, const Recorder& rec) {
   py::dict out;
   const Eigen::Index n = model.particle_count(), d = model.dimension();
   py::array_t<double> t(static_cast<py::ssize_t>(rec.t_.size()));
@@ -227,7 +229,7 @@ PYBIND11_MODULE(springlab, m) {
           }
         }
         check_scene_memory(scene, "scene '" + scene.name + "'");  // before the model
-        const ElasticModel model(scene);
+        const Model model(scene);
         std::string notes;
         const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
         for (std::size_t at = 0; at < notes.size();) {  // "springlab: note: ..." as Python warnings

@@ -12,8 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "models/builtin_scenes.h"
+#include "models/scenes/builtin_scenes.h"
 #include "scene_equality.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {

@@ -26,18 +26,18 @@
 #include <string>
 #include <vector>
 
-#include "experiments/stability.h"
-#include "experiments/definition.h"
+#include "experiments/analysis/stability.h"
+#include "experiments/kinds/definition.h"
 #include "csv_fields.h"
 #include "experiment_tasks.h"
 #include "run_process.h"
-#include "experiments/experiment.h"
-#include "experiments/experiment_runner.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/springs.h"
+#include "experiments/kinds/experiment.h"
+#include "experiments/kinds/experiment_runner.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/springs/springs.h"
 
 namespace springlab {
 namespace {
@@ -133,9 +133,13 @@ TEST(ExperimentDefinition, TopLevelMustBeAnObjectWithAKind) {
 
 TEST(ExperimentDefinition, UnknownKindListsTheKinds) {
   EXPECT_EQ(definition_error(Json{{"experiment", "energi"}}),
-            "def.json: experiment: unknown kind 'energi' (kinds: energy, convergence, "
+            "def.json: experiment: unknown kind 'energi' (did you mean 'energy'?) (kinds: energy, "
+            "convergence, "
             "work-precision, stability, damping-budget, cloth-showcase, stability-region, step-energy, "
             "motion, contact, mode, rotation, solver-error, spectral, rigid, fluid)");
+  // Nothing close: no guess.
+  EXPECT_EQ(definition_error(Json{{"experiment", "frobnicate"}}).find("did you mean"),
+            std::string::npos);
 }
 
 TEST(ExperimentDefinition, UnknownTopLevelKey) {
@@ -719,7 +723,7 @@ TEST(ExperimentKinds, MotionRecordsEveryFrameAndTheFramesPastTheBlowUp) {
     EXPECT_NEAR(number(implicit[1][k].at("t")), 0.04 * static_cast<double>(k), 1e-15);
     EXPECT_EQ(implicit[1][k].at("past_blowup"), "0");
   }
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.02;

@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "experiments/memory_check.h"
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/body_pairs.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/memory_estimate.h"
+#include "experiments/driver/memory_check.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/bodies/body_pairs.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/model/model_memory.h"
 #include "run_process.h"
 
 namespace springlab {
@@ -39,7 +39,7 @@ RunSettings settings(const std::string& integrator) {
 TEST(MemoryEstimate, OnlyAMethodThatAsksForAJacobianBuildsThePattern) {
   for (const char* scene : {"box-chain", "tank"}) {
     SCOPED_TRACE(scene);
-    const ElasticModel model(make_builtin_scene(scene, {}));
+    const Model model(make_builtin_scene(scene, {}));
     EXPECT_FALSE(model.pattern_built());
     ASSERT_EQ(simulate(model, settings("symplectic-euler")).status, RunStatus::kCompleted);
     EXPECT_FALSE(model.pattern_built());
@@ -88,7 +88,7 @@ TEST(MemoryEstimate, RefusalsNameWhatWeighsMost) {
               std::string::npos)
         << what;
   }
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double explicit_bytes = estimate_model_memory(scene).bytes(false);
   // Symplectic Euler assembles nothing: no limit above the model refuses it.
   EXPECT_NO_THROW(check_jacobian_memory(model, "symplectic-euler", "box-chain", 0.0));

@@ -6,11 +6,11 @@
 
 #include <cmath>
 
-#include "integrators/integrator.h"
-#include "integrators/newton_matrix.h"
-#include "integrators/velocity_step.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "integrators/core/integrator.h"
+#include "integrators/newton/newton_matrix.h"
+#include "integrators/newton/velocity_step.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 
 namespace springlab {
 namespace {
@@ -26,7 +26,7 @@ struct Fixture {
     x.array() += 1e-3;  // moved off its fixed end: the elements push too
     v = Vector::Constant(x.size(), 0.25);
   }
-  ElasticModel model;
+  Model model;
   IntegratorStats stats;
   CountedModel counted;
   NewtonMatrix matrix;

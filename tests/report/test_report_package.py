@@ -1165,9 +1165,11 @@ class Registry(unittest.TestCase):
             self.assertTrue(module.TITLE and module.ABOUT)
             self.assertTrue(callable(module.render))
         # Every kind the program has is one this report draws.
-        kinds = set(re.findall(r'\{"([a-z-]+)", &make_', (Path(__file__).resolve().parents[2]
-                                                          / "experiments"
-                                                          / "experiment_registry.cc").read_text()))
+        kinds = set()
+        for source in (Path(__file__).resolve().parents[2] / "experiments" / "kinds").glob(
+                "*_experiment.cc"):
+            kinds.update(re.findall(r'ExperimentKind kind\{"([a-z-]+)", &make_',
+                                    source.read_text()))
         self.assertEqual(kinds, set(KINDS))
 
 
