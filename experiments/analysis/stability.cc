@@ -136,7 +136,8 @@ StabilityResult find_max_stable_dt(const Model& model, const StabilitySettings& 
   check_grid("--dt-min", s.dt_min, s.run.t_end, run_time(s.dt_min));
   check_grid("--dt-max", s.dt_max, s.run.t_end, run_time(s.dt_max));
   if (w > 0.0) result.min_run_time = s.min_periods * 2.0 * std::numbers::pi / w;
-  const IntegratorInfo info = make_integrator(s.run.integrator)->info();
+  // The member the options pick (newmark --beta 0: central difference's 2 / w).
+  const IntegratorInfo info = make_integrator(s.run.integrator)->info_for(s.run.options);
   result.theory = theoretical_max_dt(info, result.mode, run_time, s.run.blowup);
 
   double lo = 0.0, hi = 0.0;  // largest stable, smallest diverging step so far

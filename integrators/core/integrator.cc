@@ -59,6 +59,8 @@ std::string stability_text(const IntegratorInfo& info) {
 
 std::string Integrator::check_options(const IntegratorOptions&, Eigen::Index) const { return {}; }
 
+IntegratorInfo Integrator::info_for(const IntegratorOptions&) const { return info_; }
+
 bool Integrator::assembles_jacobians(const MechanicalSystem&) const {
   return info_.implicit && !info_.jacobian_free;
 }

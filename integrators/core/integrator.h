@@ -131,6 +131,12 @@ class Integrator {
 
   const IntegratorInfo& info() const { return info_; }
   const std::string& name() const { return info_.name; }
+  // The declared properties at these options: where an option picks a
+  // member of a family (newmark's --beta and --gamma), its stability is that
+  // member's, not the default's (issue 46: `stability --integrator newmark
+  // --beta 0` printed the average-acceleration theory beside a measured
+  // 2 / w). By default info().
+  virtual IntegratorInfo info_for(const IntegratorOptions& options) const;
 
   // Option values this method cannot take on a system of `dofs` position
   // unknowns, checked before any run: empty when they are fine, otherwise

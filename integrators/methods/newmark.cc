@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -22,8 +23,9 @@ std::string given_text(double value) {
 // trapezoidal rule applied to (x, v)' = (v, M^-1 F).
 std::complex<double> trapezoidal(std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }
 
-// Stable for w h <= 1 / sqrt(gamma/2 - beta) (gamma = 1/2, Hughes 9.1.2).
-double newmark_limit(double beta) { return 1.0 / std::sqrt(0.25 - beta); }
+// Stable for w h <= 1 / sqrt(gamma/2 - beta) on the undamped oscillator
+// (Hughes 9.1.2: Omega_crit at xi = 0), when 2 beta < gamma.
+double newmark_limit(double beta, double gamma = 0.5) { return 1.0 / std::sqrt(gamma / 2.0 - beta); }
 
 // With gamma = 1/2 the method conserves (v^2 + w^2 x^2 (1 + (beta - 1/4) (w h)^2))/2
 // on the undamped oscillator (Hughes 9.1.2), so E swings up to
@@ -62,6 +64,30 @@ std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) con
     why << "--beta: must be in [0, 0.5], got " << given_text(p.beta);
   }
   return why.str();
+}
+
+IntegratorInfo Newmark::info_for(const IntegratorOptions& o) const {
+  const NewmarkParameters p = parameters(o);
+  if (p.beta == 0.25 && p.gamma == 0.5) return info();
+  IntegratorInfo i = info();
+  // The trapezoidal rule's R(z) and rho_inf = 1 are average acceleration's only.
+  i.stability_function = {};
+  i.spectral_radius_infinity = std::numeric_limits<double>::quiet_NaN();
+  i.energy_excursion = {};
+  i.order = p.gamma == 0.5 ? 2 : 1;  // gamma > 1/2: first order (Hughes 9.1.1)
+  const std::string member = "beta " + given_text(p.beta) + ", gamma " + given_text(p.gamma);
+  if (2.0 * p.beta >= p.gamma) {
+    i.stability = StabilityKind::kA;
+    i.stability_limit = kInfinity;
+    i.stability_note = member + ": 2 beta >= gamma" +
+                       (p.gamma > 0.5 ? "; gamma > 1/2 damps every mode and is first order" : "");
+  } else {
+    i.stability = StabilityKind::kConditional;
+    i.stability_limit = newmark_limit(p.beta, p.gamma);
+    i.stability_note = member + ": w h <= 1 / sqrt(gamma/2 - beta)";
+    if (p.gamma == 0.5) i.energy_excursion = newmark_excursion(p.beta);
+  }
+  return i;
 }
 
 CentralDifference::CentralDifference()

@@ -29,6 +29,9 @@ class Newmark final : public NewmarkFamily {
   Newmark();
   NewmarkParameters parameters(const IntegratorOptions& options) const override;
   std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const override;
+  // The member (beta, gamma): unconditionally stable for 2 beta >= gamma,
+  // otherwise for w h <= 1 / sqrt(gamma/2 - beta) (Hughes 9.1.2).
+  IntegratorInfo info_for(const IntegratorOptions& options) const override;
 
  protected:
   std::vector<std::string> parameter_options() const override { return {"beta", "gamma"}; }

@@ -60,11 +60,11 @@ StepResult VelocityVerlet::closing_kick(double t, double h, const Vector& v_half
       solver_version_ = system().pattern_version();
     }
     if (!solver_.factorize(lhs_, MatrixKind::kPositiveDefinite)) {
-      return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
+      return StepResult::failure(name() + ": closing half-kick matrix: " + solver_.error());
     }
     ++mutable_stats().linear_solves;
     if (!solver_.solve(rhs_, v_)) {
-      return StepResult::failure("verlet: closing half-kick solve gave a non-finite velocity");
+      return StepResult::failure(name() + ": closing half-kick solve gave a non-finite velocity");
     }
   }
   a_ = (f0_ + dfdv_ * v_).cwiseQuotient(m);
@@ -92,11 +92,11 @@ StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vect
       solver_version_ = system().pattern_version();
     }
     if (!solver_.factorize(lhs_, MatrixKind::kPositiveDefinite)) {
-      return StepResult::failure("verlet: closing half-kick matrix: " + solver_.error());
+      return StepResult::failure(name() + ": closing half-kick matrix: " + solver_.error());
     }
     ++mutable_stats().linear_solves;
     if (!solver_.solve(-rhs_, dv_) || !dv_.allFinite()) {
-      return StepResult::failure("verlet: closing half-kick solve gave a non-finite velocity");
+      return StepResult::failure(name() + ": closing half-kick solve gave a non-finite velocity");
     }
     // Backtracking on ||r||: friction's smoothing makes r only C^1, and a
     // full Newton update can overshoot the kink at |v_t| = eps_v and cycle.
@@ -119,7 +119,7 @@ StepResult VelocityVerlet::nonlinear_closing_kick(double t, double h, const Vect
       return StepResult::success();
     }
   }
-  return StepResult::failure("verlet: the closing half-kick's Newton did not converge in " +
+  return StepResult::failure(name() + ": the closing half-kick's Newton did not converge in " +
                              std::to_string(options().max_newton) +
                              " iterations; try a smaller --dt or a larger --max-newton");
 }

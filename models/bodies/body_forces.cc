@@ -405,10 +405,23 @@ const ElementKind& body_gravity_kind() {
   return kind;
 }
 
+void check_body_barrier_start(const Scene& scene, const Reporter& r);  // body_barrier_start.cc
+
+namespace {
+void read_body_barrier_start(const Json&, const Reporter& r, Scene& scene) {
+  check_body_barrier_start(scene, r);
+}
+void validate_body_barrier_start(const Scene& scene, const Reporter& r) {
+  check_body_barrier_start(scene, r);
+}
+}  // namespace
+
 const ElementKind& body_contact_kind() {
   static const ElementKind kind = {
       .name = "body-contact",
       .refers_to_particles = true,
+      .read = read_body_barrier_start,
+      .validate = validate_body_barrier_start,
       .make = make_body_contact,
       .energy = {.name = "contact", .counts_with_spring = true},
       .add_random = add_random_body_contact,
