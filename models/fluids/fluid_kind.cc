@@ -230,8 +230,12 @@ void write_fluids(const Scene& scene, std::vector<std::pair<std::string, std::st
 // kernel's support 2h (2h = 2.6 spacings: about 10.6 pairs a particle in
 // 2-D, 36.8 in 3-D on a lattice; a pair holds its two indices, its
 // separation and distance; a quarter more for the vectors' spare capacity).
-// Measured: 450 bytes a particle in 2-D (tank), 1.5 KB in 3-D (3-D dam
-// break), against the 550 and 2,000 this gives. Once the pattern is built,
+// Measured, whole processes (peak resident, symplectic Euler, the
+// particles' own arrays included): the 790,646-particle tank (2-D) 792 MB
+// (1.08 GB with --json), a 83,018-particle tank 93 MB, a 47,888-particle
+// 3-D dam break 96 MB. 448 bytes a particle besides the pairs (its SPH
+// arrays and the neighbour grid's cells) give 1.10 GB, 115 MB and 141 MB:
+// the estimate errs high, never low, on all three. Once the pattern is built,
 // the pressure's blocks couple the particles within 2.25 supports (107 in
 // 2-D, 838 in 3-D: fluid_pattern.h), the viscosity's within 1.25, and each
 // term keeps its pairs (8 bytes).
@@ -256,7 +260,7 @@ void fluid_memory(const Scene& scene, MemoryEstimate& out) {
   }
   MemoryPart part;
   part.what = std::to_string(static_cast<long long>(particles)) + " fluid particles";
-  part.bytes = particles * (128.0 + 1.25 * 0.5 * within(support) * (16.0 + 8.0 * dim));
+  part.bytes = particles * (448.0 + 1.25 * 0.5 * within(support) * (16.0 + 8.0 * dim));
   part.pattern_blocks = blocks;
   part.distinct_blocks = distinct;
   part.slot_bytes = slots;
