@@ -282,7 +282,7 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
     std::string fix;
     if (why.find("no projective form") != std::string::npos && has("model")) {
       fix = why.find("(corotated, poisson -") != std::string::npos ? "-p poisson=0.3"
-                                                                   : "-p model=1 (corotated)";
+                                                                   : "-p model=corotated";
     } else if (why.find("is the barrier") != std::string::npos && has("contact")) {
       fix = "-p contact=0 (penalty)";
     }
@@ -671,7 +671,13 @@ int command_list(bool json) {
   for (const BuiltinScene& s : builtin_scenes()) {
     out << "  " << s.name << "  " << s.description << '\n';
     for (const SceneParameter& p : s.parameters) {
-      out << "      -p " << p.name << '=' << p.default_value << "  " << p.meaning << '\n';
+      out << "      -p " << p.name << '=';
+      if (p.choices.empty()) {
+        out << p.default_value;
+      } else {
+        out << p.choices[static_cast<std::size_t>(p.default_value)];
+      }
+      out << "  " << p.meaning << '\n';
     }
   }
   write_stdout(out.str());

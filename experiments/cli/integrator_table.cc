@@ -116,7 +116,9 @@ nlohmann::ordered_json integrator_table_json() {
   for (const BuiltinScene& s : builtin_scenes()) {
     Json parameters = Json::array();
     for (const SceneParameter& p : s.parameters) {
-      parameters.push_back({{"name", p.name}, {"default", p.default_value}, {"meaning", p.meaning}});
+      Json parameter = {{"name", p.name}, {"default", p.default_value}, {"meaning", p.meaning}};
+      if (!p.choices.empty()) parameter["choices"] = p.choices;  // the default: their index
+      parameters.push_back(parameter);
     }
     scenes.push_back({{"name", s.name}, {"description", s.description}, {"parameters", parameters}});
   }

@@ -28,9 +28,11 @@
 #include "models/core/scene.h"
 #include "models/springs/springs.h"
 
+#include "models/scenes/scene_entry.h"
+
 namespace springlab {
 
-using Values = std::map<std::string, double>;
+using Values = SceneValues;
 
 // Box sides along x, y, z: (size_x, size_y, size_z) with size_x > size_y >
 // size_z, so the principal moments I_x < I_y < I_z and y is the middle
@@ -180,6 +182,78 @@ Scene build_box_chain(const Values& p) {
     scene.block<BodySprings>().push_back(joint);
   }
   return scene;
+}
+
+const SceneEntry& box_chain_scene() {
+  static const SceneEntry entry = scene_entry(
+      "box-chain",
+          "n boxes hinged end to end by stiff zero-length springs between body points, the "
+          "first to a fixed point, released from horizontal: a multiple pendulum",
+         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+          param("length", 0.2, "length of each box along the chain [m]", Range::kPositive),
+          param("width", 0.05, "its two other sides [m]", Range::kPositive),
+          param("k", 1e4, "stiffness of each joint's spring [N/m]", Range::kNonNegative),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny)},
+         build_box_chain);
+  return entry;
+}
+
+const SceneEntry& box_on_slope_scene() {
+  static const SceneEntry entry = scene_entry(
+      "box-on-slope",
+          "a cube resting on (or launched down) an inclined plane with Coulomb friction: sticks "
+          "when tan(angle) < friction, else slides at g (sin - friction cos)",
+         {param("angle", 20, "inclination of the plane [degrees], in [0, 90)", Range::kAny),
+          param("friction", 0.5, "Coulomb coefficient mu of the plane", Range::kNonNegative),
+          param("speed", 0, "initial speed down the slope [m/s]", Range::kAny),
+          param("size", 0.2, "side of the cube [m]", Range::kPositive),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
+                Range::kPositive),
+          param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
+         build_box_on_slope);
+  return entry;
+}
+
+const SceneEntry& box_pile_scene() {
+  static const SceneEntry entry = scene_entry(
+      "box-pile",
+          "n boxes, each shrink times the one below, turned and tilted, dropped onto one "
+          "another and onto the ground, with friction",
+         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+          param("size", 0.2, "longest side of the bottom box (sides size, 0.75 size, 0.5 size) [m]",
+                Range::kPositive),
+          param("shrink", 0.7, "each box's sides over the one's below, in (0, 1]", Range::kPositive),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+          param("friction", 0.5, "Coulomb coefficient mu of the ground and of every box",
+                Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
+                Range::kPositive)},
+         build_box_pile);
+  return entry;
+}
+
+const SceneEntry& tumbling_box_scene() {
+  static const SceneEntry entry = scene_entry(
+      "tumbling-box",
+          "a box with three distinct principal moments spun about its middle axis, no gravity: "
+          "it flips over and back (the Dzhanibekov effect)",
+         {param("size_x", 0.3, "side along x, the axis of least inertia [m]", Range::kPositive),
+          param("size_y", 0.2, "side along y, the middle axis, spun about [m]", Range::kPositive),
+          param("size_z", 0.1, "side along z, the axis of most inertia [m]", Range::kPositive),
+          param("spin", 6.283185307179586, "angular velocity about y [rad/s]", Range::kAny),
+          param("perturbation", 0.01, "angular velocity about x and z, as a fraction of spin",
+                Range::kAny),
+          param("density", 1000, "density [kg/m^3]", Range::kPositive),
+          param("rigidity", 1e6, "rigidity kappa of kappa V |A^T A - I|^2 [Pa]", Range::kPositive)},
+         build_tumbling_box);
+  return entry;
 }
 
 }  // namespace springlab

@@ -21,9 +21,11 @@
 #include "models/core/scene.h"
 #include "models/springs/springs.h"
 
+#include "models/scenes/scene_entry.h"
+
 namespace springlab {
 
-using Values = std::map<std::string, double>;
+using Values = SceneValues;
 
 Scene build_slope(const Values& p) {
   if (!(p.at("angle") >= 0.0 && p.at("angle") < 90.0)) {
@@ -62,6 +64,26 @@ Scene build_slope(const Values& p) {
   contact.stiffness = k_c;
   contact.smoothing = p.at("smoothing");
   return scene;
+}
+
+const SceneEntry& slope_scene() {
+  static const SceneEntry entry = scene_entry(
+      "slope",
+          "one particle resting on (or launched down) an inclined plane with Coulomb friction: "
+          "sticks when tan(angle) < friction, else slides at g (sin - friction cos)",
+         {param("angle", 30, "inclination of the plane [degrees], in [0, 90)", Range::kAny),
+          param("friction", 0.5, "Coulomb coefficient mu of the plane", Range::kNonNegative),
+          param("speed", 0, "initial speed down the slope [m/s]", Range::kAny),
+          param("mass", 1, "mass of the particle [kg]", Range::kPositive),
+          param("length", 10,
+                "length of the slope [m]: a fixed particle marks its foot (it sets the scene's "
+                "size in the energy scale E_s)",
+                Range::kPositive),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+          param("contact_stiffness", 1e5, "penalty stiffness k_c [N/m]", Range::kPositive),
+          param("smoothing", 1e-3, "friction's smoothing speed eps_v [m/s]", Range::kPositive)},
+         build_slope);
+  return entry;
 }
 
 }  // namespace springlab

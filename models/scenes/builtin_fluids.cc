@@ -26,10 +26,12 @@
 #include "models/core/scene.h"
 #include "models/fluids/sph_kernel.h"
 
+#include "models/scenes/scene_entry.h"
+
 namespace springlab {
 namespace {
 
-using Values = std::map<std::string, double>;
+using Values = SceneValues;
 
 constexpr int kWallLayers = 3;  // >= the support 2h = 2.6 l
 
@@ -176,6 +178,62 @@ double dam_break_particles(const Values& p) {
 double tank_particles(const Values& p) {
   const Box b = tank_box(p, p.at("width"), p.at("depth"));
   return b.count_water() + b.count_walls();
+}
+
+namespace {
+
+SceneCounts dam_break_counts(const SceneValues& p) { return {dam_break_particles(p), 0.0}; }
+SceneCounts tank_counts(const SceneValues& p) { return {tank_particles(p), 0.0}; }
+
+// The fluid scenes' shared parameters (builtin_fluids.cc).
+std::vector<ParameterSpec> fluid_params(double spacing, double alpha) {
+  return {param("spacing", spacing, "particle spacing l [m] (smoothing length 1.3 l)",
+                Range::kPositive),
+          param("dimension", 2, "2: particles in the x-y plane, 3: in space", Range::kWhole, 2, 3),
+          param("density", 1000, "rest density rho0 [kg/m^3]", Range::kPositive),
+          param("sound", 10, "speed of sound as a multiple of sqrt(g H), H the water's height",
+                Range::kPositive),
+          param("alpha", alpha, "viscosity as Monaghan's alpha: nu = alpha h c / (2 (d + 2))",
+                Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kPositive)};
+}
+
+}  // namespace
+
+const SceneEntry& dam_break_scene() {
+  static const SceneEntry entry = scene_entry(
+      "dam-break",
+          "a water column a wide and 2a high released against the wall of a box 5a long "
+          "(Martin and Moyce 1952), weakly compressible SPH with wall particles",
+         with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive)},
+              fluid_params(0.005, 0.02)),
+         build_dam_break, dam_break_counts, "spacing");
+  return entry;
+}
+
+const SceneEntry& sloshing_scene() {
+  static const SceneEntry entry = scene_entry(
+      "sloshing",
+          "the first standing wave of a tank (period 2 pi / w, w^2 = g k tanh(k H), k = pi / "
+          "width), started from rest level with the mode's velocity",
+         with({param("amplitude", 0.01, "the wave's amplitude at the walls [m]", Range::kAny),
+               param("width", 0.5, "width of the box [m]", Range::kPositive),
+               param("depth", 0.25, "depth of the water [m]", Range::kPositive)},
+              fluid_params(0.0125, 0.02)),
+         build_sloshing, tank_counts, "spacing");
+  return entry;
+}
+
+const SceneEntry& tank_scene() {
+  static const SceneEntry entry = scene_entry(
+      "tank",
+          "water at rest in a box: it settles to hydrostatic pressure rho0 g depth",
+         with({param("width", 0.5, "width of the box (and 4x its depth along z in 3-D) [m]",
+                     Range::kPositive),
+               param("depth", 0.25, "depth of the water [m]", Range::kPositive)},
+              fluid_params(0.0125, 0.1)),
+         build_tank, tank_counts, "spacing");
+  return entry;
 }
 
 }  // namespace springlab

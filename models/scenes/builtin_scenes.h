@@ -12,8 +12,12 @@ namespace springlab {
 
 struct SceneParameter {
   std::string name;
-  double default_value;
-  std::string meaning;  // with units, shown by `springlab list`
+  double default_value;  // a choice parameter: the index of its default choice
+  std::string meaning;   // with units, shown by `springlab list`
+  // A choice parameter (a finite-element scene's `model`): given by name,
+  // `-p model=corotated`, or by its index here, `-p model=1`. Empty for a
+  // number.
+  std::vector<std::string> choices;
 };
 
 struct BuiltinScene {
@@ -22,13 +26,15 @@ struct BuiltinScene {
   std::vector<SceneParameter> parameters;
 };
 
-// Sorted by name.
+// Sorted by name. The registry (builtin_scenes.cc) lists each scene's entry,
+// defined in the scene's file (scene_entry.h).
 const std::vector<BuiltinScene>& builtin_scenes();
 bool is_builtin_scene(const std::string& name);
 
 // Builds a built-in scene. `overrides` are the `-p key=value` pairs as typed.
 // Throws SceneError naming the parameter on an unknown key, a value that is
-// not a finite number, or a value outside the parameter's range.
+// not a finite number (nor one of a choice parameter's names), or a value
+// outside the parameter's range.
 Scene make_builtin_scene(const std::string& name,
                          const std::vector<std::pair<std::string, std::string>>& overrides = {});
 

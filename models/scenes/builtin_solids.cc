@@ -18,9 +18,11 @@
 #include "models/springs/gravity.h"
 #include "models/materials/material.h"
 
+#include "models/scenes/scene_entry.h"
+
 namespace springlab {
 
-using Values = std::map<std::string, double>;
+using Values = SceneValues;
 
 namespace {
 
@@ -192,6 +194,93 @@ Scene build_block(const Values& p) {
   contact.model = p.at("contact") == 1.0 ? ContactModel::kBarrier : ContactModel::kPenalty;
   contact.stiffness = p.at("contact_stiffness");
   return scene;
+}
+
+namespace {
+
+// Particles only (the element caps are far above what the parameters' ranges allow).
+SceneCounts beam_counts(const SceneValues& p) {
+  const double cross = p.at("dimension") == 3 ? (p.at("ny") + 1) * (p.at("ny") + 1) : p.at("ny") + 1;
+  return {(p.at("nx") + 1) * cross, 0.0};
+}
+SceneCounts membrane_counts(const SceneValues& p) { return {p.at("n") * p.at("n"), 0.0}; }
+SceneCounts block_counts(const SceneValues& p) {
+  const double side = p.at("n") + 1;
+  return {side * side * side, 0.0};
+}
+
+// The material parameters of the finite-element scenes: the model by its
+// name in the material registry (or its index there, as before names).
+std::vector<ParameterSpec> material_params(double young, double poisson, double density,
+                                           const std::string& model) {
+  std::vector<std::string> names;
+  std::string meaning = "material model, by name or number:";
+  for (const MaterialModel* m : material_models()) {
+    meaning += (names.empty() ? " " : ", ") + std::to_string(names.size()) + " " +
+               std::string(m->name);
+    names.emplace_back(m->name);
+  }
+  return {choice("model", model, meaning, names),
+          param("young", young, "Young's modulus E [Pa]", Range::kPositive),
+          param("poisson", poisson, "Poisson's ratio nu, in (-1, 0.5)", Range::kAny),
+          param("density", density, "density [kg/m^3] (lumped masses)", Range::kPositive)};
+}
+
+}  // namespace
+
+const SceneEntry& beam_scene() {
+  static const SceneEntry entry = scene_entry(
+      "beam",
+          "a cantilever clamped at x = 0 bending under gravity: 2-D plane-strain triangles or "
+          "3-D tetrahedra",
+         with({param("dimension", 2, "2: triangles (plane strain), 3: tetrahedra", Range::kWhole,
+                     2, 3),
+               param("nx", 20, "cells along the length", Range::kWhole, 1, 1000),
+               param("ny", 4, "cells across the height (and the depth in 3-D)", Range::kWhole, 1,
+                     40),
+               param("length", 1, "length [m]", Range::kPositive),
+               param("height", 0.1, "height (and depth in 3-D) [m]", Range::kPositive),
+               param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]",
+                     Range::kAny)},
+              material_params(1e7, 0.3, 1000, "neo-hookean")),
+         build_beam, beam_counts, "nx");
+  return entry;
+}
+
+const SceneEntry& block_scene() {
+  static const SceneEntry entry = scene_entry(
+      "block",
+          "a box of tetrahedra falling onto the ground plane y = 0, spinning about the vertical",
+         with({param("n", 4, "cells per side (6 tetrahedra each)", Range::kWhole, 1, 60),
+               param("size", 0.2, "side length [m]", Range::kPositive),
+               param("height", 0.5, "height of its bottom above y = 0 [m]", Range::kAny),
+               param("spin", 2, "angular velocity about the vertical [rad/s]", Range::kAny),
+               param("angle", 0,
+                     "the starting pose turned about the vertical through the centre [degrees] "
+                     "(the rest shape is not: a rigid rotation, which only the linear model "
+                     "resists)",
+                     Range::kAny),
+               param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+               param("contact", 0, "ground contact: 0 penalty, 1 barrier (IPC)", Range::kZeroOrOne),
+               param("contact_stiffness", 1e4,
+                     "penalty k_c or barrier kappa [N/m] (barrier distance 0.01 m)",
+                     Range::kPositive)},
+              material_params(1e5, 0.3, 1000, "neo-hookean")),
+         build_block, block_counts, "n");
+  return entry;
+}
+
+const SceneEntry& membrane_scene() {
+  static const SceneEntry entry = scene_entry(
+      "membrane",
+          "the cloth's set-up made of membrane triangles (in-plane stretch and shear, no "
+          "bending) instead of springs",
+         with({param("n", 16, "particles per side (n x n grid)", Range::kWhole, 2, 1024),
+               param("size", 1, "side length [m]", Range::kPositive),
+               param("thickness", 0.001, "thickness [m]", Range::kPositive)},
+              material_params(1e6, 0.3, 1000, "neo-hookean")),
+         build_membrane, membrane_counts, "n");
+  return entry;
 }
 
 }  // namespace springlab
