@@ -213,10 +213,10 @@ std::string refusal(const IntegratorInfo& info, const SceneCase& c) {
   if (!info.jacobian_free) return {};
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
-  std::string why;
+  Refusal why;
   if (model_for(c).projective_form(constraints, elements, why)) return {};
-  if (why.empty()) return "the scene has no projective form";
-  return why.substr(0, why.find(';'));
+  if (why.text.empty()) return "the scene has no projective form";
+  return why.text.substr(0, why.text.find(';'));
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 # Installation and the CMake package springlab (see CMakeLists.txt).
 include(CMakePackageConfigHelpers)
 
-install(TARGETS springlab_core ${SPRINGLAB_WINGS} springlab_cholmod EXPORT springlabTargets
+install(TARGETS springlab_core springlab_plugin ${SPRINGLAB_WINGS} springlab_cholmod EXPORT springlabTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/springlab)
@@ -24,4 +24,5 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/springlabConfigVersion.cm
   COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/springlabConfig.cmake
               ${PROJECT_BINARY_DIR}/springlabConfigVersion.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/SpringlabPlugin.cmake
         DESTINATION ${SPRINGLAB_CMAKE_DIR})

@@ -252,8 +252,8 @@ std::vector<Scene> volume_element_scenes() {
 std::vector<ProjectiveElement> projective_elements(const Model& model) {
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
-  std::string why;
-  EXPECT_TRUE(model.projective_form(constraints, elements, why)) << why;
+  Refusal why;
+  EXPECT_TRUE(model.projective_form(constraints, elements, why)) << why.text;
   return elements;
 }
 

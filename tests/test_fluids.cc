@@ -532,8 +532,8 @@ std::vector<std::unique_ptr<PositionProjection>> projections_of(const Model& mod
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
   std::vector<std::unique_ptr<PositionProjection>> projections;
-  std::string why;
-  EXPECT_TRUE(model.position_based_form(constraints, elements, projections, why)) << why;
+  Refusal why;
+  EXPECT_TRUE(model.position_based_form(constraints, elements, projections, why)) << why.text;
   return projections;
 }
 

@@ -21,6 +21,9 @@ TEST(Registry, ClosestNamesForeseeTyposCaseAndSeparators) {
   const std::vector<std::string> names = integrator_names();
   EXPECT_EQ(closest_names("implicit-eulr", names), std::vector<std::string>{"implicit-euler"});
   EXPECT_EQ(closest_names("RK4", names), std::vector<std::string>{"rk4"});
+  // Equal but for case: that one only, not every name one letter away.
+  EXPECT_EQ(closest_names("N", {"n", "k", "g", "mass"}), std::vector<std::string>{"n"});
+  EXPECT_EQ(closest_names("x", {"n", "k"}), (std::vector<std::string>{"n", "k"}));
   EXPECT_EQ(closest_names("symplectic_euler", names),
             std::vector<std::string>{"symplectic-euler"});
   EXPECT_EQ(closest_names("yoshdia4", names).front(), "yoshida4");  // two letters swapped

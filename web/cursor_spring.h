@@ -80,13 +80,13 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   // FastSolverViews: the model's, with the spring among the external forces.
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
-                       std::string& why) const override {
+                       Refusal& why) const override {
     return model_.projective_form(constraints, elements, why);
   }
   bool position_based_form(std::vector<DistanceConstraint>& constraints,
                            std::vector<ProjectiveElement>& elements,
                            std::vector<std::unique_ptr<PositionProjection>>& projections,
-                           std::string& why) const override {
+                           Refusal& why) const override {
     return model_.position_based_form(constraints, elements, projections, why);
   }
   bool laplacian_form(std::vector<DistanceConstraint>& constraints,

@@ -33,10 +33,11 @@ LabPanel::LabPanel(const PanelSettings& settings) {
   }
   const StepResult start = integrator_->initialize(
       *cursor_, 0.0, model_->initial_positions(), model_->initial_velocities(), settings.options);
-  if (!start.ok) throw RunRefused(start.message);
+  if (!start.ok) throw RunRefused(start.message, start.remedy);
   energies_.emplace(model_->energies(model_->initial_positions(), model_->initial_velocities()));
   check_ = std::make_unique<DivergenceCheck>(*model_, settings.blowup * model_->energy_scale(),
-                                             *energies_);
+                                             *energies_, integrator_->overshoot_steps());
+  blowup_ = settings.blowup;
   store_good_state();
 }
 
@@ -89,9 +90,12 @@ long LabPanel::step(long steps, double dt) {
       diverged_at_ = t;
       break;
     }
-    if (check_->diverged(integrator_->x(), integrator_->v())) {
+    if (const auto verdict = check_->judge(integrator_->x(), integrator_->v(), t)) {
       status_ = RunStatus::kDiverged;
       diverged_at_ = t;
+      failure_ = verdict_text(*verdict, *model_,
+                              {integrator_->name(), blowup_, integrator_->overshoot_steps()},
+                              integrator_->x(), integrator_->v());
       break;
     }
     ++k_;

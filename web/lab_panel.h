@@ -82,6 +82,7 @@ class LabPanel {
   std::unique_ptr<CursorSpring> cursor_;
   std::unique_ptr<Integrator> integrator_;
   std::unique_ptr<DivergenceCheck> check_;
+  double blowup_ = 1000.0;
   RunStatus status_ = RunStatus::kCompleted;
   std::optional<double> diverged_at_;
   std::string failure_;

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -99,6 +100,18 @@ struct StabilityResult {
   TheoryLimit theory;          // for the trials' run times T(h)
   double min_run_time = 0.0;   // min_periods 2 pi / w_max (0 when w_max = 0)
   double lo_run_time = 0.0;    // T(lo): simulated time of the trial at lo (0 when lo = 0)
+  // What a bracketed step means, from theory (issue 52: a "largest stable
+  // dt" beside "unstable at every step"):
+  //   - no_stable_step: the method has no stable step on the scene's
+  //     fastest mode, undamped (explicit Euler: stability_limit 0, no
+  //     damping): lo is only the largest step whose trial stayed within the
+  //     bound, and it shrinks as the trial grows;
+  //   - growth_at_lo: |R(lo lambda)|^2, the fastest mode's energy factor per
+  //     step at lo, for a method with a stability function R (NaN without
+  //     one): above 1, lo is unstable, its growth too slow to pass the bound
+  //     within the trial (explicit Euler on the damped `spring`: 1.9 x theory).
+  bool no_stable_step = false;
+  double growth_at_lo = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Throws std::invalid_argument, before any run, when the range is empty or

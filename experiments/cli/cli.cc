@@ -1,5 +1,7 @@
 #include "experiments/cli/cli.h"
 
+#include "experiments/driver/divergence.h"
+
 #include <sched.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -30,6 +32,7 @@
 
 #include "experiments/io/body_output.h"
 #include "experiments/kinds/experiment_runner.h"
+#include "experiments/cli/check_command.h"
 #include "experiments/cli/integrator_table.h"
 #include "experiments/driver/memory_check.h"
 #include "experiments/io/output_files.h"
@@ -38,9 +41,9 @@
 #include "experiments/driver/simulation.h"
 #include "experiments/analysis/stability.h"
 #include "integrators/newton/velocity_implicit_method.h"
+#include "integrators/registry/plugins.h"
 #include "integrators/registry/registry.h"
 #include "integrators/linear/sparse_direct_solver.h"
-#include "integrators/fast/xpbd.h"
 #include "models/scenes/builtin_scenes.h"
 #include "models/core/element_kind.h"
 #include "models/model/model.h"
@@ -107,6 +110,11 @@ std::string number_text(double value) {
   return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
 }
 
+// Notes for the user on stderr, one line each.
+void print_notes(const std::vector<std::string>& notes) {
+  for (const std::string& note : notes) std::cerr << "springlab: note: " << note << std::endl;
+}
+
 void require_positive(const std::string& option, double value) {
   if (!(value > 0.0) || !std::isfinite(value)) {
     throw UsageError(option + ": must be a positive number (got " + number_text(value) + ")");
@@ -136,6 +144,7 @@ Json rows(const Eigen::MatrixXd& m) {
 struct CommonOptions {
   std::string scene;
   std::vector<std::string> parameters;
+  std::vector<std::string> plugins;
   RunSettings run;
   std::map<std::string, std::string> choice_text;  // the choices as given (--stiffness ...)
   bool json = false;
@@ -145,6 +154,9 @@ struct CommonOptions {
     command = &cmd;
     cmd.add_option("SCENE", scene, "scene file, - for stdin, or a built-in scene's name")->required();
     cmd.add_option("--integrator", run.integrator, "integrator name (springlab list)")->required();
+    cmd.add_option("--plugin", plugins, "a plug-in of your own integrators (repeatable)")
+        ->allow_extra_args(false)
+        ->default_str("");
     cmd.add_option("--t-end", run.t_end, "simulated time [s]")->required()->default_str("");
     cmd.add_option("-p", parameters, "built-in scene parameter key=value (repeatable)")
         ->allow_extra_args(false)
@@ -174,6 +186,7 @@ struct CommonOptions {
   }
 
   void validate() {
+    for (const std::string& plugin : plugins) load_plugin(plugin);
     require_integrator(run.integrator);
     require_positive("--t-end", run.t_end);
     require_positive("--blowup", run.blowup);
@@ -194,8 +207,9 @@ struct CommonOptions {
   bool given(const std::string& option) const { return command->count("--" + option) > 0; }
 
   // Option values the method cannot take are refused (exit 1, before any
-  // file is touched); options it does not read are named on stderr.
-  void check_against_method(const Model& model, std::ostream& notes = std::cerr) const {
+  // file is touched); the options it does not read are returned, one note
+  // each (`run` prints them on stderr, Python warns).
+  std::vector<std::string> check_against_method(const Model& model) const {
     const auto integrator = make_integrator(run.integrator);
     if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
       throw UsageError(why);
@@ -208,10 +222,8 @@ struct CommonOptions {
         ignored += std::string(ignored.empty() ? "" : ", ") + "--" + option;
       }
     }
-    if (!ignored.empty()) {
-      notes << "springlab: note: " << run.integrator << " does not use " << ignored
-            << " (ignored)" << std::endl;
-    }
+    if (ignored.empty()) return {};
+    return {run.integrator + " does not use " + ignored + " (ignored)"};
   }
 };
 
@@ -272,19 +284,16 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
         if (!scene_arg.empty() && s.name == scene_arg) builtin = &s;
       }
     }
-    auto has = [&](const char* parameter) {
-      if (builtin == nullptr) return false;
-      for (const SceneParameter& p : builtin->parameters) {
-        if (p.name == parameter) return true;
-      }
-      return false;
-    };
+    // The remedy is data (models/core/refusal.h): told as the built-in
+    // scene's parameter of the same name, where it has one.
+    const SceneRemedy& remedy = e.remedy();
     std::string fix;
-    if (why.find("no projective form") != std::string::npos && has("model")) {
-      fix = why.find("(corotated, poisson -") != std::string::npos ? "-p poisson=0.3"
-                                                                   : "-p model=corotated";
-    } else if (why.find("is the barrier") != std::string::npos && has("contact")) {
-      fix = "-p contact=0 (penalty)";
+    if (builtin != nullptr && !remedy.empty()) {
+      for (const SceneParameter& p : builtin->parameters) {
+        if (p.name != remedy.field) continue;
+        fix = "-p " + remedy.field + "=" + remedy.value;
+        if (!remedy.meaning.empty()) fix += " (" + remedy.meaning + ")";
+      }
     }
     if (!fix.empty()) why += " (for this scene: " + fix + ")";
     throw UsageError("--integrator " + run.integrator + ": " + why);
@@ -389,8 +398,13 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
-  common.check_against_method(model);
+  print_notes(common.check_against_method(model));
   std::unique_ptr<Integrator> integrator = prepare_or_refuse(model, common.run, common.scene);
+  // docs/command-line.md: a method with substeps (xpbd) reports them per step.
+  const std::vector<std::string> read = integrator->options_read();
+  const int substeps = std::find(read.begin(), read.end(), "substeps") != read.end()
+                           ? integrator->substeps(common.run.options)
+                           : 0;
 
   // Files are opened (regular files as temporaries) before any step runs.
   std::unique_ptr<OutputFile> energy_file, trajectory_file;
@@ -440,14 +454,13 @@ int command_run(CommonOptions& common, const std::string& energy_path,
     j["status"] = to_string(r.status);
     const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
     for (const auto& [key, value] : stats.items()) j[key] = value;
-    if (r.integrator == "xpbd") {  // docs/command-line.md: xpbd adds its substeps per step
-      j["substeps"] = common.run.options.substeps > 0 ? common.run.options.substeps
-                                                      : Xpbd::kDefaultSubsteps;
-    }
+    if (substeps > 0) j["substeps"] = substeps;
     j["wall_seconds"] = r.wall_seconds;
     j["diverged"] = r.diverged();
     j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
     j["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
+    if (r.verdict) j["verdict"] = verdict_json(*r.verdict);
+    j["warnings"] = warning_texts(r.warnings, r.integrator);
     j["t_final"] = r.t_final;
     j["outputs_complete"] = outputs_complete;
     j["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
@@ -476,6 +489,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
         << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
         << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
         << "), wall " << r.wall_seconds << " s\n";
+    for (const std::string& w : warning_texts(r.warnings, r.integrator)) out << "warning: " << w << '\n';
     if (any_output && !outputs_complete) {
       out << "output files incomplete: rows up to t = " << r.t_final << ", the last good state\n";
     }
@@ -574,7 +588,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
-  common.check_against_method(model);
+  print_notes(common.check_against_method(model));
   prepare_or_refuse(model, common.run, common.scene);  // a refusal is not "diverged even at --dt-min"
   s.run = common.run;
   std::unique_ptr<StabilityProgress> progress;
@@ -617,8 +631,22 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     out << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end << ": ";
     switch (r.outcome) {
       case StabilityOutcome::kBracketed:
+        if (r.no_stable_step) {
+          // Issue 52: not "largest stable dt" beside "unstable at every step".
+          out << "no step is stable without damping (every undamped mode grows at every step); "
+                 "the largest step whose trial stayed within the blow-up bound is "
+              << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi << "], " << r.runs
+              << runs << "): it shrinks as the trial grows, a property of --t-end and --blowup, "
+                 "not a stability limit\n";
+          break;
+        }
         out << "largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi
             << "], " << r.runs << runs << ")\n";
+        if (r.growth_at_lo > 1.0 + 1e-9) {
+          out << "at " << r.lo << " the fastest mode's energy still grows x" << r.growth_at_lo
+              << " per step: unstable, but too slowly to pass the blow-up bound within the trial "
+                 "(a longer --t-end or a smaller --blowup reads nearer the limit)\n";
+        }
         break;
       case StabilityOutcome::kStableUpToDtMax:
         out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << runs << ")\n";
@@ -667,6 +695,9 @@ int command_list(bool json) {
         << (i.implicit ? ", implicit" : ", explicit") << (i.symplectic ? ", symplectic" : "")
         << ", " << stability_text(i) << "\n      " << i.scheme << '\n';
   }
+  out << "divergence: a run stops at the first step that breaks a rule (docs/command-line.md "
+         "\"Divergence\"):\n";
+  for (const std::string& rule : divergence_sentences()) out << "  " << rule << '\n';
   out << "built-in scenes:\n";
   for (const BuiltinScene& s : builtin_scenes()) {
     out << "  " << s.name << "  " << s.description << '\n';
@@ -800,7 +831,7 @@ Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>
 RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,
                              double t_end, int every,
                              const std::vector<std::pair<std::string, std::string>>& options,
-                             std::string* notes) {
+                             std::vector<std::string>* notes) {
   CLI::App app{"springlab run"};
   app.option_defaults()->always_capture_default();
   CommonOptions common;
@@ -831,15 +862,25 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  std::ostringstream note_lines;
-  common.check_against_method(model, notes != nullptr ? note_lines : std::cerr);
-  if (notes != nullptr) *notes = note_lines.str();
+  std::vector<std::string> method_notes = common.check_against_method(model);
+  if (notes != nullptr) {
+    *notes = std::move(method_notes);
+  } else {
+    print_notes(method_notes);
+  }
   return common.run;
 }
 
 std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& settings,
                                         const std::string& scene_arg) {
   return prepare_or_refuse(model, settings, scene_arg);
+}
+
+Json verdict_json(const Verdict& v) {
+  Json j{{"rule", std::string(to_string(v.rule))}, {"value", v.value}, {"bound", v.bound}};
+  if (v.where >= 0) j["where"] = v.where;
+  if (v.plane >= 0) j["plane"] = v.plane;
+  return j;
 }
 
 Json stats_json(const IntegratorStats& s) {
@@ -913,6 +954,8 @@ int run_cli(int argc, char** argv) {
                          "merge N shards into the full tables instead of running")
       ->default_str("");
   experiment->add_flag("--no-progress", no_progress, "no progress line on stderr")->default_str("");
+  CheckCommand check_options;
+  CLI::App* check = add_check_command(app, check_options);
   for (CLI::App* cmd : {run, stability}) {
     for (const char* flag : {"--dq-jacobian", "--stald", "--json"}) cmd->get_option(flag)->default_str("");
   }
@@ -951,6 +994,7 @@ int run_cli(int argc, char** argv) {
       return 0;
     }
     if (*list) return command_list(list_json);
+    if (*check) return run_check_command(check_options);
     if (*experiment) {
       const bool merging = experiment->count("--merge") > 0;
       if (merging && experiment_options.merge < 1) throw UsageError("--merge: must be >= 1");

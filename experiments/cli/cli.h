@@ -26,12 +26,12 @@ int run_cli(int argc, char** argv);
 // flag), parsed and checked exactly as `run` checks them, against the method
 // and the model too, so a bad value throws std::runtime_error with the same
 // one line the command line prints after "springlab: error: ". Options the
-// method does not read are named in `notes` (one line each, as `run` prints
-// them on stderr; on stderr when notes is nullptr).
+// method does not read are named in `notes` (one sentence each, as `run`
+// prints them after "springlab: note: "; on stderr when notes is nullptr).
 RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,
                              double t_end, int every,
                              const std::vector<std::pair<std::string, std::string>>& options,
-                             std::string* notes = nullptr);
+                             std::vector<std::string>* notes = nullptr);
 
 // simulate()'s integrator for `run`, bound to the model's initial state
 // before any output is opened (prepare_integrator): a pairing the method
@@ -43,6 +43,9 @@ std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& s
 
 // The statistics every integrator reports, by the names of `run --json`.
 nlohmann::ordered_json stats_json(const IntegratorStats& s);
+// The rule that ended a diverged run (`run --json`'s "verdict": rule,
+// value, bound, and where: the particle or body, plane).
+nlohmann::ordered_json verdict_json(const Verdict& v);
 
 // Rows one output of a run may hold (docs/reliability.md "Reliability"): about 1 GB of CSV.
 inline constexpr double kMaxOutputRows = 10'000'000;

@@ -1,10 +1,13 @@
 #include "experiments/cli/integrator_table.h"
 
+#include "experiments/driver/divergence.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
 
+#include "experiments/kinds/integrator_facts.h"
 #include "integrators/registry/registry.h"
 #include "models/scenes/builtin_scenes.h"
 
@@ -56,10 +59,6 @@ std::uint32_t stable_hash(const std::string& text) {
   return h;
 }
 
-nlohmann::ordered_json number_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
-}
-
 }  // namespace
 
 IntegratorStyle integrator_style(const std::string& name) {
@@ -73,41 +72,13 @@ IntegratorStyle integrator_style(const std::string& name) {
   return {kReserveColours[h % 7], kReserveMarkers[(h / 7) % 6]};
 }
 
-std::string integrator_family(const IntegratorInfo& info) {
-  if (info.adaptive) return "adaptive";
-  if (info.symplectic) return "symplectic";
-  if (info.implicit) return "implicit";
-  return "explicit";
-}
-
 nlohmann::ordered_json integrator_table_json() {
   using Json = nlohmann::ordered_json;
   Json integrators = Json::array();
   for (const std::string& name : integrator_names()) {
     const IntegratorInfo info = make_integrator(name)->info();
     const IntegratorStyle style = integrator_style(name);
-    Json stability;
-    stability["kind"] = to_string(info.stability);
-    stability["text"] = stability_text(info);
-    // Largest stable w h undamped: null when every step is stable (A, L) or
-    // there is no one number.
-    stability["limit_wh"] = number_or_null(info.stability_limit);
-    stability["alpha_degrees"] = number_or_null(info.stability_alpha);
-    stability["note"] = info.stability_note;
-    // The spectral radius as w h -> infinity, where the method states it.
-    stability["rho_inf"] = number_or_null(info.spectral_radius_infinity);
-    Json entry;
-    entry["name"] = name;
-    entry["family"] = integrator_family(info);
-    entry["order"] = info.order;
-    // The positions' order where F depends on x alone, where higher (fox-goodwin: 4).
-    entry["position_order"] = std::max(info.order, info.position_order);
-    entry["adaptive"] = info.adaptive;
-    entry["implicit"] = info.implicit;
-    entry["symplectic"] = info.symplectic;
-    entry["iterates_to_tolerance"] = info.iterates_to_tolerance;
-    entry["scheme"] = info.scheme;
-    entry["stability"] = stability;
+    Json entry = integrator_facts_json(name, info);
     entry["colour"] = style.colour;
     entry["marker"] = style.marker;
     integrators.push_back(entry);
@@ -122,7 +93,8 @@ nlohmann::ordered_json integrator_table_json() {
     }
     scenes.push_back({{"name", s.name}, {"description", s.description}, {"parameters", parameters}});
   }
-  return {{"integrators", integrators}, {"scenes", scenes}};
+  // docs/command-line.md "Divergence": the rule for each kind of matter.
+  return {{"integrators", integrators}, {"scenes", scenes}, {"divergence", divergence_sentences()}};
 }
 
 }  // namespace springlab

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "experiments/kinds/integrator_facts.h"  // integrator_family, the facts of one
 #include "integrators/core/integrator.h"
 
 namespace springlab {
@@ -23,9 +24,6 @@ struct IntegratorStyle {
 // colour and marker picked from a reserve by a hash of its name (the same in
 // every run and report, but possibly shared: give a new method its entry).
 IntegratorStyle integrator_style(const std::string& name);
-
-// "explicit", "symplectic", "implicit" (fixed step) or "adaptive".
-std::string integrator_family(const IntegratorInfo& info);
 
 // {"integrators": [{"name", "family", "order", "adaptive", "implicit",
 //   "symplectic", "iterates_to_tolerance", "scheme", "stability": {"kind",

@@ -99,8 +99,8 @@ SPRINGLAB_LANES_CLONES void copy_and_sum_weighted(const double* x, const double*
 }  // namespace
 
 DivergenceCheck::DivergenceCheck(const Model& model, double bound,
-                                 const Energies& initial)
-    : model_(model), bound_(bound), energies_(initial) {
+                                 const Energies& initial, int overshoot_steps)
+    : model_(model), bound_(bound), energies_(initial), window_(overshoot_steps) {
   // Both copies start as the initial state, the first reference (drift 0).
   n_ = model.initial_positions().size();
   auto line_aligned = [this] {
@@ -119,7 +119,8 @@ DivergenceCheck::DivergenceCheck(const Model& model, double bound,
   // that count with it (elements, contact) every state is checked exactly.
   const EnergyLayout& layout = model.energy_layout();
   const std::size_t spring = layout.find("spring");
-  certifies_ = layout.counts_with_spring.size() == 1 && layout.counts_with_spring[0] == spring;
+  certifies_ = layout.counts_with_spring.size() == 1 && layout.counts_with_spring[0] == spring &&
+               !model.has_divergence_rules();
   if (!certifies_) return;
   std::vector<double> kappa(static_cast<std::size_t>(model.particle_count()), 0.0);
   if (const Springs* springs = model.scene().find<Springs>()) {
@@ -134,7 +135,8 @@ DivergenceCheck::DivergenceCheck(const Model& model, double bound,
   sqrt_u_ref_ = std::sqrt(energies_["spring"]);
 }
 
-bool DivergenceCheck::diverged(const Vector& x, const Vector& v) {
+std::optional<Verdict> DivergenceCheck::judge(const Vector& x, const Vector& v, double t) {
+  ++step_;
   const Eigen::Index n = n_;
   if (x.size() != n || v.size() != n) {
     throw std::invalid_argument("DivergenceCheck: the state's size is not the model's");
@@ -142,12 +144,27 @@ bool DivergenceCheck::diverged(const Vector& x, const Vector& v) {
   const int next = 1 - good_;
   Eigen::Map<Vector> x_copy(x_[next].get(), n);
   Eigen::Map<Vector> v_copy(v_[next].get(), n);
+  // The kinds' rules (fluids, bodies), given the energies of (x, v).
+  auto kinds = [&]() -> std::optional<Verdict> {
+    model_.measure_divergence(x, v, energies_.total(), measured_);
+    for (const Verdict& m : measured_) {
+      if (m.rule == VerdictRule::kBodyEnergy ? window_.breaks(m, step_, t) : m.exceeded()) {
+        return m;
+      }
+    }
+    good_ = next;
+    return std::nullopt;
+  };
   if (!(bound_ > 0.0)) {
     x_copy = x;
     v_copy = v;
-    if (!x.allFinite() || !v.allFinite()) return true;
+    if (!x.allFinite() || !v.allFinite()) return Verdict{.rule = VerdictRule::kNonFinite};
+    if (model_.has_divergence_rules()) {
+      model_.energies(x, v, energies_);
+      return kinds();
+    }
     good_ = next;
-    return false;
+    return std::nullopt;
   }
   // The last good state's copy and the certificate's sums in one pass, in
   // lanes: the scalar loop took about 11 instructions per entry and waited
@@ -169,15 +186,26 @@ bool DivergenceCheck::diverged(const Vector& x, const Vector& v) {
     const double spring = sqrt_u_ref_ + sqrt_kappa_ * drift_[next];
     const double certificate = 0.5 * velocity2 + spring * spring;
     if (std::isfinite(certificate) && certificate <= (1.0 - kRoundingMargin) * bound_) {
+      // Within the bound (an excursion above it, if one was under way, ends;
+      // without an allowance there is none).
+      if (window_.steps() > 0) {
+        window_.breaks({.rule = VerdictRule::kEnergy, .value = certificate, .bound = bound_},
+                       step_, t);
+      }
       good_ = next;
-      return false;
+      return std::nullopt;
     }
   }
   // (Finite, as the rule asks of the state, also when the bound is not.)
-  if (!x.allFinite() || !v.allFinite()) return true;
+  if (!x.allFinite() || !v.allFinite()) return Verdict{.rule = VerdictRule::kNonFinite};
   ++exact_evaluations_;
   model_.energies(x, v, energies_);
-  if (energies_.kinetic_and_spring() > bound_ || !std::isfinite(energies_.total())) return true;
+  const double energy = energies_.kinetic_and_spring();
+  if (!std::isfinite(energies_.total())) {
+    return Verdict{.rule = model_.has_forbidden_states() ? VerdictRule::kForbidden
+                                                         : VerdictRule::kEnergy,
+                   .value = energy, .bound = bound_};
+  }
   if (certifies_) {
     // x_k the new reference: its copy's drift is 0, the other copy's (the
     // state before) |x_{k-1} - x_k|.
@@ -185,8 +213,9 @@ bool DivergenceCheck::diverged(const Vector& x, const Vector& v) {
     drift_[next] = 0.0;
     drift_[good_] = (x_good() - x_copy).norm();
   }
-  good_ = next;
-  return false;
+  const Verdict verdict{.rule = VerdictRule::kEnergy, .value = energy, .bound = bound_};
+  if (window_.breaks(verdict, step_, t)) return verdict;
+  return kinds();
 }
 
 }  // namespace springlab

@@ -1,21 +1,27 @@
-// The divergence rule of docs/command-line.md ("Divergence"): a run
-// diverges when its state is not finite or its kinetic + spring energy
-// (+ every potential that counts with it) exceeds blowup x E_s. simulate()
-// (simulation.h) checks it after every step; the lab page (web/) checks its
-// panels' steps with the same object, which also keeps the last good state.
+// The divergence rule of docs/command-line.md ("Divergence";
+// divergence.h states it plainly: divergence() is the reference), decided
+// fast. simulate() (simulation.h) checks it after every step; the lab page
+// (web/) checks its panels' steps with the same object, which also keeps the
+// last good state. Its verdicts equal divergence()'s at every step
+// (tests/test_verdicts.cc compares them on random and real runs).
 #pragma once
 
 #include <memory>
 #include <new>
+#include <optional>
 #include <vector>
 
+#include "experiments/driver/divergence.h"
 #include "models/model/model.h"
 
 namespace springlab {
 
-// docs/command-line.md "The command line"'s divergence rule, checked after every step at the cost
-// of one pass over the state instead of an energy evaluation (a pass over every
-// spring with a square root each, as much as the force).
+// The rule, checked after every step at the cost of one pass over the state
+// instead of an energy evaluation (a pass over every spring with a square
+// root each, as much as the force) where it can be: a scene of springs
+// alone, judged by the energy rule only (the kinds with rules of their own,
+// fluids and bodies, have potentials that count with the spring energy, so
+// their states are judged exactly, as divergence() does).
 //
 // The certificate. For a spring of stiffness k and rest length L between
 // particles i and j, with d = x_i - x_j, l = |d|, and any reference state
@@ -55,15 +61,22 @@ namespace springlab {
 // chain, none on its cloths).
 class DivergenceCheck {
  public:
-  // bound = blowup x model.energy_scale() (0: only a non-finite state
-  // diverges); initial = model.energies() of the model's initial state,
-  // which also starts as the last good state.
-  DivergenceCheck(const Model& model, double bound, const Energies& initial);
+  // bound = blowup x model.energy_scale() (0: the energy rule is off);
+  // initial = model.energies() of the model's initial state, which also
+  // starts as the last good state; overshoot_steps: the method's overshoot
+  // allowance K (divergence.h; 0: none).
+  DivergenceCheck(const Model& model, double bound, const Energies& initial,
+                  int overshoot_steps = 0);
 
-  // True when (x, v) is not finite or its kinetic + spring energy exceeds
-  // the bound (with a bound of 0: only when it is not finite). The same pass
-  // copies (x, v); when it returns false that copy is the last good state.
-  bool diverged(const Vector& x, const Vector& v);
+  // divergence()'s verdict on the state after the next step (x, v at time
+  // t; the calls count the steps). The same pass copies (x, v); when it
+  // returns nullopt that copy is the last good state.
+  std::optional<Verdict> judge(const Vector& x, const Vector& v, double t);
+  // Whether judge() returns a verdict.
+  bool diverged(const Vector& x, const Vector& v) { return judge(x, v, 0.0).has_value(); }
+
+  // The overshoot allowance and the overshoots it forgave.
+  const OvershootWindow& window() const { return window_; }
 
   // The last good state: the initial one, or the last (x, v) for which
   // diverged() returned false (a view of the check's copy, valid until the
@@ -79,6 +92,9 @@ class DivergenceCheck {
   const Model& model_;
   double bound_;
   Energies energies_;
+  OvershootWindow window_;
+  long step_ = 0;
+  std::vector<Verdict> measured_;  // the kinds' rules' measurements (scratch)
   bool certifies_ = false;
   double sqrt_kappa_ = 0.0;
   // m_max when the masses are all equal (the pass then reads no masses),

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/driver/divergence.h"
 #include "experiments/driver/divergence_check.h"
 #include "integrators/registry/registry.h"
 #include "models/core/decimal_text.h"
@@ -94,7 +95,7 @@ std::unique_ptr<Integrator> prepare_integrator(const Model& model,
   auto integrator = make_integrator(settings.integrator);
   const StepResult step = integrator->initialize(model, 0.0, model.initial_positions(),
                                                  model.initial_velocities(), run_options(settings));
-  if (!step.ok) throw RunRefused(step.message);
+  if (!step.ok) throw RunRefused(step.message, step.remedy);
   return integrator;
 }
 
@@ -102,27 +103,6 @@ RunResult simulate(const Model& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers) {
   return simulate(model, settings, observers, nullptr);
 }
-
-namespace {
-
-// A plain blow-up's message (docs/command-line.md "Divergence"): what the
-// rule saw and what to try.
-std::string blowup_text(const Model& model, const RunSettings& settings, double bound,
-                        const Vector& x, const Vector& v) {
-  std::ostringstream text;
-  if (!x.allFinite() || !v.allFinite()) {
-    text << "the state turned non-finite";
-  } else {
-    text << "kinetic + spring energy " << model.energies(x, v).kinetic_and_spring()
-         << " J exceeded --blowup " << settings.blowup << " x E_s = " << bound << " J";
-  }
-  text << "; " << settings.integrator
-       << " is unstable or inaccurate at this step: try a smaller --dt (`springlab stability` "
-          "finds the largest stable one) or a method with a larger stability limit";
-  return text.str();
-}
-
-}  // namespace
 
 RunResult simulate(const Model& model, const RunSettings& settings,
                    const std::vector<Observer*>& observers, std::unique_ptr<Integrator> prepared) {
@@ -166,7 +146,9 @@ RunResult simulate(const Model& model, const RunSettings& settings,
     result.failure = step.message;
     result.diverged_at = 0.0;
   }
-  DivergenceCheck check(model, bound, energies);  // keeps the last good state, (x0, v0) first
+  // The rule of divergence.h, decided fast (divergence_check.h); it keeps
+  // the last good state, (x0, v0) first.
+  DivergenceCheck check(model, bound, energies, integrator->overshoot_steps());
   double t_good = 0.0;
   bool good_observed = true;  // has the last good state been written?
   for (long k = 1; k <= grid.steps && result.status == RunStatus::kCompleted; ++k) {
@@ -184,32 +166,27 @@ RunResult simulate(const Model& model, const RunSettings& settings,
     }
     const Vector& x = integrator->x();
     const Vector& v = integrator->v();
-    if (check.diverged(x, v)) {
+    if (std::optional<Verdict> verdict = check.judge(x, v, t)) {
       result.status = RunStatus::kDiverged;
       result.diverged_at = t;
-      // A finite state of infinite energy (a barrier's gap closed): say where.
-      // (Not "an implicit method": linear-implicit-euler's one linear solve
-      // steps through a plane too; implicit-euler's Newton keeps gaps open.)
-      if (model.has_forbidden_states() && x.allFinite()) {
-        const std::string where = model.forbidden_state(x);
-        if (!where.empty()) {
-          result.failure = where + "; use implicit-euler (its Newton iteration keeps every gap "
-                                   "open) or a smaller --dt";
-        }
-      } else if (model.has_forbidden_states()) {
-        // A stage of a multi-stage step (rk4) inside a plane, where the
-        // barrier has no force, makes the step's end non-finite.
-        result.failure =
-            "the state turned non-finite (with barrier contact: a stage of the step inside a "
-            "plane, where the barrier has no force); use implicit-euler (its Newton iteration "
-            "keeps every gap open) or a smaller --dt";
-      }
-      if (result.failure.empty()) result.failure = blowup_text(model, settings, bound, x, v);
+      result.verdict = verdict;
+      result.failure = verdict_text(
+          *verdict, model, {settings.integrator, settings.blowup, integrator->overshoot_steps()},
+          x, v);
       break;
     }
     t_good = t;
     good_observed = k == grid.steps || k % settings.every == 0;
     if (good_observed) notify(t, x, v);
+  }
+  for (const FallbackCount& f : integrator->fallbacks()) {
+    result.warnings.push_back(
+        {.code = WarningCode::kFallback, .fallback = f.fallback, .steps = f.steps});
+  }
+  for (const OvershootWindow::Overshoot& o : check.window().overshoots()) {
+    if (result.verdict && o.rule == result.verdict->rule) continue;  // it ended the run
+    result.warnings.push_back({.code = WarningCode::kOvershoot, .rule = o.rule, .steps = o.steps,
+                               .ratio = o.peak_ratio, .t = o.t_peak});
   }
   // A run that stopped early still ends its output at its last good state.
   Vector x_good = check.x_good(), v_good = check.v_good();

@@ -9,8 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "experiments/driver/run_warnings.h"
 #include "integrators/core/integrator.h"
 #include "models/model/model.h"
+#include "models/core/verdict.h"
 
 namespace springlab {
 
@@ -38,7 +40,9 @@ struct RunResult {
   double t_end = 0.0;
   RunStatus status = RunStatus::kCompleted;
   std::optional<double> diverged_at;  // time of the step that diverged or failed
-  std::string failure;                // the solver's message when kFailed
+  std::string failure;                // the solver's message when kFailed, the verdict's when kDiverged
+  std::optional<Verdict> verdict;     // the rule that ended a diverged run (divergence.h), as data
+  std::vector<RunWarning> warnings;   // run_warnings.h: what a reader should know
   IntegratorStats stats;
   double wall_seconds = 0.0;
   double energy_initial = 0.0;
@@ -78,10 +82,11 @@ TimeGrid make_time_grid(double dt, double t_end);
 std::vector<double> time_grid(double dt, double t_end);
 
 // Runs to t_end or until the run diverges or fails (both are results, not
-// exceptions). Divergence: a non-finite state, or kinetic + spring energy
-// (+ every potential that counts with it: Energies::kinetic_and_spring)
-// above blowup * E_s (E_s = model.energy_scale(); with E_s = 0 only a
-// non-finite state counts). Throws std::invalid_argument for bad settings.
+// exceptions). Divergence: the rule of divergence.h after every step (a
+// non-finite state; kinetic + spring energy, with every potential that
+// counts with it, above blowup * E_s, E_s = model.energy_scale(), off when
+// E_s = 0; the rules of the scene's kinds of matter: fluids, bodies), with
+// a method's overshoot allowance. Throws std::invalid_argument for bad settings.
 // A run that starts from a state whose energy does not fit in a double
 // (coordinates near 1e300) diverges at t = 0. When settings.options.stop is
 // set and becomes true, simulate throws StopRequested at the next step.
@@ -91,9 +96,15 @@ RunResult simulate(const Model& model, const RunSettings& settings,
 // A pairing the method refuses before its first step (a material it has no
 // form for, the barrier with a projection method): prepare_integrator's
 // error. what() is the method's one line ("xpbd: ... use ...").
+// remedy(): the scene setting that would make it work, as data (or empty).
 class RunRefused : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit RunRefused(const std::string& what, SceneRemedy remedy = {})
+      : std::runtime_error(what), remedy_(std::move(remedy)) {}
+  const SceneRemedy& remedy() const { return remedy_; }
+
+ private:
+  SceneRemedy remedy_;
 };
 
 // What simulate() does before its first step: the settings' integrator,

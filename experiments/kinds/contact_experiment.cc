@@ -153,7 +153,7 @@ class ContactExperiment final : public TimedCasesExperiment {
   std::vector<TableSpec> tables() const override {
     return {{"", {"case", "scene", "integrator", "dt", "status", "t_final", "regime", "measured",
                   "theory", "min_gap", "energy_change", "steps", "newton_iterations",
-                  "wall_seconds", "failure"}}};
+                  "wall_seconds", "failure", "warnings"}}};
   }
 
   TaskOutput run_task(std::size_t index) const override {
@@ -175,7 +175,7 @@ class ContactExperiment final : public TimedCasesExperiment {
         .add(p.regime)
         .add(completed ? watch.measured : std::numeric_limits<double>::quiet_NaN())
         .add(p.theory).add(watch.min_gap).add(r.energy_final - r.energy_initial)
-        .add(r.stats.steps).add(r.stats.newton_iterations).add(r.wall_seconds).add(r.failure);
+        .add(r.stats.steps).add(r.stats.newton_iterations).add(r.wall_seconds).add(r.failure).add(warnings_cell(r));
     out.rows[0].push_back(row.str());
     return out;
   }

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "experiments/kinds/definition_methods.h"
 #include "experiments/kinds/experiment_support.h"
 #include "experiments/io/output_files.h"
 #include "models/core/strict_json.h"
@@ -76,7 +77,15 @@ LoadedExperiment parse_experiment(const std::string& json_text, const std::strin
   caps.kind = "definition";
   policy.caps = caps;
   const nlohmann::json json = parse_strict_json<nlohmann::json>(json_text, policy);
-  const DefinitionObject top(json, source, "");
+  // The methods it brings ("plugins", "python") are registered first; the
+  // kind reads the rest.
+  load_definition_methods(DefinitionObject(json, source, ""));
+  nlohmann::json for_kind = json;
+  if (for_kind.is_object()) {
+    for_kind.erase("plugins");
+    for_kind.erase("python");
+  }
+  const DefinitionObject top(for_kind, source, "");
   const std::string kind = top.string("experiment");
   for (const ExperimentKind* entry : experiment_kinds()) {
     const ExperimentKind& k = *entry;

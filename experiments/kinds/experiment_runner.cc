@@ -17,8 +17,10 @@
 #include <thread>
 
 #include "experiments/kinds/experiment.h"
+#include "experiments/kinds/integrator_facts.h"
 #include "experiments/io/output_files.h"
 #include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab {
 namespace {
@@ -342,6 +344,19 @@ ExperimentRunSummary run_experiment(const std::string& definition_path,
   settings["complete"] = summary.complete();
   settings["tasks_total"] = summary.tasks_total;
   settings["tasks_done"] = summary.tasks_done;
+  // The facts of the methods the definition brought (plug-ins, Python
+  // classes), which `springlab list --json` does not know: the report
+  // groups them by family beside the built-ins.
+  const std::string definition_text = loaded.definition.dump();
+  nlohmann::ordered_json own = nlohmann::ordered_json::array();
+  for (const std::string& name : integrator_names()) {
+    if (is_builtin_integrator(name) ||
+        definition_text.find("\"" + name + "\"") == std::string::npos) {
+      continue;
+    }
+    own.push_back(integrator_facts_json(name, make_integrator(name)->info()));
+  }
+  if (!own.empty()) settings["own_integrators"] = own;
   settings["definition"] = loaded.definition;
   settings["definition_digest"] = definition_digest(loaded);
   if (o.shard_count > 1) {

@@ -12,6 +12,7 @@
 #include "models/springs/springs.h"
 #include "models/model/scene_file.h"
 #include "models/model/element_registry.h"
+#include "experiments/driver/run_warnings.h"
 
 namespace springlab {
 
@@ -153,6 +154,14 @@ void check_time_grid(const DefinitionObject& o, const char* key, double dt, doub
   } catch (const std::invalid_argument& e) {
     o.fail(key, e.what());
   }
+}
+
+std::string warnings_cell(const RunResult& r) {
+  std::string cell;
+  for (const std::string& line : warning_texts(r.warnings, r.integrator)) {
+    cell += (cell.empty() ? "" : "; ") + line;
+  }
+  return cell;
 }
 
 }  // namespace springlab

@@ -65,6 +65,9 @@ inline constexpr std::size_t kMaxExperimentRows = 10'000'000;  // about 1.5 GB o
 void check_task_count(const DefinitionObject& o, const std::string& key, double tasks);
 void check_output_rows(const DefinitionObject& o, const std::string& key, double rows);
 std::string format_count(double count);  // whole, rounded up: "12000000", not "1.2e+07"
+// A run's warnings (run_warnings.h) for a table's "warnings" column: their
+// lines joined by "; " (empty when none).
+std::string warnings_cell(const RunResult& r);
 class SceneTotals {
  public:
   void add(const DefinitionObject& o, const std::string& key, const Scene& scene);

@@ -343,7 +343,7 @@ class FluidExperiment final : public Experiment {
                       "t_final", "steps", "force_evals", "newton_iterations", "wall_seconds",
                       "cpu_seconds", "cost_per_second", "Z_T2", "Z_T2_measured", "Z_T2_error",
                       "front_speed_max", "ritter_speed", "compression_max", "energy_initial",
-                      "viscous_work", "numerical", "particles", "failure"}},
+                      "viscous_work", "numerical", "particles", "failure", "warnings"}},
             {"reference", {"T", "Z"}},
             {"limits", {"sound", "c", "integrator", "particles", "h", "hydrostatic", "w_max",
                         "dt_theory", "C_theory", "dt_max_stable", "lo", "hi", "v_max",
@@ -455,7 +455,8 @@ class FluidExperiment final : public Experiment {
     if (simulated > 0.0) row.add(cpu / simulated); else row.add_empty();
     row.add(Z2).add(Z2_measured).add(Z2_error).add(fastest).add(f.ritter())
         .add(watch.compression_max).add(watch.energy_initial).add(watch.work_last)
-        .add(watch.numerical_last).add(static_cast<long>(scene_.particles.size())).add(r.failure);
+        .add(watch.numerical_last).add(static_cast<long>(scene_.particles.size())).add(r.failure)
+        .add(warnings_cell(r));
     out.rows[1].push_back(row.str());
   }
 

@@ -186,7 +186,7 @@ class ModeExperiment final : public Experiment {
     return {{"", {"scene", "integrator", "steps_per_period", "dt", "status", "diverged_at", "w",
                   "period_exact", "period", "period_predicted", "amplitude_per_period",
                   "amplitude_per_period_predicted", "steps", "force_evals", "wall_seconds",
-                  "failure"}},
+                  "failure", "warnings"}},
             {"series", {"scene", "integrator", "steps_per_period", "dt", "t", "q", "dq_over_w"}}};
   }
 
@@ -217,7 +217,7 @@ class ModeExperiment final : public Experiment {
         .add(period).add(p.period)
         .add(completed ? std::exp(watch.decay_rate() * period) : kNaN)
         .add(p.amplitude_per_period).add(r.stats.steps).add(r.stats.force_evals)
-        .add(r.wall_seconds).add(r.failure);
+        .add(r.wall_seconds).add(r.failure).add(warnings_cell(r));
     out.rows[0].push_back(row.str());
     return out;
   }

@@ -82,7 +82,7 @@ class MotionExperiment final : public TimedCasesExperiment {
     return {{"", {"scene", "integrator", "dt", "t", "past_blowup", "i", "x", "y", "z"}},
             {"frames", {"scene", "integrator", "dt", "t", "past_blowup", "energy"}},
             {"runs", {"scene", "integrator", "dt", "status", "diverged_at", "steps", "wall_seconds",
-                      "energy_initial", "energy_scale", "failure"}}};
+                      "energy_initial", "energy_scale", "failure", "warnings"}}};
   }
 
   TaskOutput run_task(std::size_t index) const override {
@@ -109,7 +109,8 @@ class MotionExperiment final : public TimedCasesExperiment {
     }
     Row run;
     run.raw(t.prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps)
-        .add(r.wall_seconds).add(r.energy_initial).add(model.energy_scale()).add(r.failure);
+        .add(r.wall_seconds).add(r.energy_initial).add(model.energy_scale()).add(r.failure)
+        .add(warnings_cell(r));
     out.rows[2].push_back(run.str());
     return out;
   }

@@ -227,7 +227,7 @@ class RigidExperiment final : public Experiment {
                       "energy_drift_max", "momentum_drift_max", "strain_max",
                       "orientation_error_max", "reversals", "first_reversal", "flip_period",
                       "reference_first_reversal", "reference_flip_period", "period_error",
-                      "steps", "wall_seconds", "failure"}},
+                      "steps", "wall_seconds", "failure", "warnings"}},
             {"kappa", {"kappa", "integrator", "dt", "t_end", "status", "strain_max",
                        "orientation_error_max", "energy_drift_max", "momentum_drift_max",
                        "flip_period", "reference_flip_period", "period_error"}},
@@ -296,7 +296,7 @@ class RigidExperiment final : public Experiment {
         .add(watch.error_max).add(static_cast<long>(watch.reversals.size()))
         .add(first_of(watch.reversals)).add(period).add(first_of(ref.reversals()))
         .add(ref_period).add(error_of(period, ref_period)).add(r.stats.steps)
-        .add(r.wall_seconds).add(r.failure);
+        .add(r.wall_seconds).add(r.failure).add(warnings_cell(r));
     out.rows[1].push_back(row.str());
   }
 

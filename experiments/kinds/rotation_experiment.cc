@@ -122,7 +122,7 @@ class RotationExperiment final : public Experiment {
                   "gyration"}},
             {"runs", {"scenario", "scene", "model", "integrator", "dt", "status", "diverged_at",
                       "kinetic_initial", "elastic_initial", "elastic_max", "gyration_max",
-                      "gyration_final", "steps", "wall_seconds", "failure"}}};
+                      "gyration_final", "steps", "wall_seconds", "failure", "warnings"}}};
   }
 
   std::size_t task_count() const override {
@@ -156,7 +156,7 @@ class RotationExperiment final : public Experiment {
         .add(e0.values()[model.energy_layout().find("kinetic")])
         .add(elastic < e0.values().size() ? e0.values()[elastic] : 0.0).add(rows.elastic_max)
         .add(rows.gyration_max).add(rows.gyration_last).add(r.stats.steps).add(r.wall_seconds)
-        .add(r.failure);
+        .add(r.failure).add(warnings_cell(r));
     out.rows[1].push_back(row.str());
     return out;
   }

@@ -135,7 +135,7 @@ class SolverErrorExperiment final : public Experiment {
                   "iterations", "failure"}},
             {"runs", {"case", "scene", "integrator", "variant", "dt", "status", "t_final",
                       "energy_initial", "energy_lost", "max_strain", "wall_seconds_per_step",
-                      "failure"}}};
+                      "failure", "warnings"}}};
   }
 
   std::size_t task_count() const override { return cases_.size() * variants_.size(); }
@@ -223,7 +223,7 @@ class SolverErrorExperiment final : public Experiment {
     row.raw(prefix);
     if (make_integrator(variant.integrator)->info().adaptive) {
       return row.add("skipped").add_empty().add_empty().add_empty().add_empty().add_empty()
-          .add("adaptive methods are not run whole").str();
+          .add("adaptive methods are not run whole").add_empty().str();
     }
     RunSettings run;
     run.integrator = variant.integrator;
@@ -238,7 +238,7 @@ class SolverErrorExperiment final : public Experiment {
         .add(springs > 0 ? strain.max_strain : std::numeric_limits<double>::quiet_NaN())
         .add(r.stats.steps > 0 ? r.wall_seconds / static_cast<double>(r.stats.steps)
                                : std::numeric_limits<double>::quiet_NaN())
-        .add(r.failure).str();
+        .add(r.failure).add(warnings_cell(r)).str();
   }
 
   // The tight implicit Euler trajectory and, at the sampled steps, the true

@@ -59,8 +59,6 @@ std::string stability_text(const IntegratorInfo& info) {
 
 std::string Integrator::check_options(const IntegratorOptions&, Eigen::Index) const { return {}; }
 
-IntegratorInfo Integrator::info_for(const IntegratorOptions&) const { return info_; }
-
 bool Integrator::assembles_jacobians(const MechanicalSystem&) const {
   return info_.implicit && !info_.jacobian_free;
 }
@@ -87,6 +85,8 @@ StepResult Integrator::initialize(const MechanicalSystem& system, double t0, con
   inv_mass_ = system.mass().cwiseInverse();
   return do_initialize();
 }
+
+IntegratorInfo Integrator::info_for(const IntegratorOptions&) const { return info_; }
 
 StepResult Integrator::advance_to(double t_out) {
   const double h = t_out - t_;

@@ -18,6 +18,7 @@
 
 #include "integrators/core/integrator_options.h"
 #include "models/core/mechanical_system.h"
+#include "models/core/refusal.h"
 
 namespace springlab {
 
@@ -35,11 +36,31 @@ struct IntegratorStats {
   long nonlinear_failures = 0;  // nonlinear solves that did not converge
 };
 
+// A weaker variant of a method that some of a run's steps fell back to
+// (docs/command-line.md "Warnings": the run reports it, with the number of
+// steps). Data, not prose: the driver's warnings print it.
+enum class Fallback {
+  // discrete-gradient: Gonzalez's generic discrete gradient for every force
+  // instead of a force's own (the rigid bodies' rigidity): energy still
+  // exact, but the step's angular momentum is not kept.
+  kGenericDiscreteGradient,
+};
+struct FallbackCount {
+  Fallback fallback = Fallback::kGenericDiscreteGradient;
+  long steps = 0;
+};
+
 struct StepResult {
   bool ok = true;
   std::string message;  // why it failed, naming the call / condition
+  // A refusal before the first step: the scene setting that would make the
+  // pairing work (models/core/refusal.h), or empty.
+  SceneRemedy remedy;
   static StepResult success() { return {}; }
-  static StepResult failure(std::string why) { return {false, std::move(why)}; }
+  static StepResult failure(std::string why) { return {false, std::move(why), {}}; }
+  static StepResult refusal(std::string why, SceneRemedy remedy) {
+    return {false, std::move(why), std::move(remedy)};
+  }
 };
 
 // What a method's stability region {z : |R(z)| <= 1} covers, R being one
@@ -131,11 +152,9 @@ class Integrator {
 
   const IntegratorInfo& info() const { return info_; }
   const std::string& name() const { return info_.name; }
-  // The declared properties at these options: where an option picks a
-  // member of a family (newmark's --beta and --gamma), its stability is that
-  // member's, not the default's (issue 46: `stability --integrator newmark
-  // --beta 0` printed the average-acceleration theory beside a measured
-  // 2 / w). By default info().
+  // What the method claims when run with `options`, where they change it
+  // (newmark's --beta and --gamma: --beta 0 is the central difference,
+  // stable for w h <= 2); by default info().
   virtual IntegratorInfo info_for(const IntegratorOptions& options) const;
 
   // Option values this method cannot take on a system of `dofs` position
@@ -150,6 +169,9 @@ class Integrator {
   // memory estimate counts the pattern only then (issue 46.5). By default
   // the implicit methods that are not Jacobian-free.
   virtual bool assembles_jacobians(const MechanicalSystem& system) const;
+  // The substeps one step takes with these options, for a method that reads
+  // --substeps (`run --json` reports it); 1 for the others.
+  virtual int substeps(const IntegratorOptions&) const { return 1; }
 
   // Binds the integrator to `system` and sets the initial state. An
   // integrator serves one system for one run: its caches (a symbolic
@@ -162,6 +184,16 @@ class Integrator {
   // Advances to t_out. A fixed-step method takes exactly one step of
   // h = t_out - t(); an adaptive one as many as it needs.
   virtual StepResult advance_to(double t_out);
+
+  // The steps that fell back to a weaker variant of the method so far, one
+  // entry per variant used (empty: none).
+  virtual std::vector<FallbackCount> fallbacks() const { return {}; }
+  // The method's overshoot (docs/command-line.md "Divergence"; the
+  // Newmark-alpha family, Hilber and Hughes 1978): the most steps an
+  // undamped stiff mode's energy can keep rising, at large w h, before the
+  // method damps it, with the options it was initialized with; 0: its steps
+  // do not overshoot.
+  virtual int overshoot_steps() const { return 0; }
 
   double t() const { return t_; }
   const Vector& x() const { return x_; }

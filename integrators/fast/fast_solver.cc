@@ -7,7 +7,7 @@ namespace springlab {
 StepResult FastSolver::do_initialize() {
   views_ = system().fast_solver_views();
   dim_ = views_ != nullptr ? views_->dimension_of_state() : 0;
-  std::string why = "this system has no projective form; use implicit-euler";
+  Refusal why{"this system has no projective form; use implicit-euler", {}};
   position_projections_.clear();
   const bool has_form =
       dim_ >= 1 &&
@@ -15,17 +15,18 @@ StepResult FastSolver::do_initialize() {
            ? views_->position_based_form(constraints_, elements_, position_projections_, why)
            : views_->projective_form(constraints_, elements_, why));
   if (!has_form) {
-    return StepResult::failure(name() + ": " + why);
+    return StepResult::refusal(name() + ": " + why.text, why.remedy);
   }
   views_->plane_constraints(planes_);
   for (const PlaneConstraint& plane : planes_) {
     if (!(plane.stiffness > 0.0)) {
       // A projection puts a particle on the plane, where the barrier's
       // energy is infinite.
-      return StepResult::failure(
+      return StepResult::refusal(
           name() + ": this scene's contact is the barrier, whose energy is infinite on the plane, "
                    "where a projection puts a particle; use the penalty contact with " + name() +
-          ", or implicit-euler with the barrier");
+              ", or implicit-euler with the barrier",
+          SceneRemedy{"contact", "0", "penalty"});
     }
   }
   const Eigen::Index n = system().dofs() / dim_;

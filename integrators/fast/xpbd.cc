@@ -99,7 +99,7 @@ void Xpbd::predict(double hs) {
 }
 
 StepResult Xpbd::do_step(double h) {
-  const int substeps = options().substeps > 0 ? options().substeps : kDefaultSubsteps;
+  const int substeps = this->substeps(options());
   const int iterations = options().iterations > 0 ? options().iterations : kDefaultIterations;
   const double hs = h / substeps;
   if (hs != compliance_hs_) {

@@ -58,6 +58,9 @@ class Xpbd final : public FastSolver {
   Xpbd();
   std::vector<std::string> options_read() const override { return {"iterations", "substeps"}; }
   static constexpr int kDefaultSubsteps = 10;
+  int substeps(const IntegratorOptions& o) const override {
+    return o.substeps > 0 ? o.substeps : kDefaultSubsteps;
+  }
   static constexpr int kDefaultIterations = 1;
 
  protected:

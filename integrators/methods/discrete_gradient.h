@@ -69,15 +69,31 @@
 
 namespace springlab {
 
+// A step whose Newton fails with the forces' own discrete gradients is
+// solved again as 2, then 4, then 8 substeps of h / n with them (each
+// substep keeps the energy and the angular momentum, so their composition
+// does); only when those fail too does it fall back to Gonzalez's generic
+// discrete gradient for every force in the whole step: energy still exact,
+// the angular momentum not (its torque above), and the run reports the
+// steps that did (Fallback::kGenericDiscreteGradient, a run warning).
+// tumbling-box at dt 0.05: |L| 0.3142 -> 0.0044 over 5 s when two steps
+// fell back to the generic gradient at once; with substeps first, kept.
 class DiscreteGradient final : public VelocityImplicitMethod {
  public:
   DiscreteGradient();
+  std::vector<FallbackCount> fallbacks() const override;
 
  protected:
   StepResult do_step(double h) override;
 
  private:
-  Vector v_new_;
+  // One step of h as n substeps with the scheme, from (t_, x_, v_); on
+  // success x_ and v_ hold its end (t_ is left to advance_to), on failure
+  // they are as before.
+  StepResult substeps(double h, int n, const VelocityImplicitScheme& scheme);
+
+  Vector v_new_, x_start_, v_start_;
+  long generic_steps_ = 0;
 };
 
 }  // namespace springlab

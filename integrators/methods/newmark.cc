@@ -54,6 +54,23 @@ NewmarkParameters Newmark::parameters(const IntegratorOptions& o) const {
   return {.beta = std::isnan(o.beta) ? 0.25 : o.beta, .gamma = std::isnan(o.gamma) ? 0.5 : o.gamma};
 }
 
+IntegratorInfo Newmark::info_for(const IntegratorOptions& o) const {
+  const NewmarkParameters p = parameters(o);
+  IntegratorInfo info = this->info();
+  if (p.beta == 0.25 && p.gamma == 0.5) return info;
+  std::ostringstream note;
+  note << "at --beta " << p.beta << " --gamma " << p.gamma;
+  info.stability_note = note.str();
+  info.stability_function = {};
+  info.spectral_radius_infinity = std::numeric_limits<double>::quiet_NaN();
+  if (p.gamma > 0.5) info.order = 1;
+  if (p.beta >= 0.5 * p.gamma) return info;  // A-stable (Hughes 9.1.2)
+  info.stability = StabilityKind::kConditional;
+  info.stability_limit = 1.0 / std::sqrt(0.5 * p.gamma - p.beta);
+  if (p.gamma == 0.5) info.energy_excursion = newmark_excursion(p.beta);
+  return info;
+}
+
 std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) const {
   const NewmarkParameters p = parameters(o);
   std::ostringstream why;
@@ -64,30 +81,6 @@ std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) con
     why << "--beta: must be in [0, 0.5], got " << given_text(p.beta);
   }
   return why.str();
-}
-
-IntegratorInfo Newmark::info_for(const IntegratorOptions& o) const {
-  const NewmarkParameters p = parameters(o);
-  if (p.beta == 0.25 && p.gamma == 0.5) return info();
-  IntegratorInfo i = info();
-  // The trapezoidal rule's R(z) and rho_inf = 1 are average acceleration's only.
-  i.stability_function = {};
-  i.spectral_radius_infinity = std::numeric_limits<double>::quiet_NaN();
-  i.energy_excursion = {};
-  i.order = p.gamma == 0.5 ? 2 : 1;  // gamma > 1/2: first order (Hughes 9.1.1)
-  const std::string member = "beta " + given_text(p.beta) + ", gamma " + given_text(p.gamma);
-  if (2.0 * p.beta >= p.gamma) {
-    i.stability = StabilityKind::kA;
-    i.stability_limit = kInfinity;
-    i.stability_note = member + ": 2 beta >= gamma" +
-                       (p.gamma > 0.5 ? "; gamma > 1/2 damps every mode and is first order" : "");
-  } else {
-    i.stability = StabilityKind::kConditional;
-    i.stability_limit = newmark_limit(p.beta, p.gamma);
-    i.stability_note = member + ": w h <= 1 / sqrt(gamma/2 - beta)";
-    if (p.gamma == 0.5) i.energy_excursion = newmark_excursion(p.beta);
-  }
-  return i;
 }
 
 CentralDifference::CentralDifference()

@@ -29,8 +29,11 @@ class Newmark final : public NewmarkFamily {
   Newmark();
   NewmarkParameters parameters(const IntegratorOptions& options) const override;
   std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const override;
-  // The member (beta, gamma): unconditionally stable for 2 beta >= gamma,
-  // otherwise for w h <= 1 / sqrt(gamma/2 - beta) (Hughes 9.1.2).
+  // The member --beta and --gamma select: unconditionally stable for
+  // beta >= gamma / 2 (gamma >= 1/2), else stable for
+  // w h <= 1 / sqrt(gamma/2 - beta) (Hughes 9.1.2, undamped), with the
+  // energy swing of a gamma = 1/2 member (newmark_excursion); R(z) only for
+  // average acceleration (the trapezoidal rule).
   IntegratorInfo info_for(const IntegratorOptions& options) const override;
 
  protected:

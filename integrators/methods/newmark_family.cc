@@ -1,5 +1,8 @@
 #include "integrators/methods/newmark_family.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace springlab {
 
 NewmarkParameters generalized_alpha_parameters(double rho_inf) {
@@ -21,6 +24,43 @@ NewmarkParameters hht_parameters(double alpha) {
   return p;
 }
 
+int newmark_overshoot_steps(const NewmarkParameters& p) {
+  const double am = p.alpha_m, af = p.alpha_f, beta = p.beta, gamma = p.gamma;
+  // Unconditionally stable (the header: Hughes 9.1)?
+  if (!(am <= af && af <= 0.5 && beta >= 0.25 + 0.5 * (af - am)) || !(gamma >= 0.5)) return 0;
+  // At w h = 1e3: the peak's step no longer depends on w h there (hht-alpha:
+  // step 5 at 1e3, 1e4 and 1e6), and the recurrence's round-off (terms of
+  // (w h)^2 cancelling) stays near 1e-10, below the 1e-6 that counts as a
+  // rise (at 1e6 it made newmark's conserved energy "rise").
+  const double w = 1.0, h = 1e3;
+  constexpr int kPhases = 16, kSteps = 2000;
+  int peak_step = 0;
+  for (int phase = 0; phase < kPhases; ++phase) {
+    const double theta = 2.0 * 3.141592653589793 * phase / kPhases;
+    double x = std::cos(theta), v = w * std::sin(theta), a = -w * w * x;
+    const double e0 = 0.5 * (v * v + w * w * x * x);
+    double peak = e0;
+    int at = 0;
+    for (int k = 1; k <= kSteps; ++k) {
+      // (1 - am) a' + am a = -w^2 ((1 - af) x' + af x), x' = x + h v + h^2 ((1/2 - beta) a + beta a').
+      const double rhs = -am * a - w * w * ((1.0 - af) * (x + h * v + h * h * (0.5 - beta) * a) +
+                                            af * x);
+      const double a_new = rhs / ((1.0 - am) + w * w * (1.0 - af) * h * h * beta);
+      const double x_new = x + h * v + h * h * ((0.5 - beta) * a + beta * a_new);
+      v += h * ((1.0 - gamma) * a + gamma * a_new);
+      x = x_new;
+      a = a_new;
+      const double e = 0.5 * (v * v + w * w * x * x);
+      if (e > peak) {
+        peak = e;
+        at = k;
+      }
+    }
+    if (peak > (1.0 + 1e-6) * e0) peak_step = std::max(peak_step, at);
+  }
+  return peak_step;
+}
+
 std::vector<std::string> NewmarkFamily::options_read() const {
   std::vector<std::string> read = {"newton-tol", "max-newton"};
   for (const std::string& option : parameter_options()) read.push_back(option);
@@ -34,6 +74,7 @@ StepResult NewmarkFamily::do_initialize() {
     return StepResult::failure(why);
   }
   p_ = parameters(options());
+  overshoot_ = newmark_overshoot_steps(p_);
   // a_0 from the equations of motion at the start (Hughes 9.1.1).
   eval_acceleration(t_, x_, v_, a_);
   return StepResult::success();

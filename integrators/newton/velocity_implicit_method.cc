@@ -77,7 +77,8 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
     result = checked_newton(NewtonPolicy::Matrices::kAlternating, start, v, again);
     if (result.ok) return result;
   }
-  if (!result.ok && system().jacobian_symmetric() && !linear_.out_of_memory()) {
+  if (!result.ok && s.definite_fallback && system().jacobian_symmetric() &&
+      !linear_.out_of_memory()) {
     // The definite fallback (see the header): projected Newton from the
     // step's start (or the kept state).
     ++mutable_stats().nonlinear_failures;

@@ -44,6 +44,12 @@ struct VelocityImplicitScheme {
   // (ForceTerm::has_discrete_gradient: the rigidity); false: Gonzalez's
   // for every force.
   bool own_discrete_gradients = true;
+  // Whether a step whose Newton fails may be solved by the definite
+  // ("projected") Newton (velocity_implicit_method.h). The discrete
+  // gradient with forces' own discrete gradients turns it off: its definite
+  // Newton never leaves the frozen potential (newton_policy.h), whose
+  // solution is Gonzalez's generic discrete gradient, not the step's.
+  bool definite_fallback = true;
   // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
   // are evaluated at the end (implicit Euler), 2 at the midpoint.
   double end = 1.0;

@@ -59,6 +59,13 @@ std::vector<std::string> integrator_names() {
 
 bool is_integrator(const std::string& name) { return integrator_registry().find(name) != nullptr; }
 
+bool is_builtin_integrator(const std::string& name) {
+#define SPRINGLAB_INTEGRATOR_NAME(ENTRY, ACCESSOR) ACCESSOR().name,
+  static const std::vector<std::string> builtin = {SPRINGLAB_INTEGRATORS(SPRINGLAB_INTEGRATOR_NAME)};
+#undef SPRINGLAB_INTEGRATOR_NAME
+  return std::find(builtin.begin(), builtin.end(), name) != builtin.end();
+}
+
 std::unique_ptr<Integrator> make_integrator(const std::string& name) {
   if (const IntegratorEntry* e = integrator_registry().find(name)) return e->make();
   throw std::invalid_argument(integrator_registry().unknown("integrator", name));

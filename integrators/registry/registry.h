@@ -24,6 +24,9 @@ void register_integrator(const IntegratorEntry& entry);
 // Sorted by name.
 std::vector<std::string> integrator_names();
 bool is_integrator(const std::string& name);
+// Whether `name` is one of springlab's own methods (not a plug-in's or a
+// Python class's, registered at run time).
+bool is_builtin_integrator(const std::string& name);
 // Throws std::invalid_argument naming the closest names and listing the
 // valid ones when `name` is unknown.
 std::unique_ptr<Integrator> make_integrator(const std::string& name);

@@ -181,8 +181,8 @@ class RigidityForce final : public ForceTerm {
   std::string_view name() const override { return "rigidity"; }
   bool conservative() const override { return true; }
 
-  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
-    why = "rigid bodies have no projective form (the affine body's rigidity kappa V |A^T A - I|^2 "
+  bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
+    why.text = "rigid bodies have no projective form (the affine body's rigidity kappa V |A^T A - I|^2 "
           "is not a projective energy of particles); use implicit-euler or another Newton method";
     return false;
   }
@@ -755,6 +755,12 @@ void add_random_body(Scene& scene, std::mt19937& rng, RandomStates states) {
   add_random_body_with(scene, rng, states, true);
 }
 
+// Its divergence rule: rigidity strain and, unforced, energy (body_verdict.cc).
+std::unique_ptr<DivergenceRule> make_body_divergence_rule(const Scene& scene,
+                                                          const ParticleOrder& order,
+                                                          const VerdictScale& scale);
+extern const char kBodyDivergenceSentence[];
+
 const ElementKind& body_kind() {
   static const ElementKind kind = {
       .name = "body",
@@ -765,6 +771,8 @@ const ElementKind& body_kind() {
       .write = write_bodies,
       .make = make_rigidity_force,
       .energy = {.name = "rigidity", .counts_with_spring = true},
+      .divergence_rule = make_body_divergence_rule,
+      .divergence_sentence = kBodyDivergenceSentence,
       .memory = body_memory,
       .add_random = add_random_body,
   };

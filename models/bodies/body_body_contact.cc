@@ -54,8 +54,8 @@ class BodyBodyContactForce final : public ForceTerm {
 
   std::string_view name() const override { return "body-body contact"; }
   bool conservative() const override { return true; }
-  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
-    why = "contact between rigid bodies has no projective form; use implicit-euler or another "
+  bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
+    why.text = "contact between rigid bodies has no projective form; use implicit-euler or another "
           "Newton method";
     return false;
   }

@@ -136,8 +136,8 @@ class BodySpringForce final : public ForceTerm {
     }
     return true;
   }
-  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
-    why = "a spring to a free body's point has no distance-constraint form (its end moves with "
+  bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
+    why.text = "a spring to a free body's point has no distance-constraint form (its end moves with "
           "the body's 12 unknowns); use implicit-euler or another Newton method";
     return false;
   }

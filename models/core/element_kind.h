@@ -32,12 +32,17 @@
 #include "models/core/memory_estimate.h"
 #include "models/core/scene.h"
 #include "models/core/scene_io.h"
+#include "models/core/verdict.h"
 
 namespace springlab {
 
 // Builds the kind's term from the scene, or returns nullptr when the scene
 // has nothing of this kind (an absent force costs nothing).
 using ForceFactory = std::unique_ptr<ForceTerm> (*)(const Scene&, const ParticleOrder&);
+// Builds the kind's divergence rule (verdict.h) for one model of the scene,
+// or returns nullptr when the scene has nothing it judges.
+using RuleFactory = std::unique_ptr<DivergenceRule> (*)(const Scene&, const ParticleOrder&,
+                                                        const VerdictScale&);
 
 // One top-level key of a scene file.
 struct SceneKey {
@@ -95,6 +100,18 @@ struct ElementKind {
   // Its term of docs/command-line.md "The command line"'s energy scale E_s per unit of free mass,
   // given the diameter d of the initial positions (gravity: |g| d, wind: |w_max|^2/2).
   double (*energy_scale_per_mass)(const Scene& scene, double diameter) = nullptr;
+  // Whether its force can feed energy into the scene (wind): a scene with
+  // such a kind is not unforced, and the bodies' energy rule (verdict.h)
+  // does not apply to it.
+  bool feeds_energy = false;
+
+  // Its divergence rule (verdict.h: fluids, bodies), which the run driver
+  // checks after every step beside the energy rule every scene has;
+  // nullptr: the energy rule alone judges it (springs, elements).
+  RuleFactory divergence_rule = nullptr;
+  // That rule in one sentence, "<matter>: <when it has diverged>", for
+  // `springlab list` and the docs (beside the rule's code and bounds).
+  std::string_view divergence_sentence = {};
 
   // Adds the kind's parts of the model's memory (memory_estimate.h), from
   // the scene alone: the bytes its term will hold and the Jacobian blocks it

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "models/core/mechanical_system.h"
+#include "models/core/refusal.h"
 
 namespace springlab {
 
@@ -103,7 +104,7 @@ class FastSolverViews {
   // projects them in this order.
   virtual bool projective_form(std::vector<DistanceConstraint>& constraints,
                                std::vector<ProjectiveElement>& elements,
-                               std::string& why) const = 0;
+                               Refusal& why) const = 0;
   // The position-based solvers' view (xpbd): projective_form's, where a
   // stiff force without that form may come instead as a PositionProjection
   // (appended to `projections`, which the solver then owns). The default
@@ -111,7 +112,7 @@ class FastSolverViews {
   virtual bool position_based_form(std::vector<DistanceConstraint>& constraints,
                                    std::vector<ProjectiveElement>& elements,
                                    std::vector<std::unique_ptr<PositionProjection>>& projections,
-                                   std::string& why) const {
+                                   Refusal& why) const {
     projections.clear();
     return projective_form(constraints, elements, why);
   }

@@ -216,8 +216,8 @@ class ForceTerm {
   // too: the model turns them into places) and returns true; false, with
   // `why`, where its energy has no projective form.
   virtual bool projective_elements(std::vector<ProjectiveElement>& /*out*/,
-                                   std::string& why) const {
-    why = std::string(name()) + " forces have no projective form";
+                                   Refusal& why) const {
+    why.text = std::string(name()) + " forces have no projective form";
     return false;
   }
   // A stiff conservative term with neither form whose constraints a

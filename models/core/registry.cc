@@ -56,8 +56,10 @@ std::vector<std::string> closest_names(std::string_view typed,
   std::stable_sort(scored.begin(), scored.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<std::string> out;
+  // A name equal but for case or separators is the one meant: no others.
+  const std::size_t slack = !scored.empty() && scored.front().first == 0 ? 0 : 1;
   for (const auto& [distance, name] : scored) {
-    if (out.size() == 3 || distance > scored.front().first + 1) break;
+    if (out.size() == 3 || distance > scored.front().first + slack) break;
     out.push_back(name);
   }
   return out;

@@ -238,7 +238,7 @@ void ElementTerm::declare_jacobian_blocks(JacobianPatternBuilder& builder) const
 }
 
 bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
-                                      std::string& why) const {
+                                      Refusal& why) const {
   std::vector<ProjectiveElement> mine;
   for (std::size_t e = 0; e < element_count(); ++e) {
     Shape s = shape(e);
@@ -251,7 +251,10 @@ bool ElementTerm::projective_elements(std::vector<ProjectiveElement>& out,
                  "with poisson >= 0 (the as-rigid-as-possible energy mu |F - R|^2 plus, for "
                  "poisson > 0, Bouaziz et al. 2014's volume term): use such a material, or "
                  "implicit-euler";
-      why = message.str();
+      why.text = message.str();
+      // What would make it work: a corotated material (validate_scene
+      // already refuses corotated with poisson < 0).
+      if (s.model->name != "corotated") why.remedy = {"model", "corotated", ""};
       return false;
     }
     // The volume term's weight: near rest (F = I, or orthonormal columns

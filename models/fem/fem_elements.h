@@ -98,7 +98,7 @@ class ElementTerm : public ForceTerm {
   bool conservative() const override { return true; }
   bool forbids_states() const override { return forbids_states_; }
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override;
-  bool projective_elements(std::vector<ProjectiveElement>& out, std::string& why) const override;
+  bool projective_elements(std::vector<ProjectiveElement>& out, Refusal& why) const override;
   bool laplacian_elements(std::vector<ProjectiveElement>& out) const override;
 
  protected:

@@ -10,12 +10,19 @@
 
 #include "models/core/force_term.h"
 #include "models/core/scene.h"
+#include "models/core/verdict.h"
 
 namespace springlab {
 
 std::unique_ptr<ForceTerm> make_fluid_pressure_force(const Scene& scene, const ParticleOrder& order);
 std::unique_ptr<ForceTerm> make_fluid_viscosity_force(const Scene& scene,
                                                       const ParticleOrder& order);
+
+// The fluids' divergence rule (fluid_verdict.cc; verdict.h).
+std::unique_ptr<DivergenceRule> make_fluid_divergence_rule(const Scene& scene,
+                                                           const ParticleOrder& order,
+                                                           const VerdictScale& scale);
+extern const char kFluidDivergenceSentence[];
 
 class SphParticles;
 // Position-based fluids' density constraints (fluid_density_projection.cc)

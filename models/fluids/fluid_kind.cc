@@ -318,6 +318,8 @@ const ElementKind& fluid_kind() {
       .write = write_fluids,
       .make = make_fluid_pressure_force,
       .energy = {.name = "pressure", .counts_with_spring = true},
+      .divergence_rule = make_fluid_divergence_rule,
+      .divergence_sentence = kFluidDivergenceSentence,
       .memory = fluid_memory,
       .add_random = add_random_fluid,
   };

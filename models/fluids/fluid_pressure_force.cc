@@ -63,8 +63,8 @@ class FluidPressureForce final : public ForceTerm {
     for (const auto& fluid : fluids_) own.push_back(*fluid);
     return make_fluid_density_projection(std::move(own), x_all0_, dim_, free_);
   }
-  bool projective_elements(std::vector<ProjectiveElement>&, std::string& why) const override {
-    why = "fluid forces have no projective form (xpbd runs them as position-based fluids)";
+  bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
+    why.text = "fluid forces have no projective form (xpbd runs them as position-based fluids)";
     return false;
   }
 

@@ -12,6 +12,7 @@
 #include "models/core/element_kind.h"
 #include "models/model/element_registry.h"
 #include "models/model/energy_layout.h"
+#include "models/model/scene_extent.h"
 
 namespace springlab {
 namespace {
@@ -85,6 +86,7 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
     if (kind->make == nullptr) continue;
     if (auto term = kind->make(scene_, order_)) {
       terms_.push_back(std::move(term));
+      fed_ = fed_ || kind->feeds_energy;
       const std::size_t column =
           kind->energy.name.empty() ? energy_layout_->columns.size()
                                     : energy_layout_->find(kind->energy.name);
@@ -112,34 +114,10 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
     }
   }
 
-  // docs/command-line.md "The command line": E_s = T(0) + U_spring(0) + sum_free m_i (|g| d +
-  // |w_max|^2 / 2), d the diameter of the initial positions' bounding box; each kind gives
-  // its term per unit of free mass (gravity |g| d, wind |w_max|^2 / 2).
-  double diameter2 = 0.0;
-  for (int r = 0; r < dim; ++r) {
-    double lo = INFINITY, hi = -INFINITY;
-    for (const Particle& p : scene_.particles) {
-      lo = std::min(lo, p.x[r]);
-      hi = std::max(hi, p.x[r]);
-    }
-    diameter2 += (hi - lo) * (hi - lo);
-  }
-  double diameter = std::sqrt(diameter2);
-  if (!bodies.bodies.empty()) {
-    // The bodies' surface vertices count as points of the scene.
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    for (const Particle& p : scene_.particles) {
-      lo = lo.cwiseMin(p.x);
-      hi = hi.cwiseMax(p.x);
-    }
-    for (const RigidBody& b : bodies.bodies) {
-      for (const Eigen::Vector3d& X : b.X) {
-        lo = lo.cwiseMin(b.p0 + b.A0 * X);
-        hi = hi.cwiseMax(b.p0 + b.A0 * X);
-      }
-    }
-    diameter = (hi - lo).norm();
-  }
+  // docs/command-line.md "Divergence": E_s = T(0) + U_spring(0) + sum_free m_i (|g| d +
+  // |w_max|^2 / 2), d the scene's extent of motion (scene_extent.h); each kind gives its term
+  // per unit of free mass (gravity |g| d, wind |w_max|^2 / 2).
+  const double diameter = extent_of_motion(scene_, bodies);
   double per_mass = 0.0;
   for (const ElementKind* kind : element_kinds()) {
     if (kind->energy_scale_per_mass != nullptr) {
@@ -152,6 +130,23 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
     if (bodies.first[b] >= 0) free_mass += bodies.bodies[b].mass.mass;
   }
   energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
+
+  // The kinds' divergence rules (verdict.h), given the scene's energy.
+  VerdictScale scale{
+      .energy_initial = e0.total(), .energy_scale = energy_scale_, .unforced = !fed_};
+  plane_constraints(scale.planes);
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->divergence_rule == nullptr) continue;
+    if (auto rule = kind->divergence_rule(scene_, order_, scale)) rules_.push_back(std::move(rule));
+  }
+}
+
+void Model::measure_divergence(const Vector& x, const Vector& v, double total,
+                                      std::vector<Verdict>& out) const {
+  out.clear();
+  if (rules_.empty()) return;
+  const Configuration c = configure(0.0, x, v);
+  for (const auto& rule : rules_) rule->measure(c, total, out);
 }
 
 // One pattern for dF/dx and dF/dv: the full diagonal plus every block a
@@ -444,25 +439,25 @@ bool Model::has_forbidden_states() const {
 
 bool Model::projective_form(std::vector<DistanceConstraint>& constraints,
                                    std::vector<ProjectiveElement>& elements,
-                                   std::string& why) const {
+                                   Refusal& why) const {
   return stiff_forms(constraints, elements, ElementForm::kProjective, why);
 }
 
 bool Model::laplacian_form(std::vector<DistanceConstraint>& constraints,
                                   std::vector<ProjectiveElement>& elements) const {
-  std::string why;
+  Refusal why;
   return stiff_forms(constraints, elements, ElementForm::kLaplacian, why);
 }
 
 bool Model::position_based_form(
     std::vector<DistanceConstraint>& constraints, std::vector<ProjectiveElement>& elements,
-    std::vector<std::unique_ptr<PositionProjection>>& projections, std::string& why) const {
+    std::vector<std::unique_ptr<PositionProjection>>& projections, Refusal& why) const {
   return stiff_forms(constraints, elements, ElementForm::kProjective, why, &projections);
 }
 
 bool Model::stiff_forms(std::vector<DistanceConstraint>& out,
                                std::vector<ProjectiveElement>& elements, ElementForm form,
-                               std::string& why,
+                               Refusal& why,
                                std::vector<std::unique_ptr<PositionProjection>>* projections) const {
   out.clear();
   elements.clear();

@@ -24,6 +24,7 @@
 #include "models/core/mechanical_system.h"
 #include "models/core/scene.h"
 #include "models/model/energy_layout.h"
+#include "models/core/verdict.h"
 
 namespace springlab {
 
@@ -78,13 +79,13 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   // FastSolverViews (fast_solver_views.h), gathered from the same terms.
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
-                       std::string& why) const override;
+                       Refusal& why) const override;
   bool laplacian_form(std::vector<DistanceConstraint>& constraints,
                       std::vector<ProjectiveElement>& elements) const override;
   bool position_based_form(std::vector<DistanceConstraint>& constraints,
                            std::vector<ProjectiveElement>& elements,
                            std::vector<std::unique_ptr<PositionProjection>>& projections,
-                           std::string& why) const override;
+                           Refusal& why) const override;
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
@@ -113,9 +114,19 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   // The same into `out` (made by energies() once), without allocating.
   void energies(const Vector& x, const Vector& v, Energies& out) const;
 
-  // docs/command-line.md "The command line"'s energy scale E_s = T(0) + U_spring(0) + sum_free m
-  // (|g| d + |w_max|^2/2) (U_spring: every potential that counts with the spring energy).
+  // docs/command-line.md "Divergence"'s energy scale E_s = T(0) + U_spring(0) + sum_free m
+  // (|g| d + |w_max|^2/2) (U_spring: every potential that counts with the spring energy; d the
+  // scene's extent of motion, scene_extent.h).
   double energy_scale() const { return energy_scale_; }
+
+  // The divergence rules of the scene's kinds (verdict.h: fluids, bodies),
+  // measured on the state (x, v) whose total energy (energies(x, v).total())
+  // is `total`: one Verdict per quantity into `out` (cleared first), each
+  // with its value, bound and where. Empty when no kind of the scene has a
+  // rule (springs and elements: the energy rule alone).
+  bool has_divergence_rules() const { return !rules_.empty(); }
+  void measure_divergence(const Vector& x, const Vector& v, double total,
+                          std::vector<Verdict>& out) const;
 
   // Positions/velocities of all particles in scene order, one row each
   // (fixed particles at their fixed place, with zero velocity).
@@ -155,6 +166,8 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   mutable bool derives_from_potentials_ = true;
   VelocityDependence velocity_dependence_ = VelocityDependence::kNone;
   double energy_scale_ = 0.0;
+  std::vector<std::unique_ptr<DivergenceRule>> rules_;
+  bool fed_ = false;  // a term of a kind that feeds energy in (wind): not unforced
 
   // Sum of the constant terms (gravity) in each ForcePart, all particles:
   // force() starts f from it (see ForceTerm::constant()).
@@ -177,7 +190,7 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   // With `projections`, a term that projects positions itself adds its
   // projection instead of failing.
   bool stiff_forms(std::vector<DistanceConstraint>& out, std::vector<ProjectiveElement>& elements,
-                   ElementForm form, std::string& why,
+                   ElementForm form, Refusal& why,
                    std::vector<std::unique_ptr<PositionProjection>>* projections = nullptr) const;
   // Which terms the fast solvers solve as constraints (distance
   // constraints, elements, position projections, contact planes:

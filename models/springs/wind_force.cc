@@ -147,6 +147,7 @@ const ElementKind& wind_kind() {
       .write = write_wind,
       .make = make_wind_force,
       .energy_scale_per_mass = wind_energy_scale,
+      .feeds_energy = true,
       .add_random = add_random_wind,
   };
   return kind;
