@@ -143,6 +143,39 @@ INSTANTIATE_TEST_SUITE_P(
                 "--merge and --shard: merge the shards in a run of its own, without --shard"}),
     [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
 
+// Issue 46: NaN was the method's default in disguise; a value out of range
+// is printed as given (not rounded into the range); two outputs at one new
+// path are refused before the run (it used to run, publish e2.csv, then
+// fail); a NUL byte is refused where it is read (/dev/zero: at once, not
+// after the 512 MiB cap).
+INSTANTIATE_TEST_SUITE_P(
+    Issue46, CliRefusal,
+    ::testing::Values(
+        Refusal{"BetaNan", run_args("newmark", {"--beta", "nan"}),
+                "--beta: must be a finite number (got nan)"},
+        Refusal{"GammaInfinite", run_args("newmark", {"--gamma", "inf"}),
+                "--gamma: must be a finite number (got inf)"},
+        Refusal{"AlphaNan", run_args("hht-alpha", {"--alpha", "nan"}),
+                "--alpha: must be a finite number (got nan)"},
+        Refusal{"RhoInfNan", run_args("generalized-alpha", {"--rho-inf", "nan"}),
+                "--rho-inf: must be a finite number (got nan)"},
+        Refusal{"BetaAsGiven", run_args("newmark", {"--beta", "0.5000001"}),
+                "--beta: must be in [0, 0.5], got 0.5000001"},
+        Refusal{"RhoInfAsGiven", run_args("generalized-alpha", {"--rho-inf", "1.0000001"}),
+                "--rho-inf: must be in [0, 1] (the spectral radius at infinity), got 1.0000001"},
+        Refusal{"EnergyAndVtkAtOneNewPath",
+                {"run", "oscillator", "--integrator", "rk4", "--dt", "0.1", "--t-end", "1",
+                 "--energy", "e2.csv", "--vtk", "e2.csv"},
+                "--energy e2.csv and --vtk e2.csv name the same path"},
+        Refusal{"TrajectoryAndVtkAtOneNewPath",
+                {"run", "oscillator", "--integrator", "rk4", "--dt", "0.1", "--t-end", "1",
+                 "--trajectory", "t.csv", "--vtk", "./t.csv"},
+                "--trajectory t.csv and --vtk ./t.csv name the same path"},
+        Refusal{"NulAtTheFirstByte", run_args("rk4", {}, "/dev/zero"),
+                "/dev/zero: malformed JSON: a NUL byte at line 1, column 1 (JSON text cannot hold "
+                "one)"}),
+    [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
+
 // Options a method does not read are named on stderr, and the run goes on.
 // Issue 38.8: counts past the experiment definitions' cap of 100000 (a
 // --substeps of 2147483647 spun for ever) and empty output names (an unset

@@ -10,15 +10,18 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -32,6 +35,7 @@
 #include "experiments/cli/check_command.h"
 #include "experiments/cli/integrator_table.h"
 #include "experiments/cli/parse_errors.h"
+#include "experiments/driver/memory_check.h"
 #include "experiments/io/output_files.h"
 #include "experiments/io/vtk_series.h"
 #include "experiments/io/signals.h"
@@ -100,10 +104,11 @@ std::string builtin_list() {
   return names;
 }
 
+// The shortest text that reads back as the value: a refusal prints it as
+// given (--t-end 1e-7, --dt-min 0.30000000000000004).
 std::string number_text(double value) {
-  std::ostringstream s;
-  s << value;
-  return s.str();
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
 }
 
 // Notes for the user on stderr, one line each.
@@ -246,6 +251,9 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
 // meets the check at run time only if it falls back to Newton.
 std::unique_ptr<Integrator> prepare_or_refuse(const Model& model, const RunSettings& run,
                                               const std::string& scene_arg) {
+  // The Jacobian pattern, before the method builds it (memory_check.h).
+  check_jacobian_memory(model, run.integrator,
+                        scene_arg.empty() ? "the scene" : printable(scene_arg));
   std::unique_ptr<Integrator> integrator = prepare_or_refuse_pairing(model, run, scene_arg);
   if (dynamic_cast<const VelocityImplicitMethod*>(integrator.get()) != nullptr &&
       run.options.solver != Solver::kQuasiNewton) {
@@ -337,9 +345,19 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  if (!energy_path.empty() && !trajectory_path.empty() && same_file(energy_path, trajectory_path)) {
-    throw UsageError("--energy " + printable(energy_path) + " and --trajectory " +
-                     printable(trajectory_path) + " name the same file");
+  // Two outputs at one path: refused before the run (issue 46.11: --energy
+  // and --vtk at one new path ran the whole run, then failed).
+  const std::pair<const char*, const std::string*> outputs[] = {
+      {"--energy", &energy_path}, {"--trajectory", &trajectory_path}, {"--vtk", &vtk_dir}};
+  for (std::size_t a = 0; a < 3; ++a) {
+    for (std::size_t b = a + 1; b < 3; ++b) {
+      const std::string &pa = *outputs[a].second, &pb = *outputs[b].second;
+      if (!pa.empty() && !pb.empty() && same_file(pa, pb)) {
+        throw UsageError(std::string(outputs[a].first) + " " + printable(pa) + " and " +
+                         outputs[b].first + " " + printable(pb) + " name the same " +
+                         (b == 2 ? "path" : "file"));
+      }
+    }
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
   TimeGrid grid;
@@ -378,6 +396,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
                std::to_string(scene.particles.size()) + " points x " +
                    std::to_string(static_cast<long long>(times)) + " frames");
   }
+  check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
   print_notes(common.check_against_method(model));
@@ -482,23 +501,46 @@ int command_run(CommonOptions& common, const std::string& energy_path,
 
 // The stability search's progress on a terminal: one line on stderr,
 // overwritten in place (nothing in the first second), naming the trial, its
-// step, the bracket so far and how far the trial has run.
+// step, the bracket so far, how far the trial has run and, once it has run
+// a while, how long it will take. A thread redraws it every second too: an
+// adaptive method's output interval can take many seconds (issue 46.14:
+// arkode-dirk on box-chain n=2, 7 s for each of a trial's 100 intervals, and
+// minutes without a line).
 class StabilityProgress final : public Observer {
  public:
   explicit StabilityProgress(std::string integrator)
-      : integrator_(std::move(integrator)), start_(Clock::now()), last_(start_) {}
+      : integrator_(std::move(integrator)), start_(Clock::now()), last_(start_),
+        ticker_([this] { tick(); }) {}
   ~StabilityProgress() override {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    ticker_.join();
     if (shown_) std::fprintf(stderr, "\r\033[K");
   }
   void trial(const StabilityTrial& t) {
+    std::lock_guard<std::mutex> lock(mutex_);
     trial_ = t;
-    show(0.0, true);
+    t_ = 0.0;
+    trial_start_ = Clock::now();
+    show(true);
   }
-  void observe(double t, const Vector&, const Vector&) override { show(t, false); }
+  void observe(double t, const Vector&, const Vector&) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    t_ = t;
+    show(false);
+  }
 
  private:
   using Clock = std::chrono::steady_clock;
-  void show(double t, bool force) {
+  void tick() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!wake_.wait_for(lock, std::chrono::seconds(1), [this] { return done_; })) show(true);
+  }
+  // (mutex_ held)
+  void show(bool force) {
     const auto now = Clock::now();
     if (now - start_ < std::chrono::seconds(1)) return;
     if (!force && now - last_ < std::chrono::milliseconds(200)) return;
@@ -509,14 +551,23 @@ class StabilityProgress final : public Observer {
       std::snprintf(bracket, sizeof bracket, ", bracket [%.4g, %.4g]", trial_.lo, trial_.hi);
     }
     std::fprintf(stderr, "\r\033[K[stability %s] run %d: dt %.4g%s, t = %.4g of %.4g s, %.0f s",
-                 integrator_.c_str(), trial_.run, trial_.dt, bracket, t, trial_.t_end,
+                 integrator_.c_str(), trial_.run, trial_.dt, bracket, t_, trial_.t_end,
                  std::chrono::duration<double>(now - start_).count());
+    // The trial's time left at its pace so far (as run's progress line).
+    const double spent = std::chrono::duration<double>(now - trial_start_).count();
+    if (t_ > 0.0 && spent >= 1.0) {
+      std::fprintf(stderr, ", this run about %.0f s more", spent * (trial_.t_end - t_) / t_);
+    }
     std::fflush(stderr);
   }
   std::string integrator_;
   StabilityTrial trial_;
-  Clock::time_point start_, last_;
-  bool shown_ = false;
+  double t_ = 0.0;
+  Clock::time_point start_, last_, trial_start_ = start_;
+  bool shown_ = false, done_ = false;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::thread ticker_;  // last: started once the rest is set
 };
 
 int command_stability(CommonOptions& common, StabilitySettings& s) {
@@ -535,6 +586,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     }
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
+  check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
   print_notes(common.check_against_method(model));
