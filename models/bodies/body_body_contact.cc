@@ -189,6 +189,9 @@ void add_random_body_pair(Scene& scene, std::mt19937& rng, RandomStates states) 
     if (scene.get<Planes>().empty()) plane_kind().add_random(scene, rng, states);
     return;
   }
+  // Bodies meet only under the penalty model (the barrier is refused
+  // between bodies: check_no_barrier_between_bodies).
+  scene.block<Contact>().model = ContactModel::kPenalty;
   const std::size_t first = scene.get<Bodies>().size();
   add_random_body_with(scene, rng, states, false);
   add_random_body_with(scene, rng, states, false);
