@@ -1,5 +1,5 @@
-// Contact between rigid bodies (models/body_body_contact.cc,
-// models/body_body_friction.cc, docs/physics.md "Contact between bodies"):
+// Contact between rigid bodies (models/bodies/body_body_contact.cc,
+// models/bodies/body_body_friction.cc, docs/physics.md "Contact between bodies"):
 // the pair force conserves the total momenta through a collision; friction
 // acts at one place (no torque) and decelerates a sliding box at mu g; a
 // box on a tilted box sticks below the friction angle and slides at
@@ -17,19 +17,20 @@
 #include <numbers>
 #include <string>
 
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/body_contacts.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/springs.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/bodies/body_contacts.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/springs/springs.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
 
-RunResult run(const ElasticModel& model, const std::string& integrator, double dt, double t_end,
+RunResult run(const Model& model, const std::string& integrator, double dt, double t_end,
               double newton_tol, std::vector<Observer*> observers = {}) {
   RunSettings s;
   s.integrator = integrator;
@@ -108,7 +109,7 @@ Apart apart(const Scene& scene, const Vector& x) {
 // 1.5 % relative over the collision (below 3 %).
 TEST(BodyContact, ACollisionConservesTotalMomentum) {
   const Scene scene = collision(0.0);
-  const ElasticModel model(scene);
+  const Model model(scene);
   Eigen::Vector3d P0, L0, P, L;
   total_momentum(scene, model.initial_positions(), model.initial_velocities(), P0, L0);
   const RunResult r = run(model, "verlet", 1e-4, 0.5, 1e-13);
@@ -139,12 +140,12 @@ TEST(BodyContact, ACollisionConservesTotalMomentum) {
 // than 5 %).
 TEST(BodyContact, FrictionBetweenBodiesIsAPairForceAtOnePoint) {
   const Scene scene = collision(0.5);
-  const ElasticModel model(scene);
+  const Model model(scene);
   Eigen::Vector3d P0, L0, P, L;
   total_momentum(scene, model.initial_positions(), model.initial_velocities(), P0, L0);
   class Torques final : public Observer {
    public:
-    explicit Torques(const ElasticModel& m) : model(m) {}
+    explicit Torques(const Model& m) : model(m) {}
     void observe(double t, const Vector& x, const Vector& v) override {
       Vector f;
       model.force(t, x, v, f);
@@ -161,7 +162,7 @@ TEST(BodyContact, FrictionBetweenBodiesIsAPairForceAtOnePoint) {
         ++loaded;
       }
     }
-    const ElasticModel& model;
+    const Model& model;
     double worst = 0.0;
     int loaded = 0;
   } torques(model);
@@ -173,7 +174,7 @@ TEST(BodyContact, FrictionBetweenBodiesIsAPairForceAtOnePoint) {
   EXPECT_LT((P - P0).norm() / P0.norm(), 1e-10);
   RecordProperty("friction_L_drift", std::to_string((L - L0).norm() / L0.norm()));
 
-  const ElasticModel smooth(collision(0.0));
+  const Model smooth(collision(0.0));
   const RunResult without = run(smooth, "implicit-midpoint", 1e-3, 0.5, 1e-13);
   ASSERT_EQ(without.status, RunStatus::kCompleted) << without.failure;
   const BodyLayout layout = body_layout(scene, 0);
@@ -237,7 +238,7 @@ TEST(BodyContact, ABoxOnATiltedBoxSticksBelowTheFrictionAngleAndSlidesAbove) {
   {
     const double theta = 20.0 * std::numbers::pi / 180.0;
     const Scene scene = cube_on_tilted_box(theta, 0.5);
-    const ElasticModel model(scene);
+    const Model model(scene);
     const RunResult r = run(model, "implicit-euler", 1e-3, 1.0, 1e-9);
     ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
     const double speed = along_slope(scene, r.v_final, theta);
@@ -247,7 +248,7 @@ TEST(BodyContact, ABoxOnATiltedBoxSticksBelowTheFrictionAngleAndSlidesAbove) {
   {
     const double theta = 30.0 * std::numbers::pi / 180.0, mu = 0.3;
     const Scene scene = cube_on_tilted_box(theta, mu);
-    const ElasticModel model(scene);
+    const Model model(scene);
     const RunResult early = run(model, "implicit-euler", 1e-3, 0.2, 1e-9);
     const RunResult late = run(model, "implicit-euler", 1e-3, 0.6, 1e-9);
     ASSERT_EQ(early.status, RunStatus::kCompleted) << early.failure;
@@ -292,7 +293,7 @@ TEST(BodyContact, ABoxSlidingOnAFixedBoxDeceleratesAtMuG) {
   scene.block<Bodies>().push_back(table);
   scene.block<Bodies>().push_back(cube);
   validate_scene(scene, "slide");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const RunResult r = run(model, "implicit-euler", 1e-3, T, 1e-8);
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const BodyLayout layout = body_layout(scene, 0);
@@ -342,7 +343,7 @@ TEST(BodyContact, TheContactEnergyIsContinuousAsABoxSweepsPastAnEdge) {
   scene.block<Bodies>().push_back(table);
   scene.block<Bodies>().push_back(cube);
   validate_scene(scene, "sweep");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const std::size_t column = model.energy_layout().find("contact");
   auto largest_change = [&](double spacing) {
     Vector x = model.initial_positions();
@@ -376,7 +377,7 @@ TEST(BodyContact, TheContactEnergyIsContinuousAsABoxSweepsPastAnEdge) {
 TEST(BodyContact, ATwoBoxStackComesToRestAndItsContactsCarryItsWeight) {
   const Scene scene = make_builtin_scene("box-pile", {{"n", "2"}});
   ASSERT_EQ(scene.get<Contact>().model, ContactModel::kBarrier);
-  const ElasticModel model(scene);
+  const Model model(scene);
   class Gaps final : public Observer {
    public:
     explicit Gaps(const Scene& s) : scene(s) {}

@@ -12,8 +12,8 @@
 #include <random>
 #include <vector>
 
-#include "models/body_distance.h"
-#include "models/mass_properties.h"
+#include "models/bodies/body_distance.h"
+#include "models/bodies/mass_properties.h"
 
 namespace springlab {
 namespace {

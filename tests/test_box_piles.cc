@@ -12,13 +12,14 @@
 #include <cmath>
 #include <string>
 
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/body_contacts.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/elastic_model.h"
-#include "models/scene.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/bodies/body_contacts.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/model/model.h"
+#include "models/model/scene_file.h"
+#include "models/core/scene.h"
 
 namespace springlab {
 namespace {
@@ -32,7 +33,7 @@ std::string scene_file(const std::string& name) {
 // the largest rise of the total energy from one state to the next.
 class Watch final : public Observer {
  public:
-  Watch(const ElasticModel& model)
+  Watch(const Model& model)
       : model_(model), finder_(model.scene(), body_layout(model.scene(), 0)) {}
   void observe(double, const Vector& x, const Vector& v) override {
     finder_.place(x.data());
@@ -50,12 +51,12 @@ class Watch final : public Observer {
   long states = 0;
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
   BodyContactFinder finder_;
   double previous_ = 0.0;
 };
 
-RunResult run(const ElasticModel& model, const std::string& integrator, double dt, double t_end,
+RunResult run(const Model& model, const std::string& integrator, double dt, double t_end,
               std::vector<Observer*> observers = {}) {
   RunSettings s;
   s.integrator = integrator;
@@ -64,7 +65,7 @@ RunResult run(const ElasticModel& model, const std::string& integrator, double d
   return simulate(model, s, observers);
 }
 
-std::vector<BodyState> states_of(const ElasticModel& model, const RunResult& r) {
+std::vector<BodyState> states_of(const Model& model, const RunResult& r) {
   const BodyLayout layout = body_layout(model.scene(), 0);
   std::vector<BodyState> out;
   for (std::size_t b = 0; b < layout.bodies.size(); ++b) {
@@ -75,7 +76,7 @@ std::vector<BodyState> states_of(const ElasticModel& model, const RunResult& r) 
 
 // A pile stands: every box above the one below it, its centre within
 // `offset` of that one's vertical axis, all still (speeds below `speed`).
-void expect_stands(const ElasticModel& model, const RunResult& r, double offset, double speed) {
+void expect_stands(const Model& model, const RunResult& r, double offset, double speed) {
   const std::vector<BodyState> s = states_of(model, r);
   for (std::size_t i = 0; i < s.size(); ++i) {
     EXPECT_LT(s[i].dp.norm(), speed) << "box " << i;
@@ -93,7 +94,7 @@ void expect_stands(const ElasticModel& model, const RunResult& r, double offset,
 // convex contact energy within each step); the pile stands, its boxes still
 // and within 2 mm of each other's axes.
 TEST(BoxPiles, ThePileOfEightStandsUnderImplicitEulerAtAFrameStep) {
-  const ElasticModel model(make_builtin_scene("box-pile", {{"n", "8"}}));
+  const Model model(make_builtin_scene("box-pile", {{"n", "8"}}));
   Watch watch(model);
   const RunResult r = run(model, "implicit-euler", 1.0 / 60.0, 5.0, {&watch});
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -108,7 +109,7 @@ TEST(BoxPiles, ThePileOfEightStandsUnderImplicitEulerAtAFrameStep) {
 
 // The same pile at 1 ms for 5 s under implicit Euler and BDF2.
 TEST(BoxPiles, ThePileOfEightStandsAtAMillisecond) {
-  const ElasticModel model(make_builtin_scene("box-pile", {{"n", "8"}}));
+  const Model model(make_builtin_scene("box-pile", {{"n", "8"}}));
   for (const char* method : {"implicit-euler", "bdf2"}) {
     SCOPED_TRACE(method);
     Watch watch(model);
@@ -122,7 +123,7 @@ TEST(BoxPiles, ThePileOfEightStandsAtAMillisecond) {
 
 // box-tower: 10 equal boxes, implicit Euler at 1/60 s for 5 s.
 TEST(BoxPiles, TheTowerOfTenStandsUnderImplicitEulerAtAFrameStep) {
-  const ElasticModel model(make_builtin_scene("box-tower", {}));
+  const Model model(make_builtin_scene("box-tower", {}));
   ASSERT_EQ(model.scene().get<Bodies>().size(), 10u);
   Watch watch(model);
   const RunResult r = run(model, "implicit-euler", 1.0 / 60.0, 5.0, {&watch});
@@ -141,7 +142,7 @@ TEST(BoxPiles, TheTowerOfTenStandsUnderImplicitEulerAtAFrameStep) {
 TEST(BoxPiles, ABoxRestsOnALyingCylinderAndAnIcosahedronOnABox) {
   for (const char* name : {"box-on-cylinder.json", "icosahedron-on-box.json"}) {
     SCOPED_TRACE(name);
-    const ElasticModel model(load_scene_file(scene_file(name)));
+    const Model model(load_scene_file(scene_file(name)));
     Watch watch(model);
     const RunResult r = run(model, "implicit-euler", 1.0 / 60.0, 3.0, {&watch});
     ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -158,7 +159,7 @@ TEST(BoxPiles, ABoxRestsOnALyingCylinderAndAnIcosahedronOnABox) {
 // box, 0.41 ms for the top one of three) symplectic Euler ends the pile
 // diverged, with a message that says what happened and what to try.
 TEST(BoxPiles, AnExplicitMethodPastItsLimitSaysSo) {
-  const ElasticModel model(make_builtin_scene("box-pile", {{"n", "3"}}));
+  const Model model(make_builtin_scene("box-pile", {{"n", "3"}}));
   for (double dt : {1e-3, 5e-4}) {
     const RunResult r = run(model, "symplectic-euler", dt, 1.0);
     EXPECT_EQ(r.status, RunStatus::kDiverged) << dt;

@@ -22,9 +22,14 @@ LAB_FILE = "lab.html"  # the lab page's name next to index.html
 
 def collect_names(experiments, integrators):
     """Every integrator the data names; methods integrators.json does not
-    list are learned from the tables (their `adaptive` column where there is one)."""
+    list are learned from the settings' "own_integrators" (a plug-in's or a
+    Python class's facts) or else from the tables (their `adaptive` column
+    where there is one)."""
     names = set()
     for e in experiments:
+        # Methods the experiment brought (plug-ins, Python classes): their facts.
+        for entry in e.settings.get("own_integrators", []) or []:
+            integrators.learn_entry(entry)
         for t in e.tables.values():
             if not t.has("integrator"):
                 continue
@@ -129,7 +134,7 @@ def main(argv=None):
                        attempt(errors, "benchmarks", bench_section.render, bench, ctx)))
     else:
         notes.append("Step cost: no benchmark file (%s in the data directory, or --bench "
-                     "FILE.json): skipped. `cmake --build --preset bench` makes one."
+                     "FILE.json): skipped. `cmake --workflow --preset bench` makes one."
                      % bench_section.BENCH_FILE)
     intro = ("<p>Experiment results from <code>%s/</code>, drawn by <code>report/"
              "make_report.py</code>. Each section says what theory predicts, shows the figure, "
