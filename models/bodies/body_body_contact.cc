@@ -109,7 +109,11 @@ class BodyBodyContactForce final : public ForceTerm {
   void add_force(const Configuration& c, double* f) const override {
     for (const BodyContact& k : current(c.x)) {
       const ContactPhi phi = law_.between_bodies(gap(k, c.x));
-      if (phi.slope == 0.0) continue;
+      // Live, no force where the gap has closed (phi' is NaN there): an
+      // explicit step that lands there ends with the interpenetration named
+      // (forbidden_state), not with a NaN. Within an implicit step the NaN
+      // stays: the line search rejects such a trial at once.
+      if (phi.slope == 0.0 || (!lagged_ && std::isnan(phi.slope))) continue;
       const std::array<int, 8> index = BodyPairBlocks::unknowns(finder_, k.a, k.b);
       const std::array<double, 8> w = gap_weights(k);
       for (std::size_t u = 0; u < 8; ++u) {
