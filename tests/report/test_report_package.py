@@ -1172,6 +1172,22 @@ class FakeExp:
         return self._table
 
 
+class RigidStrainWindows(unittest.TestCase):
+    """The strain panel draws each window's maximum: a ramp's maximum is its
+    value at the window's right end, and an empty window is left out."""
+
+    def test_window_max_of_a_ramp(self):
+        from springlab_report.kinds.rigid import window_max
+        t = np.linspace(0.0, 4.0, 401)
+        centres, top = window_max(t, 2 * t, 4)
+        np.testing.assert_allclose(centres, [0.5, 1.5, 2.5, 3.5])
+        # windows [0,1), [1,2), [2,3), [3,4]: the last sample before each edge
+        np.testing.assert_allclose(top, [1.98, 3.98, 5.98, 8.0])
+        gap = np.array([0.0, 0.1, 3.9, 4.0])
+        centres, top = window_max(gap, gap, 4)
+        np.testing.assert_allclose(centres, [0.5, 3.5])
+
+
 class Styles(unittest.TestCase):
     def test_colours_and_markers_come_from_the_integrator_table(self):
         s = Scratch()
