@@ -70,8 +70,10 @@ class ProjectiveDynamics final : public FastSolver {
  public:
   ProjectiveDynamics();
   std::vector<std::string> options_read() const override {
-    return {"iterations", "chebyshev"};
+    return {"iterations", "chebyshev", "no-chebyshev"};
   }
+  // --chebyshev without RHO: projective dynamics has no rho of its own.
+  std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const override;
   static constexpr int kDefaultIterations = 10;
 
   // A distance constraint as the local step reads it, in 24 bytes: b < 0

@@ -16,6 +16,7 @@
 #include "integrators/rk4.h"
 #include "integrators/symplectic_euler.h"
 #include "integrators/tr_bdf2.h"
+#include "integrators/vbd.h"
 #include "integrators/verlet.h"
 #include "integrators/xpbd.h"
 #include "integrators/yoshida.h"
@@ -62,6 +63,7 @@ const std::vector<Entry>& registry() {
       entry<RungeKutta4>(),
       entry<SymplecticEuler>(),
       entry<TrBdf2>(),
+      entry<Vbd>(),
       entry<VelocityVerlet>(),
       entry<Xpbd>(),
       entry<Yoshida4>(),
