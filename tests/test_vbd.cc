@@ -12,22 +12,22 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "integrators/vbd.h"
-#include "integrators/vertex_colouring.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/scene.h"
-#include "models/springs.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "integrators/fast/vbd.h"
+#include "integrators/fast/vertex_colouring.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
 
 namespace springlab {
 namespace {
 
 // One step of h from (x0, v0) of `scene`: the method's end positions.
-Vector one_step(const ElasticModel& model, const std::string& method, double h,
+Vector one_step(const Model& model, const std::string& method, double h,
                 const IntegratorOptions& options) {
   std::unique_ptr<Integrator> integrator = make_integrator(method);
   StepResult r = integrator->initialize(model, 0.0, model.initial_positions(),
@@ -38,14 +38,14 @@ Vector one_step(const ElasticModel& model, const std::string& method, double h,
   return integrator->x();
 }
 
-Vector newton_step(const ElasticModel& model, double h) {
+Vector newton_step(const Model& model, double h) {
   IntegratorOptions tight;
   tight.newton_tol = 1e-13;
   return one_step(model, "implicit-euler", h, tight);
 }
 
 // rho 0: no Chebyshev acceleration.
-Vector vbd_step(const ElasticModel& model, double h, int iterations, double rho) {
+Vector vbd_step(const Model& model, double h, int iterations, double rho) {
   IntegratorOptions o;
   o.iterations = iterations;
   if (rho == 0.0) o.no_chebyshev = true;
@@ -61,7 +61,7 @@ TEST(Vbd, OneIterationIsImplicitEulerOnOneParticle) {
   Scene s = make_builtin_scene("oscillator", {{"k", "400"}, {"amplitude", "0.3"}});
   s.block<Gravity>().acceleration = {0.0, -9.81, 0.0};
   s.particles[1].v = {0.5, -1.0, 0.0};
-  const ElasticModel model(s);
+  const Model model(s);
   const Vector euler = newton_step(model, 0.05);
   const Vector vbd = vbd_step(model, 0.05, 1, 0.0);
   EXPECT_LT((vbd - euler).norm(), 1e-13 * euler.norm());
@@ -76,7 +76,7 @@ TEST(Vbd, OneIterationIsImplicitEulerOnOneParticle) {
 // 64, 7.3e-13 m with rho 0.9).
 void expect_converges_to_newton(const Scene& scene, const std::vector<int>& iterations,
                                 double rho) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double h = 1.0 / 60.0;
   const Vector euler = newton_step(model, h);
   double previous = std::numeric_limits<double>::infinity();
@@ -108,7 +108,7 @@ TEST(Vbd, ParticleBlocksAreTheModelsForceAndJacobianBlocks) {
   Scene s = make_builtin_scene("cloth", {{"n", "5"}, {"drag", "0.3"}, {"wind", "2"},
                                          {"ground", "0.05"}});
   for (Spring& spring : s.block<Springs>()) spring.damping = 0.2;
-  const ElasticModel model(s);
+  const Model model(s);
   const int d = model.dimension();
   const Eigen::Index n = model.dofs();
   Vector x = model.initial_positions(), v = Vector::Zero(n);
@@ -152,7 +152,7 @@ TEST(Vbd, ParticleBlocksAreTheModelsForceAndJacobianBlocks) {
 // the largest number of neighbours.
 TEST(Vbd, ColouringSeparatesCoupledParticles) {
   for (const char* scene : {"cloth", "block"}) {
-    const ElasticModel model(make_builtin_scene(scene, {{"n", "6"}}));
+    const Model model(make_builtin_scene(scene, {{"n", "6"}}));
     const int d = model.dimension();
     const int particles = static_cast<int>(model.dofs() / d);
     const SparseMatrix& pattern = model.jacobian_pattern();
@@ -205,7 +205,7 @@ class LowestGap final : public Observer {
 };
 
 TEST(Vbd, ContactStepCapKeepsEveryGapOpen) {
-  const ElasticModel model(hurled_at_a_barrier());
+  const Model model(hurled_at_a_barrier());
   for (int iterations : {1, 2, 10}) {
     for (bool chebyshev : {false, true}) {
       RunSettings s;
@@ -251,7 +251,7 @@ TEST(Vbd, ContactStepCapKeepsEveryGapOpen) {
 // a = -1 / (g^T F^-1 dx) (det(F + a dx g^T) = det F (1 + a g^T F^-1 dx)):
 // there its volume is zero, a little before it is positive.
 TEST(Vbd, ElementCapIsWhereTheTetrahedronInverts) {
-  const ElasticModel model(make_builtin_scene("block", {{"n", "1"}}));
+  const Model model(make_builtin_scene("block", {{"n", "1"}}));
   const VertexBlockView& view = *model.vertex_block_view();
   Vector x_all = model.initial_positions();
   view.fill_fixed(x_all);
@@ -271,7 +271,7 @@ TEST(Vbd, ElementCapIsWhereTheTetrahedronInverts) {
 // What the method refuses, with what to use.
 TEST(Vbd, RefusesRigidBodiesAndFluidsNamingImplicitEuler) {
   for (const char* scene : {"tumbling-box", "dam-break"}) {
-    const ElasticModel model(make_builtin_scene(scene));
+    const Model model(make_builtin_scene(scene));
     std::unique_ptr<Integrator> vbd = make_integrator("vbd");
     const StepResult r = vbd->initialize(model, 0.0, model.initial_positions(),
                                          model.initial_velocities(), {});
