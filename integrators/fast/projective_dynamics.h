@@ -74,6 +74,10 @@ class ProjectiveDynamics final : public FastSolver {
   }
   // --chebyshev without RHO: projective dynamics has no rho of its own.
   std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const override;
+  // It reads dF/dv once where the damping is diagonal (read_linear_damping).
+  bool assembles_jacobians(const MechanicalSystem& system) const override {
+    return system.velocity_dependence() == VelocityDependence::kDiagonal;
+  }
   static constexpr int kDefaultIterations = 10;
 
   // A distance constraint as the local step reads it, in 24 bytes: b < 0

@@ -84,6 +84,9 @@ class Vbd final : public Integrator {
   int substeps(const IntegratorOptions& o) const override {
     return o.substeps > 0 ? o.substeps : kDefaultSubsteps;
   }
+  // It colours the vertices from the Jacobian's pattern, so the model builds
+  // the pattern (the memory estimate counts it).
+  bool assembles_jacobians(const MechanicalSystem&) const override { return true; }
   static constexpr double kDefaultRho = 0.9;
   // The fraction of the distance to a forbidden state one local step may
   // cover.

@@ -40,14 +40,12 @@ class FluidViscosityForce final : public ForceTerm {
  public:
   FluidViscosityForce(std::vector<std::shared_ptr<SphParticles>> fluids, std::vector<double> nu,
                       int dim,
-                      int free_particles, const double* x_all)
+                      int free_particles, std::vector<double> x_all)
       : fluids_(std::move(fluids)),
         nu_(std::move(nu)),
         dim_(dim),
         free_(free_particles),
-        pattern_(1.0, dim) {
-    pattern_.follow(fluids_, x_all);
-  }
+        pattern_(1.0, dim, std::move(x_all)) {}
 
   std::string_view name() const override { return "fluid-viscosity"; }
   bool conservative() const override { return false; }
@@ -172,9 +170,9 @@ std::unique_ptr<ForceTerm> make_fluid_viscosity_force(const Scene& scene,
     nu.push_back((*fluids)[k].viscosity);
   }
   if (particles.empty()) return nullptr;
-  const std::vector<double> x = internal_positions(scene, order);
   return std::make_unique<FluidViscosityForce>(std::move(particles), std::move(nu), order.dim,
-                                               order.free_particles, x.data());
+                                               order.free_particles,
+                                               internal_positions(scene, order));
 }
 
 const ElementKind& fluid_kind();               // fluid_kind.cc
