@@ -302,6 +302,28 @@ class Motion(unittest.TestCase):
                       "-0.2 E_s", page)
 
 
+class MotionDampingContrast(unittest.TestCase):
+    """Runs that keep the energy beside runs that damp it are told apart in
+    one sentence; none when all agree."""
+
+    def panel(self, name, change, status="completed"):
+        """A run whose energy changes by `change` E_s (E_s = 2 J)."""
+        return {"name": name, "status": status, "Es": 2.0, "energy": [1.0, 1.0 + 2.0 * change],
+                "past": [0, 0]}
+
+    def test_sentence_follows_the_energies(self):
+        panels = [self.panel("cvode-bdf", 0.001), self.panel("implicit-euler", -0.66),
+                  self.panel("xpbd", -0.58), self.panel("explicit-euler", 9, "diverged")]
+        text = motion.damping_contrast(panels)
+        self.assertEqual(text, "At this step cvode-bdf keeps the energy within 0.01 E_s while "
+                               "implicit-euler, xpbd lose 0.58 to 0.66 E_s: where their panels "
+                               "differ at one moment (one still moving, another at rest), that is "
+                               "the methods' numerical damping, not the scene")
+        # All damp (or all keep): nothing to contrast.
+        self.assertIsNone(motion.damping_contrast(panels[1:]))
+        self.assertIsNone(motion.damping_contrast(panels[:1]))
+
+
 class MotionBodies(unittest.TestCase):
     """A case with rigid bodies: its settings give the points per frame
     (particles, then the bodies' surface vertices) and the surface
