@@ -134,9 +134,18 @@ def attempt(errors, what, fn, *args):
         return '<div class="report-error">%s failed:\n%s</div>\n' % (esc(what), esc(tb))
 
 
-def section(exp, module, ctx, errors):
+def section(exp, module, ctx, errors, first_of_kind=None):
+    """One experiment's section. `first_of_kind`: the earlier section of the
+    same kind (name, title), whose "What to look for" this one would repeat
+    word for word: it links there instead."""
     body = [note_html(esc(n)) for n in exp.notes]
-    body.append('<p class="theory"><b>What to look for.</b> %s</p>\n' % esc(module.ABOUT))
+    if first_of_kind is None:
+        body.append('<p class="theory"><b>What to look for.</b> %s</p>\n' % esc(module.ABOUT))
+    else:
+        body.append('<p class="theory"><b>What to look for.</b> The same as in '
+                    '<a href="#%s">%s</a> (the same kind of experiment, %s); this section\'s '
+                    'settings below say what differs.</p>\n'
+                    % (esc(first_of_kind[0]), esc(first_of_kind[1]), esc(exp.kind)))
     if exp.tables:
         body.append(attempt(errors, "%s (%s)" % (exp.name, exp.kind), module.render, exp, ctx))
     else:

@@ -172,6 +172,18 @@ class EnergySentences(unittest.TestCase):
         self.assertIn("gain energy: symplectic-euler (+50% E_s by t = 10 s)", page)
         self.assertNotIn("oscillate without drift", page)
 
+    def test_a_second_section_of_one_kind_links_to_the_first(self):
+        t = [0.1 * k for k in range(11)]
+        energy_data(self.s, {"symplectic-euler": (t, [1.0] * len(t))})
+        second = json.loads((self.s.dir / "energy.json").read_text())
+        second["name"] = "energy-again"
+        self.s.json("energy-again.json", second)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        about = html.escape(KINDS["energy"].ABOUT, quote=True)
+        self.assertEqual(page.count(about), 1)
+        self.assertIn('The same as in <a href="#energy">', page)
+
     def test_coinciding_runs_are_said_to_coincide(self):
         t = [0.1 * k for k in range(50)]
         e = [math.exp(-x) for x in t]
