@@ -250,6 +250,22 @@ def data_files_html(exp, files):
         ", ".join(items))
 
 
+def run_options(names, runs):
+    """Per integrator of the settings, " (key value, ...)" from its run's
+    options when the settings list one run per integrator (so that a method
+    run twice, e.g. with stiffness exact and definite, is told apart), else
+    ""."""
+    if not (isinstance(runs, list) and len(runs) == len(names) and
+            all(isinstance(r, dict) and r.get("integrator") == n for r, n in zip(runs, names))):
+        return [""] * len(names)
+    out = []
+    for r in runs:
+        options = ["%s %s" % (k, v if isinstance(v, str) else json.dumps(v))
+                   for k, v in r.items() if k != "integrator"]
+        out.append(" (%s)" % ", ".join(options) if options else "")
+    return out
+
+
 def settings_html(exp, integrators, files=None):
     s = exp.settings
     if not s:
@@ -262,8 +278,9 @@ def settings_html(exp, integrators, files=None):
         out.append("<p>%s</p>\n" % esc(desc))
     names = s.get("integrators")
     if isinstance(names, list):
-        out.append("<p><b>Integrators</b>: %s</p>\n" % ", ".join(swatch(integrators, str(n))
-                                                                for n in names))
+        out.append("<p><b>Integrators</b>: %s</p>\n" % ", ".join(
+            swatch(integrators, str(n)) + esc(options) for n, options in
+            zip(names, run_options(names, s.get("runs")))))
     simple = []
     for k, v in s.items():
         if k in ("name", "experiment", "title", "description", "integrators", "definition",

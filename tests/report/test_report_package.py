@@ -1222,6 +1222,22 @@ class RigidStrainWindows(unittest.TestCase):
         np.testing.assert_allclose(centres, [0.5, 3.5])
 
 
+class RunOptions(unittest.TestCase):
+    """A method listed twice in the settings is told apart by its run's options."""
+
+    def test_options_follow_the_runs(self):
+        from springlab_report.page import run_options
+        names = ["linear-implicit-euler", "linear-implicit-euler", "implicit-euler"]
+        runs = [{"integrator": "linear-implicit-euler", "stiffness": "exact"},
+                {"integrator": "linear-implicit-euler", "stiffness": "definite"},
+                {"integrator": "implicit-euler"}]
+        self.assertEqual(run_options(names, runs),
+                         [" (stiffness exact)", " (stiffness definite)", ""])
+        # Runs that do not line up with the names: no labels rather than wrong ones.
+        self.assertEqual(run_options(names, runs[:2]), ["", "", ""])
+        self.assertEqual(run_options(names, None), ["", "", ""])
+
+
 class Styles(unittest.TestCase):
     def test_colours_and_markers_come_from_the_integrator_table(self):
         s = Scratch()
