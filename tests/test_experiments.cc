@@ -161,7 +161,17 @@ TEST(ExperimentDefinition, UnknownKeyInsideASecondCase) {
 TEST(ExperimentDefinition, UnknownIntegratorName) {
   Json d = kEnergy;
   d["integrators"] = {"rk4", "forward-euler"};
-  EXPECT_EQ(definition_error(d), "def.json: integrators: unknown integrator 'forward-euler'");
+  // The message lists every method, as the command line's does.
+  EXPECT_EQ(definition_error(d).rfind("def.json: integrators: unknown integrator 'forward-euler' "
+                                      "(integrators: arkode-dirk, ", 0),
+            0u)
+      << definition_error(d);
+  d["integrators"] = {"rk4", "implicit_euler"};
+  EXPECT_EQ(definition_error(d).rfind("def.json: integrators: unknown integrator 'implicit_euler' "
+                                      "(did you mean 'implicit-euler'?) (integrators: ",
+                                      0),
+            0u)
+      << definition_error(d);
   d["integrators"] = "implicit";
   EXPECT_EQ(definition_error(d),
             "def.json: integrators: expected \"all\", \"fixed-step\", \"adaptive\" or a list of "
@@ -458,6 +468,29 @@ TEST(ExperimentKinds, EnergyExplicitEulerGrowsByExactFactor) {
     EXPECT_GE(spring, 0.0);
   }
   EXPECT_TRUE(gravity_seen);
+}
+
+// Without a map in its definition, the stability experiment has no map
+// table (no file with a header and no rows for the report to warn about).
+TEST(ExperimentKinds, StabilityWithoutMapHasNoMapTable) {
+  const LoadedExperiment loaded = parse({{"experiment", "stability"},
+                                         {"integrators", {"symplectic-euler"}},
+                                         {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}}});
+  const std::vector<TableSpec> specs = loaded.experiment->tables();
+  ASSERT_EQ(specs.size(), 1u);
+  EXPECT_EQ(specs[0].suffix, "");
+  const LoadedExperiment with_map = parse(
+      {{"experiment", "stability"},
+       {"integrators", {"symplectic-euler"}},
+       {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}},
+       {"map",
+        {{"scene", "oscillator"},
+         {"integrators", {"symplectic-euler"}},
+         {"k", {100}},
+         {"dt", {0.1}},
+         {"t_end", 1}}}});
+  ASSERT_EQ(with_map.experiment->tables().size(), 2u);
+  EXPECT_EQ(with_map.experiment->tables()[1].suffix, "map");
 }
 
 TEST(ExperimentKinds, StabilityLimitsMatchTheory) {
