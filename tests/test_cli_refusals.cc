@@ -82,7 +82,8 @@ INSTANTIATE_TEST_SUITE_P(
         Refusal{"UnknownOption", {"run", "oscillator", "--bogus"},
                 "unknown option --bogus (springlab run --help lists the options)"},
         Refusal{"UnknownOptionWithValue", run_args("rk4", {"--tend=3"}),
-                "unknown option --tend (springlab run --help lists the options)"},
+                "unknown option --tend (did you mean '--t-end'?) (springlab run --help lists the "
+                "options)"},
         Refusal{"OptionTwice", run_args("rk4", {"--dt", "0.2"}), "--dt: given more than once"},
         Refusal{"OptionTwiceOnceWithEquals", run_args("rk4", {"--t-end=2"}),
                 "--t-end: given more than once"},
