@@ -736,33 +736,36 @@ def solver_error_data(scratch):
     m; Newton below it, XPBD above it in solver error but closer to the true
     motion."""
     scratch.json("integrators.json", INTEGRATORS)
-    cols = ["task", "case", "scene", "integrator", "variant", "dt", "step", "t", "status",
-            "solver_error", "total_error", "discretization_error", "wall_seconds", "iterations",
-            "failure"]
+    options = ["option_newton_tol", "option_solver", "option_substeps", "option_iterations",
+               "option_chebyshev", "option_rtol"]
+    cols = ["task", "case", "scene", "integrator", "variant"] + options + [
+            "dt", "step", "t", "status", "solver_error", "total_error", "discretization_error",
+            "wall_seconds", "iterations", "failure"]
     scratch.json("se.json", {"name": "se", "experiment": "solver-error", "title": "SE",
                              "dt": 0.02,
                              "tables": [{"file": "se.csv", "suffix": "", "columns": cols}]})
     rows = [",".join(cols)]
-    runs = [("implicit-euler", "newton-tol 0.01", 1e-5, 1e-3, 0.02),
-            ("xpbd", "substeps 10; iterations 1", 3e-3, 1e-4, 0.001)]
-    for task, (name, variant, se, te, wall) in enumerate(runs):
+    # The option columns say what the label says (the report reads them, not the label).
+    runs = [("implicit-euler", "newton-tol 0.01", "0.01,,,,,", 1e-5, 1e-3, 0.02),
+            ("xpbd", "substeps 10; iterations 1", ",,10,1,,", 3e-3, 1e-4, 0.001)]
+    for task, (name, variant, opts, se, te, wall) in enumerate(runs):
         for k in (0, 5):
-            rows.append("%d,0,cloth,%s,%s,0.02,%d,%r,completed,%r,%r,0.001,%r,3," % (
-                task, name, variant, k, k * 0.02, se, te, wall))
+            rows.append("%d,0,cloth,%s,%s,%s,0.02,%d,%r,completed,%r,%r,0.001,%r,3," % (
+                task, name, variant, opts, k, k * 0.02, se, te, wall))
     scratch.write("se.csv", "\n".join(rows) + "\n")
     # The whole runs: XPBD at equal cost S x N = 4, and tight Newton.
-    runs_cols = ["task", "case", "scene", "integrator", "variant", "dt", "status", "t_final",
-                 "energy_initial", "energy_lost", "max_strain", "wall_seconds_per_step",
-                 "failure"]
+    runs_cols = ["task", "case", "scene", "integrator", "variant"] + options + [
+                 "dt", "status", "t_final", "energy_initial", "energy_lost", "max_strain",
+                 "wall_seconds_per_step", "failure"]
     settings = json.loads((scratch.dir / "se.json").read_text())
     settings["tables"].append({"file": "se-runs.csv", "suffix": "runs", "columns": runs_cols})
     scratch.json("se.json", settings)
-    runs = [",".join(runs_cols), "0,0,cloth,implicit-euler,newton-tol 1e-06,0.02,completed,1,0,"
-            "1.5,0.2,0.02,"]
+    runs = [",".join(runs_cols), "0,0,cloth,implicit-euler,newton-tol 1e-06,1e-06,,,,,,0.02,"
+            "completed,1,0,1.5,0.2,0.02,"]
     for task, (S, N, lost, strain) in enumerate(((1, 4, -10.0, 1.2), (2, 2, -2.0, 0.5),
                                                  (4, 1, -0.5, 0.3)), start=1):
-        runs.append("%d,0,cloth,xpbd,substeps %d; iterations %d,0.02,completed,1,0,%r,%r,0.001,"
-                    % (task, S, N, lost, strain))
+        runs.append("%d,0,cloth,xpbd,substeps %d; iterations %d,,,%d,%d,,,0.02,completed,1,0,%r,"
+                    "%r,0.001," % (task, S, N, S, N, lost, strain))
     scratch.write("se-runs.csv", "\n".join(runs) + "\n")
 
 

@@ -27,17 +27,36 @@ ABOUT = (
 
 FLOOR = 1e-12
 
+# The options a run set, one column each (experiments/README.md
+# "solver-error"), empty where not set; "variant" is the same as a label.
+OPTION_NUMBERS = ("newton_tol", "substeps", "iterations", "chebyshev", "rtol")
+
+
+def option_columns():
+    return tuple("option_" + o for o in OPTION_NUMBERS)
+
+
+def options(cols, r):
+    """The options row r set: {"newton_tol": 0.01, "substeps": 10, "solver": "quasi-newton", ...}."""
+    out = {o: float(cols["option_" + o][r]) for o in OPTION_NUMBERS
+           if math.isfinite(cols["option_" + o][r])}
+    if cols["option_solver"][r]:
+        out["solver"] = cols["option_solver"][r]
+    return out
+
 
 def render(exp, ctx):
     db = Columns(exp.table(), numbers=("case", "step", "solver_error", "total_error",
-                                       "discretization_error", "wall_seconds", "iterations"),
-                 texts=("scene", "integrator", "variant", "status", "failure"))
+                                       "discretization_error", "wall_seconds", "iterations")
+                 + option_columns(),
+                 texts=("scene", "integrator", "variant", "option_solver", "status", "failure"))
     integ = ctx.integrators
     html = []
     runs = exp.table("runs")
     runs = None if runs is None else Columns(
-        runs, numbers=("case", "energy_lost", "max_strain", "wall_seconds_per_step"),
-        texts=("scene", "integrator", "variant", "status"))
+        runs, numbers=("case", "energy_lost", "max_strain", "wall_seconds_per_step")
+        + option_columns(),
+        texts=("scene", "integrator", "variant", "option_solver", "status"))
     cases = sorted({int(c) for c in db["case"]})
     for case in cases:
         rows = [r for r in range(len(db)) if int(db["case"][r]) == case]
@@ -47,13 +66,11 @@ def render(exp, ctx):
     return "".join(html)
 
 
-def substeps_iterations(variant):
-    """(S, N) of an XPBD variant "substeps S; iterations N", else None."""
-    parts = dict(p.split(" ", 1) for p in variant.split("; ") if " " in p)
-    try:
-        return int(parts["substeps"]), int(parts["iterations"])
-    except (KeyError, ValueError):
-        return None
+def substeps_iterations(opts):
+    """(S, N) of a run that set both substeps S and iterations N, else None."""
+    if "substeps" in opts and "iterations" in opts:
+        return int(opts["substeps"]), int(opts["iterations"])
+    return None
 
 
 def small_steps_figure(exp, ctx, db, rows, runs, case, integ):
@@ -65,15 +82,15 @@ def small_steps_figure(exp, ctx, db, rows, runs, case, integ):
     one_step = {(e["name"], e["variant"]): e for e in summaries(db, rows) if e["completed"]}
     groups = {}
     for (name, variant), r in whole.items():
-        sn = substeps_iterations(variant)
+        sn = substeps_iterations(options(runs, r))
         if sn is not None:
             groups.setdefault((name, sn[0] * sn[1]), []).append((sn[0], sn[1], r, variant))
     groups = {k: sorted(v) for k, v in groups.items() if len(v) >= 3}
     if not groups:
         return ""
     # The tightest Newton run: the reference lines.
-    newton = [(float(v.split(" ")[1]), r) for (n, v), r in whole.items()
-              if n == "implicit-euler" and v.startswith("newton-tol ") and ";" not in v]
+    newton = [(options(runs, r)["newton_tol"], r) for (n, v), r in whole.items()
+              if n == "implicit-euler" and set(options(runs, r)) == {"newton_tol"}]
     ref = min(newton)[1] if newton else None
     fig = new_figure(13.5, 4.2)
     axes = fig.subplots(1, 3)
@@ -139,7 +156,8 @@ def summaries(db, rows):
     out = []
     for (name, variant), idx in groups.items():
         ok = [r for r in idx if db["status"][r] == "completed"]
-        entry = {"name": name, "variant": variant, "samples": len(idx), "completed": len(ok)}
+        entry = {"name": name, "variant": variant, "options": options(db, idx[0]),
+                 "samples": len(idx), "completed": len(ok)}
         if ok:
             for col in ("solver_error", "total_error", "wall_seconds", "iterations"):
                 entry[col] = float(np.median([db[col][r] for r in ok]))
@@ -156,9 +174,10 @@ def label(e):
 def family(e):
     """Variants drawn joined by one line: one integrator with one solver
     (quasi-Newton, Chebyshev acceleration: lines of their own)."""
-    for extra in ("quasi-newton", "chebyshev"):
-        if extra in e["variant"]:
-            return e["name"] + " " + extra
+    if e["options"].get("solver") == "quasi-newton":
+        return e["name"] + " quasi-newton"
+    if "chebyshev" in e["options"]:
+        return e["name"] + " chebyshev"
     return e["name"]
 
 
@@ -168,12 +187,17 @@ def family(e):
 LABELS = 12
 
 
-def short_variant(variant):
-    text = variant.replace("newton-tol ", "tol ").replace("iterations ", "N=").replace(
-        "substeps ", "S=")
-    if text.endswith("; quasi-newton"):
-        text = "QN " + text[:-len("; quasi-newton")]
-    return text
+def short_variant(opts):
+    """A point's label from its options: "tol 0.01", "QN tol 0.01", "S=10; N=1"."""
+    parts = []
+    for key, text in (("newton_tol", "tol %s"), ("substeps", "S=%s"), ("iterations", "N=%s"),
+                      ("chebyshev", "chebyshev %s"), ("rtol", "rtol %s")):
+        if key in opts:
+            parts.append(text % fmt(opts[key], 3))
+    if opts.get("solver") == "newton":
+        parts.append("newton")
+    text = "; ".join(parts)
+    return "QN " + text if opts.get("solver") == "quasi-newton" else text
 
 
 def label_order(points):
@@ -294,7 +318,7 @@ def case_figure(exp, ctx, db, rows, case, integ):
             ax.plot(xs, ys, ms=7, mfc="none", mew=1.4, lw=1.1, label=fam, **style)
             for e, x, y in zip(members, xs, ys):
                 if e["variant"]:
-                    points.append((x, y, short_variant(e["variant"]), style["color"], fam))
+                    points.append((x, y, short_variant(e["options"]), style["color"], fam))
         ax.axhline(disc, color="0.35", lw=1.2, ls="--")
         ax.text(0.99, disc, "implicit Euler's discretization error per step ", va="top",
                 ha="right", fontsize=7.5, color="0.3", transform=ax.get_yaxis_transform())
