@@ -30,6 +30,8 @@ Scene build_box_pile(const std::map<std::string, double>& p);
 Scene build_dam_break(const std::map<std::string, double>& p);
 Scene build_tank(const std::map<std::string, double>& p);
 Scene build_sloshing(const std::map<std::string, double>& p);
+Scene build_dam_break_obstacle(const std::map<std::string, double>& p);
+double dam_break_obstacle_particles(const std::map<std::string, double>& p);
 double dam_break_particles(const std::map<std::string, double>& p);
 double tank_particles(const std::map<std::string, double>& p);
 Scene build_box_chain(const std::map<std::string, double>& p);
@@ -230,6 +232,7 @@ Counts block_counts(const Values& p) {
 
 Counts dam_break_counts(const Values& p) { return {dam_break_particles(p), 0.0}; }
 Counts tank_counts(const Values& p) { return {tank_particles(p), 0.0}; }
+Counts dam_break_obstacle_counts(const Values& p) { return {dam_break_obstacle_particles(p), 0.0}; }
 
 // Structural 2 n (n-1), shear 2 (n-1)^2, bend 2 n (n-2), as build_cloth makes them.
 Counts cloth_counts(const Values& p) {
@@ -431,6 +434,20 @@ const std::vector<Generator>& generators() {
          with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive)},
               fluid_params(0.005, 0.02)),
          build_dam_break, dam_break_counts, "spacing"},
+        {{"dam-break-obstacle",
+          "MARIN's 3-D dam break onto a box (Kleefsman et al. 2005, SPHERIC test 2): water 1.228 m "
+          "long and 0.55 m deep across a tank 3.22 m x 1 m, released against a box on the floor",
+          {}},
+         {param("spacing", 0.05, "particle spacing l [m] (smoothing length 1.3 l)",
+                Range::kPositive),
+          param("obstacle", 1, "1: the box on the floor, 0: none", Range::kZeroOrOne),
+          param("density", 1000, "rest density rho0 [kg/m^3]", Range::kPositive),
+          param("sound", 10, "speed of sound as a multiple of sqrt(g H), H the water's height",
+                Range::kPositive),
+          param("alpha", 0.02, "viscosity as Monaghan's alpha: nu = alpha h c / (2 (d + 2))",
+                Range::kNonNegative),
+          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kPositive)},
+         build_dam_break_obstacle, dam_break_obstacle_counts, "spacing"},
         {{"tank",
           "water at rest in a box: it settles to hydrostatic pressure rho0 g depth",
           {}},
