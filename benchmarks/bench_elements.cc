@@ -1,4 +1,4 @@
-// BM_ElementForce/<material>/block/<n>: one ElasticModel::force evaluation of
+// BM_ElementForce/<material>/block/<n>: one Model::force evaluation of
 // the built-in block (6 n^3 tetrahedra, the ground plane) with each material
 // model; BM_ElementForceJacobian/...: force plus dF/dx on the shared
 // pattern (what an implicit method assembles per Newton iteration).
@@ -13,18 +13,18 @@
 #include <utility>
 
 #include "benchmarks/bench_support.h"
-#include "models/builtin_scenes.h"
-#include "models/fem.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/fem/fem.h"
 #include "models/materials/material.h"
 
 namespace springlab::bench {
 namespace {
 
-const ElasticModel& block_model(int model, int n) {
-  static std::map<std::pair<int, int>, std::unique_ptr<ElasticModel>> cache;
+const Model& block_model(int model, int n) {
+  static std::map<std::pair<int, int>, std::unique_ptr<Model>> cache;
   auto& entry = cache[{model, n}];
   if (!entry) {
-    entry = std::make_unique<ElasticModel>(make_builtin_scene(
+    entry = std::make_unique<Model>(make_builtin_scene(
         "block", {{"n", std::to_string(n)}, {"model", std::to_string(model)}}));
   }
   return *entry;
@@ -35,7 +35,7 @@ const ElasticModel& block_model(int model, int n) {
 // that F is a full matrix that differs from element to element (a uniform
 // stretch alone gives every element the same diagonal F, which flatters
 // the SVD).
-Vector deformed(const ElasticModel& model, unsigned seed) {
+Vector deformed(const Model& model, unsigned seed) {
   Vector x = model.initial_positions();
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(0.3, Eigen::Vector3d(1.0, 1.0, 1.0).normalized()).toRotationMatrix();
@@ -49,7 +49,7 @@ Vector deformed(const ElasticModel& model, unsigned seed) {
   return x;
 }
 
-void set_counters(benchmark::State& state, const ElasticModel& model) {
+void set_counters(benchmark::State& state, const Model& model) {
   const double tets = static_cast<double>(model.scene().get<Tetrahedra>().size());
   state.counters["ns_per_tet"] =
       benchmark::Counter(static_cast<double>(state.iterations()) * tets * 1e-9,
@@ -58,7 +58,7 @@ void set_counters(benchmark::State& state, const ElasticModel& model) {
 }
 
 void element_force(benchmark::State& state, int material, int n, bool jacobian) {
-  const ElasticModel& model = block_model(material, n);
+  const Model& model = block_model(material, n);
   // Two states, taken in turn: a model keeps what it derives from an
   // element's F between calls at one state (corotated's R and S, from the
   // force for dF/dx), and each iteration here is one new state, as each

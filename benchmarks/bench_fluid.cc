@@ -1,7 +1,7 @@
 // BM_FluidStep/dam-break/<n>: one explicit step of the 2-D dam break
 // (docs/scenes.md "dam-break"): symplectic Euler at the acoustic CFL step
 // dt = 0.25 h / c, i.e. one force evaluation -- the neighbour search
-// (models/neighbour_grid.cc, rebuilt at every evaluation), the summation
+// (models/fluids/neighbour_grid.cc, rebuilt at every evaluation), the summation
 // density, the pressure and the viscosity forces -- and the update.
 // BM_FluidNeighbours/dam-break/<n>: the neighbour search alone
 // (NeighbourGrid::build over every particle, radius 2h), at the initial
@@ -26,7 +26,7 @@
 //     newton_per_step, factorizations_per_step, cg_per_step; iteration_ms =
 //     step_ms / newton_per_step;
 //   - eval_ms: at that run's last state, one explicit evaluation of the
-//     force and both Jacobians (ElasticModel::force, jacobians: the
+//     force and both Jacobians (Model::force, jacobians: the
 //     neighbour search, the densities, the pressure's reach-two Hessian
 //     and the viscosity's), the pattern already current; the mean of 10;
 //   - factor_ms: the numeric Cholesky factorization (CHOLMOD supernodal, as
@@ -42,29 +42,29 @@
 #include <memory>
 
 #include "benchmarks/bench_support.h"
-#include "experiments/output_files.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "integrators/sparse_direct_solver.h"
-#include "models/builtin_scenes.h"
-#include "models/fluids.h"
-#include "models/neighbour_grid.h"
+#include "experiments/driver/simulation.h"
+#include "experiments/io/output_files.h"
+#include "integrators/linear/sparse_direct_solver.h"
+#include "integrators/registry/registry.h"
+#include "models/fluids/fluids.h"
+#include "models/fluids/neighbour_grid.h"
+#include "models/scenes/builtin_scenes.h"
 
 namespace springlab::bench {
 namespace {
 
-const ElasticModel& dam_break_model(int n) {
-  static std::map<int, std::unique_ptr<ElasticModel>> models;
+const Model& dam_break_model(int n) {
+  static std::map<int, std::unique_ptr<Model>> models;
   auto& slot = models[n];
   if (!slot) {
     const double spacing = 1.0 / n;
-    slot = std::make_unique<ElasticModel>(make_builtin_scene(
+    slot = std::make_unique<Model>(make_builtin_scene(
         "dam-break", {{"a", "1"}, {"spacing", format_number(spacing)}, {"dimension", "2"}}));
   }
   return *slot;
 }
 
-void fluid_counters(benchmark::State& state, const ElasticModel& model, std::size_t pairs) {
+void fluid_counters(benchmark::State& state, const Model& model, std::size_t pairs) {
   const Fluid& fluid = model.scene().get<Fluids>().front();
   state.counters["ns_per_particle"] = benchmark::Counter(
       static_cast<double>(state.iterations()) * fluid.count * 1e-9,
@@ -74,7 +74,7 @@ void fluid_counters(benchmark::State& state, const ElasticModel& model, std::siz
   state.counters["pairs"] = static_cast<double>(pairs);
 }
 
-std::size_t initial_pairs(const ElasticModel& model, NeighbourGrid& grid) {
+std::size_t initial_pairs(const Model& model, NeighbourGrid& grid) {
   const Eigen::MatrixXd x = model.scene_positions(model.initial_positions());
   std::vector<double> flat(static_cast<std::size_t>(x.size()));
   for (Eigen::Index s = 0; s < x.rows(); ++s) {
@@ -87,7 +87,7 @@ std::size_t initial_pairs(const ElasticModel& model, NeighbourGrid& grid) {
 }
 
 void fluid_step(benchmark::State& state, int n) {
-  const ElasticModel& model = dam_break_model(n);
+  const Model& model = dam_break_model(n);
   const Fluid& fluid = model.scene().get<Fluids>().front();
   const double dt = 0.25 * kSmoothingPerSpacing * fluid.spacing / fluid.speed_of_sound;
   std::unique_ptr<Integrator> integrator = make_integrator("symplectic-euler");
@@ -110,7 +110,7 @@ void fluid_step(benchmark::State& state, int n) {
 }
 
 void fluid_neighbours(benchmark::State& state, int n) {
-  const ElasticModel& model = dam_break_model(n);
+  const Model& model = dam_break_model(n);
   const Eigen::MatrixXd x = model.scene_positions(model.initial_positions());
   std::vector<double> flat(static_cast<std::size_t>(x.size()));
   for (Eigen::Index s = 0; s < x.rows(); ++s) {
@@ -133,7 +133,7 @@ double thread_cpu_seconds() {
 }
 
 void fluid_implicit(benchmark::State& state) {
-  const ElasticModel model(make_builtin_scene("dam-break", {}));
+  const Model model(make_builtin_scene("dam-break", {}));
   constexpr double kDt = 1e-3, kEnd = 0.05;
   constexpr int kRepeats = 10;
   double step_ms = 0.0, eval_ms = 0.0, factor_ms = 0.0, analyse_ms = 0.0;

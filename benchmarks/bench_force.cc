@@ -1,4 +1,4 @@
-// BM_Force/<scene>/<n>: one ElasticModel::force evaluation (all forces).
+// BM_Force/<scene>/<n>: one Model::force evaluation (all forces).
 // BM_ForceJacobian/<scene>/<n>: force plus both Jacobians (dF/dx, dF/dv) on
 // the model's fixed pattern: what an implicit method assembles per Newton
 // iteration.
@@ -13,7 +13,7 @@
 namespace springlab::bench {
 namespace {
 
-void set_rate_counters(benchmark::State& state, const ElasticModel& model) {
+void set_rate_counters(benchmark::State& state, const Model& model) {
   const double iterations = static_cast<double>(state.iterations());
   if (element_count(model) > 0) {
     state.counters["ns_per_element"] = benchmark::Counter(
@@ -30,7 +30,7 @@ void set_rate_counters(benchmark::State& state, const ElasticModel& model) {
 }
 
 void force_benchmark(benchmark::State& state, const SceneCase& c) {
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   Vector x, v, f;
   perturbed_state(model, x, v);
   model.force(0.0, x, v, f);  // sizes f, warms the caches
@@ -43,7 +43,7 @@ void force_benchmark(benchmark::State& state, const SceneCase& c) {
 }
 
 void force_jacobian_benchmark(benchmark::State& state, const SceneCase& c) {
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   Vector x, v, f;
   perturbed_state(model, x, v);
   SparseMatrix dfdx = model.jacobian_pattern();

@@ -53,9 +53,9 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include "benchmarks/bench_support.h"
-#include "integrators/preconditioned_cg.h"
-#include "integrators/sparse_direct_solver.h"
-#include "integrators/sundials_support.h"
+#include "integrators/linear/preconditioned_cg.h"
+#include "integrators/linear/sparse_direct_solver.h"
+#include "integrators/sundials/sundials_support.h"
 
 extern "C" void openblas_set_num_threads(int threads);
 
@@ -76,7 +76,7 @@ struct LinearSystem {
   SparseMatrix a_definite, a_definite_prev;
 };
 
-SparseMatrix definite_matrix(const ElasticModel& model, double t, const Vector& x,
+SparseMatrix definite_matrix(const Model& model, double t, const Vector& x,
                              const Vector& v) {
   SparseMatrix dfdx = model.jacobian_pattern();
   model.definite_jacobians(t, x, v, &dfdx, nullptr);
@@ -87,7 +87,7 @@ SparseMatrix definite_matrix(const ElasticModel& model, double t, const Vector& 
 }
 
 // A and b at a state (see the header comment).
-void assemble(const ElasticModel& model, double t, const Vector& x, const Vector& v,
+void assemble(const Model& model, double t, const Vector& x, const Vector& v,
               SparseMatrix& a, Vector& b) {
   SparseMatrix dfdx = model.jacobian_pattern(), dfdv = model.jacobian_pattern();
   model.jacobians(t, x, v, &dfdx, &dfdv);
@@ -103,7 +103,7 @@ const LinearSystem& system_for(const SceneCase& c) {
   static std::map<std::string, LinearSystem> cache;
   auto found = cache.find(c.path());
   if (found != cache.end()) return found->second;
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   Vector x = model.initial_positions(), v = model.initial_velocities(), dv;
   LinearSystem sys;
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;
@@ -238,7 +238,7 @@ void cholmod_benchmark(benchmark::State& state, const SceneCase& c) {
   finish(state, c, sys, t, x, 0.0);
 }
 
-// springlab's own solver (integrators/sparse_direct_solver.h: CHOLMOD
+// springlab's own solver (integrators/linear/sparse_direct_solver.h: CHOLMOD
 // supernodal LL^T, one BLAS thread) on the definite matrix.
 void springlab_cholesky_benchmark(benchmark::State& state, const SceneCase& c) {
   const LinearSystem& sys = system_for(c);

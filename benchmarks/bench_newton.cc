@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "benchmarks/bench_support.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab::bench {
 namespace {
@@ -54,14 +54,14 @@ double cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-const ElasticModel& cloth(int n) {
+const Model& cloth(int n) {
   // Sizes beyond bench_support's cases (48, 96) are built here once.
   return model_for({"cloth", n});
 }
 
 void run_benchmark(benchmark::State& state, const std::string& integrator, int n,
                    const IntegratorOptions& options, double duration = kDuration) {
-  const ElasticModel& model = cloth(n);
+  const Model& model = cloth(n);
   RunSettings settings;
   settings.integrator = integrator;
   settings.options = options;
@@ -91,7 +91,7 @@ void run_benchmark(benchmark::State& state, const std::string& integrator, int n
 }
 
 // One step of a fresh integrator from (t, x, v), in `steps` equal parts.
-bool fresh_step(const std::string& name, const ElasticModel& model, double t, const Vector& x,
+bool fresh_step(const std::string& name, const Model& model, double t, const Vector& x,
                 const Vector& v, double tol, int steps, Vector& x_out) {
   auto integrator = make_integrator(name);
   IntegratorOptions options;
@@ -105,7 +105,7 @@ bool fresh_step(const std::string& name, const ElasticModel& model, double t, co
 }
 
 void accuracy_benchmark(benchmark::State& state, const std::string& name, int n, double tol) {
-  const ElasticModel& model = cloth(n);
+  const Model& model = cloth(n);
   std::vector<double> newton, disc;
   double solver_max = 0.0, run_solver_max = 0.0, ratio_max = 0.0;
   long failures = 0;

@@ -1,5 +1,5 @@
 // BM_OdeintStep/<method>/<scene>/<n>: Boost.Odeint stepping the same model
-// (its own ElasticModel::force, divided by the lumped mass) with the same
+// (its own Model::force, divided by the lumped mass) with the same
 // dt as springlab's BM_Step/<method>/<scene>/<n> (0.5 / w_max), so
 // springlab / odeint time ratios can be read off one run:
 //   - rk4: odeint::runge_kutta4 on the first-order state y = (x, v) (one
@@ -29,7 +29,7 @@
 #include <utility>
 
 #include "benchmarks/bench_support.h"
-#include "integrators/registry.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab::bench {
 namespace {
@@ -45,7 +45,7 @@ double explicit_dt(const SceneCase& c) {
   return w_max > 0.0 ? 0.5 / w_max : 1.0 / 60.0;
 }
 
-bool diverged(const ElasticModel& model, const Vector& x, const Vector& v) {
+bool diverged(const Model& model, const Vector& x, const Vector& v) {
   if (!x.allFinite() || !v.allFinite()) return true;
   const double scale = model.energy_scale();
   if (!(scale > 0.0)) return false;
@@ -53,7 +53,7 @@ bool diverged(const ElasticModel& model, const Vector& x, const Vector& v) {
   return !(e.kinetic_and_spring() <= kBlowup * scale);
 }
 
-void finish(benchmark::State& state, const ElasticModel& model, double dt, long force_evals,
+void finish(benchmark::State& state, const Model& model, double dt, long force_evals,
             long restarts) {
   using benchmark::Counter;
   const double iterations = static_cast<double>(state.iterations());
@@ -72,7 +72,7 @@ void finish(benchmark::State& state, const ElasticModel& model, double dt, long 
 // y' = f(y) for y = (x, v): (v, M^-1 F(t, x, v)).
 class FirstOrderRhs {
  public:
-  explicit FirstOrderRhs(const ElasticModel& model)
+  explicit FirstOrderRhs(const Model& model)
       : model_(&model), n_(model.dofs()), inv_mass_(model.mass().cwiseInverse()) {}
   void operator()(const Vector& y, Vector& dydt, double t) {
     ++evals;
@@ -86,7 +86,7 @@ class FirstOrderRhs {
   long evals = 0;
 
  private:
-  const ElasticModel* model_;
+  const Model* model_;
   Eigen::Index n_;
   Vector inv_mass_, x_, v_, f_;
 };
@@ -95,7 +95,7 @@ class FirstOrderRhs {
 class OdeintRk4 {
  public:
   static constexpr const char* kName = "rk4";
-  OdeintRk4(const ElasticModel& model, double dt)
+  OdeintRk4(const Model& model, double dt)
       : model_(&model), dt_(dt), n_(model.dofs()), y0_(2 * n_), rhs_(model) {
     y0_ << model.initial_positions(), model.initial_velocities();
     y_ = y0_;
@@ -112,7 +112,7 @@ class OdeintRk4 {
   long evals() const { return rhs_.evals; }
 
  private:
-  const ElasticModel* model_;
+  const Model* model_;
   double dt_;
   Eigen::Index n_;
   Vector y0_, y_;
@@ -124,7 +124,7 @@ class OdeintRk4 {
 // dp/dt = M^-1 F(q) (p = v: unit-mass form of the Hamiltonian system).
 class MomentumRhs {
  public:
-  explicit MomentumRhs(const ElasticModel& model)
+  explicit MomentumRhs(const Model& model)
       : model_(&model),
         inv_mass_(model.mass().cwiseInverse()),
         zero_v_(Vector::Zero(model.dofs())) {}
@@ -136,7 +136,7 @@ class MomentumRhs {
   long evals = 0;
 
  private:
-  const ElasticModel* model_;
+  const Model* model_;
   Vector inv_mass_, zero_v_, f_;
 };
 
@@ -144,7 +144,7 @@ class MomentumRhs {
 class OdeintSymplecticEuler {
  public:
   static constexpr const char* kName = "symplectic-euler";
-  OdeintSymplecticEuler(const ElasticModel& model, double dt)
+  OdeintSymplecticEuler(const Model& model, double dt)
       : model_(&model), dt_(dt), rhs_(model) {
     reset();
   }
@@ -161,7 +161,7 @@ class OdeintSymplecticEuler {
   long evals() const { return rhs_.evals; }
 
  private:
-  const ElasticModel* model_;
+  const Model* model_;
   double dt_;
   Vector q_, p_;
   double t_ = 0.0;
@@ -171,7 +171,7 @@ class OdeintSymplecticEuler {
       stepper_;
 };
 
-bool usable(benchmark::State& state, const ElasticModel& model) {
+bool usable(benchmark::State& state, const Model& model) {
   if (model.velocity_dependence() == VelocityDependence::kNone) return true;
   // odeint's symplectic steppers give the momentum function q only.
   state.SkipWithError("forces depend on v: odeint's symplectic_euler cannot express that");
@@ -180,7 +180,7 @@ bool usable(benchmark::State& state, const ElasticModel& model) {
 
 template <class Stepper>
 void odeint_benchmark(benchmark::State& state, const SceneCase& c) {
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   if (std::string(Stepper::kName) == "symplectic-euler" && !usable(state, model)) return;
   const double dt = explicit_dt(c);
   Stepper stepper(model, dt);
@@ -208,7 +208,7 @@ void odeint_benchmark(benchmark::State& state, const SceneCase& c) {
 template <class Stepper>
 void paired_benchmark(benchmark::State& state, const SceneCase& c) {
   using Clock = std::chrono::steady_clock;
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   if (std::string(Stepper::kName) == "symplectic-euler" && !usable(state, model)) return;
   const double dt = explicit_dt(c);
   Stepper peer(model, dt);

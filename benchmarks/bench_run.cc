@@ -1,5 +1,5 @@
 // BM_RunPair/<method>/<scene>/<n>: what `springlab run` costs per step
-// (experiments/simulation.h's driver: the integrator's step plus the
+// (experiments/driver/simulation.h's driver: the integrator's step plus the
 // driver's divergence check and bookkeeping, no output files) against the
 // kernel doing the same work, timed in alternation in one benchmark so both
 // see the same machine load:
@@ -15,7 +15,7 @@
 // kernel side continues from where it stopped. dt = 0.5 / w_max (as
 // BM_Step's explicit methods); kBatch steps of it never diverge from rest.
 // Counters: run_us and kernel_us per step, ratio, force_us (one
-// ElasticModel::force at the initial state, timed in the same loop: the
+// Model::force at the initial state, timed in the same loop: the
 // floor of a symplectic Euler step); run_min_us, kernel_min_us and
 // ratio_min from the fastest batch of each side (on a busy machine, the
 // batch least disturbed by other processes: a batch of the chain is about
@@ -30,8 +30,8 @@
 #include <boost/numeric/odeint/external/eigen/eigen.hpp>
 
 #include "benchmarks/bench_support.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab::bench {
 namespace {
@@ -49,7 +49,7 @@ double seconds_since(Clock::time_point start) {
 // runge_kutta4 on y = (x, v).
 class Kernel {
  public:
-  Kernel(const ElasticModel& model, const std::string& method, double dt)
+  Kernel(const Model& model, const std::string& method, double dt)
       : model_(model), dt_(dt), odeint_(method == "rk4"), n_(model.dofs()) {
     if (odeint_) {
       y_.resize(2 * n_);
@@ -81,7 +81,7 @@ class Kernel {
   }
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
   double dt_;
   bool odeint_;
   Eigen::Index n_;
@@ -92,7 +92,7 @@ class Kernel {
 };
 
 void run_pair(benchmark::State& state, const std::string& method, const SceneCase& c) {
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   const double w_max = max_frequency_for(c);
   const double dt = w_max > 0.0 ? 0.5 / w_max : 1.0 / 60.0;
   RunSettings settings;

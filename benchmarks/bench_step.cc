@@ -6,7 +6,7 @@
 // What one benchmark iteration is (also in each entry's label and its `dt`
 // counter):
 //   - explicit fixed-step methods: advance_to(t + dt) with dt = 0.5 / w_max
-//     (w_max from models/modal_analysis.h at the initial state): a quarter of
+//     (w_max from models/model/modal_analysis.h at the initial state): a quarter of
 //     the symplectic methods' limit 2 / w_max, so the step is stable for all
 //     but explicit Euler (unstable at every dt; it is restarted when it
 //     diverges);
@@ -70,7 +70,7 @@
 #include <string>
 
 #include "benchmarks/bench_support.h"
-#include "integrators/registry.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab::bench {
 namespace {
@@ -119,7 +119,7 @@ StepPlan plan_for(const IntegratorInfo& info, const SceneCase& c) {
   return plan;
 }
 
-bool diverged(const ElasticModel& model, const Integrator& integrator) {
+bool diverged(const Model& model, const Integrator& integrator) {
   if (!integrator.x().allFinite() || !integrator.v().allFinite()) return true;
   const double scale = model.energy_scale();
   if (!(scale > 0.0)) return false;
@@ -142,7 +142,7 @@ void add(IntegratorStats& sum, const IntegratorStats& s) {
 void step_benchmark(benchmark::State& state, const std::string& name, const SceneCase& c,
                     const IntegratorOptions& options = {}) {
   // Default options: newton_tol 1e-4 m/s, rtol 1e-6, atol 1e-8.
-  const ElasticModel& model = model_for(c);
+  const Model& model = model_for(c);
   std::unique_ptr<Integrator> integrator = make_integrator(name);
   const StepPlan plan = plan_for(integrator->info(), c);
   std::string init_error;
@@ -213,10 +213,10 @@ std::string refusal(const IntegratorInfo& info, const SceneCase& c) {
   if (!info.jacobian_free) return {};
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
-  std::string why;
+  Refusal why;
   if (model_for(c).projective_form(constraints, elements, why)) return {};
-  if (why.empty()) return "the scene has no projective form";
-  return why.substr(0, why.find(';'));
+  if (why.text.empty()) return "the scene has no projective form";
+  return why.text.substr(0, why.text.find(';'));
 }
 
 }  // namespace

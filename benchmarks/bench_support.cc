@@ -8,10 +8,10 @@
 #include <memory>
 #include <utility>
 
-#include "models/builtin_scenes.h"
-#include "models/fem.h"
-#include "models/modal_analysis.h"
-#include "models/springs.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/fem/fem.h"
+#include "models/model/modal_analysis.h"
+#include "models/springs/springs.h"
 
 namespace springlab::bench {
 
@@ -42,7 +42,7 @@ std::vector<SceneCase> spring_and_solid_cases() {
 namespace {
 
 struct Cached {
-  std::unique_ptr<ElasticModel> model;
+  std::unique_ptr<Model> model;
   double w_max = -1.0;
 };
 
@@ -52,14 +52,14 @@ Cached& cached(const SceneCase& c) {
   if (!entry.model) {
     auto parameters = c.parameters;
     parameters.emplace_back(c.size_key, std::to_string(c.n));
-    entry.model = std::make_unique<ElasticModel>(make_builtin_scene(c.scene, parameters));
+    entry.model = std::make_unique<Model>(make_builtin_scene(c.scene, parameters));
   }
   return entry;
 }
 
 }  // namespace
 
-const ElasticModel& model_for(const SceneCase& c) { return *cached(c).model; }
+const Model& model_for(const SceneCase& c) { return *cached(c).model; }
 
 double max_frequency_for(const SceneCase& c) {
   Cached& entry = cached(c);
@@ -67,23 +67,23 @@ double max_frequency_for(const SceneCase& c) {
   return entry.w_max;
 }
 
-long spring_count(const ElasticModel& model) {
+long spring_count(const Model& model) {
   return static_cast<long>(model.scene().get<Springs>().size());
 }
 
-long element_count(const ElasticModel& model) {
+long element_count(const Model& model) {
   return static_cast<long>(model.scene().get<Triangles>().size() +
                            model.scene().get<Tetrahedra>().size());
 }
 
-void add_size_counters(benchmark::State& state, const ElasticModel& model) {
+void add_size_counters(benchmark::State& state, const Model& model) {
   state.counters["unknowns"] = static_cast<double>(model.dofs());
   state.counters["particles"] = static_cast<double>(model.free_particle_count());
   state.counters["springs"] = static_cast<double>(spring_count(model));
   if (element_count(model) > 0) state.counters["elements"] = static_cast<double>(element_count(model));
 }
 
-double shortest_rest_length(const ElasticModel& model) {
+double shortest_rest_length(const Model& model) {
   double shortest = std::numeric_limits<double>::infinity();
   for (const Spring& s : model.scene().get<Springs>()) {
     if (s.rest > 0.0) shortest = std::min(shortest, s.rest);
@@ -91,7 +91,7 @@ double shortest_rest_length(const ElasticModel& model) {
   return std::isfinite(shortest) ? shortest : 1.0;
 }
 
-void perturbed_state(const ElasticModel& model, Vector& x, Vector& v) {
+void perturbed_state(const Model& model, Vector& x, Vector& v) {
   x = model.initial_positions();
   v = model.initial_velocities();
   const double amplitude = 1e-3 * shortest_rest_length(model);

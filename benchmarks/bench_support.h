@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "models/elastic_model.h"
+#include "models/model/model.h"
 
 namespace springlab::bench {
 
@@ -38,24 +38,24 @@ std::vector<SceneCase> spring_and_solid_cases();
 
 // Built once, then shared (benchmarks run one at a time, so the model's
 // scratch arrays are never used concurrently).
-const ElasticModel& model_for(const SceneCase& c);
-// w_max at the initial state (models/modal_analysis.h), cached.
+const Model& model_for(const SceneCase& c);
+// w_max at the initial state (models/model/modal_analysis.h), cached.
 double max_frequency_for(const SceneCase& c);
 
-long spring_count(const ElasticModel& model);
-long element_count(const ElasticModel& model);  // triangles + tetrahedra
+long spring_count(const Model& model);
+long element_count(const Model& model);  // triangles + tetrahedra
 
 // unknowns, particles, springs, elements (triangles and tetrahedra)
 // (plain values, not divided by anything).
-void add_size_counters(benchmark::State& state, const ElasticModel& model);
+void add_size_counters(benchmark::State& state, const Model& model);
 
 // The initial state moved off equilibrium by a small deterministic amount
 // (1e-3 of the rest spacing scale) so that no spring sits exactly at its rest
 // length: a generic state for force / Jacobian / matrix benchmarks.
-void perturbed_state(const ElasticModel& model, Vector& x, Vector& v);
+void perturbed_state(const Model& model, Vector& x, Vector& v);
 
 // Rest spacing of a grid/chain: the length of the shortest spring.
-double shortest_rest_length(const ElasticModel& model);
+double shortest_rest_length(const Model& model);
 
 // "7.07e-05"-style short number for labels.
 std::string short_number(double value);

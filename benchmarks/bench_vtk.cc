@@ -1,5 +1,5 @@
 // BM_VtkSeries/<frames>: what `springlab run --vtk DIR` costs per frame
-// (experiments/vtk_series.h): VtkSeries::observe writing each frame into its
+// (experiments/io/vtk_series.h): VtkSeries::observe writing each frame into its
 // temporary folder, then publish() putting the series in a new DIR, on the
 // oscillator (2 particles, 1 spring: the frame's text is small, so the
 // figure is the per-frame overhead, not the formatting of points).
@@ -15,8 +15,8 @@
 #include <string>
 
 #include "benchmarks/bench_support.h"
-#include "experiments/vtk_series.h"
-#include "models/builtin_scenes.h"
+#include "experiments/io/vtk_series.h"
+#include "models/scenes/builtin_scenes.h"
 
 namespace springlab::bench {
 namespace {
@@ -24,7 +24,7 @@ namespace {
 void vtk_series(benchmark::State& state) {
   const int frames = static_cast<int>(state.range(0));
   const Scene scene = make_builtin_scene("oscillator", {});
-  const ElasticModel model(scene);
+  const Model model(scene);
   namespace fs = std::filesystem;
   std::string root = (fs::temp_directory_path() / "springlab-bench-vtk-XXXXXX").string();
   if (::mkdtemp(root.data()) == nullptr) {

@@ -1,7 +1,9 @@
 // lbfgs_reference: a plain quasi-Newton (L-BFGS) implicit Euler on a
 // mass-spring scene, written for comparison only (issue 37). It shares no
-// code with springlab's solvers: one file, a scene file in, a few numbers
-// out, so that `springlab run --integrator implicit-euler --solver
+// code with springlab's solvers: one file (and the references'
+// reference_scene.h: the command line, the scene file, the energy scale, the
+// time loop, the matrix H0 below and the output), a scene file in, a few
+// numbers out, so that `springlab run --integrator implicit-euler --solver
 // quasi-newton` can be timed and checked against it
 // (benchmarks/bench_fast_reference.cc).
 //
@@ -61,10 +63,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <deque>
 #include <exception>
-#include <fstream>
 #include <limits>
 #include <string>
 #include <vector>
@@ -72,16 +72,12 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
-#include <nlohmann/json.hpp>
+
+#include "reference_scene.h"
 
 namespace {
 
-struct Spring {
-  int i, j;
-  double k, rest;
-};
-
-double vec(const nlohmann::json& j, int r) { return r < static_cast<int>(j.size()) ? j[r].get<double>() : 0.0; }
+using reference::Spring;
 
 constexpr int kHistory = 5;
 constexpr double kArmijo = 1e-4;
@@ -104,70 +100,35 @@ int main(int argc, char** argv) {
 namespace {
 
 int run(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr,
-                 "usage: lbfgs_reference SCENE.json --dt H --t-end T [--tol TOL] "
-                 "[--max-iterations N] [--positions FILE]\n");
-    return 2;
-  }
-  double dt = 1.0 / 60.0, t_end = 1.0, tol = 1e-3;
+  reference::CommandLine args;
+  double tol = 1e-3;
   int max_iterations = 200;
   std::string positions_file;
-  for (int a = 2; a + 1 < argc; a += 2) {
-    const std::string key = argv[a];
-    const double value = std::atof(argv[a + 1]);
-    if (key == "--dt") dt = value;
-    else if (key == "--t-end") t_end = value;
-    else if (key == "--tol") tol = value;
-    else if (key == "--max-iterations") max_iterations = static_cast<int>(value);
-    else if (key == "--positions") positions_file = argv[a + 1];
-    else { std::fprintf(stderr, "unknown option %s\n", key.c_str()); return 2; }
+  if (!reference::read_command_line("lbfgs_reference", argc, argv,
+                                    {{"--tol", "TOL", &tol}, {"--max-iterations", "N", &max_iterations},
+                                     {"--positions", "FILE", &positions_file}},
+                                    args)) {
+    return 2;
   }
-  const auto start = std::chrono::steady_clock::now();
 
   // The scene: particles (the free ones numbered in scene order), springs.
-  std::ifstream file(argv[1]);
-  const nlohmann::json scene = nlohmann::json::parse(file);
-  for (const auto& [key, value] : scene.items()) {
-    if (key != "name" && key != "dimension" && key != "gravity" && key != "drag" &&
-        key != "particles" && key != "springs") {
-      std::fprintf(stderr, "lbfgs_reference: error: %s: \"%s\" is not modelled\n", argv[1], key.c_str());
-      return 2;
-    }
+  reference::Scene scene;
+  const reference::Refusal refusal = reference::read_scene(args.scene, {}, scene);
+  if (refusal.what == reference::Unmodelled::kKey) {
+    std::fprintf(stderr, "lbfgs_reference: error: %s: \"%s\" is not modelled\n", args.scene, refusal.key.c_str());
+    return 2;
   }
-  const int D = scene.at("dimension").get<int>();
-  const int n = static_cast<int>(scene.at("particles").size());
-  std::vector<double> x0(n * D), v0(n * D, 0.0), m(n);
-  std::vector<int> row(n, -1);  // the particle's row among the free ones; -1: fixed
-  int free = 0;
-  for (int i = 0; i < n; ++i) {
-    const nlohmann::json& p = scene["particles"][i];
-    m[i] = p.value("mass", 1.0);
-    if (!p.value("fixed", false)) row[i] = free++;
-    for (int r = 0; r < D; ++r) {
-      x0[i * D + r] = vec(p["x"], r);
-      if (p.contains("v") && row[i] >= 0) v0[i * D + r] = vec(p["v"], r);
-    }
+  if (refusal.what == reference::Unmodelled::kSpringDamping) {
+    std::fprintf(stderr, "lbfgs_reference: error: %s: spring damping is not modelled\n", args.scene);
+    return 2;
   }
-  std::vector<Spring> springs;
-  for (const nlohmann::json& s : scene.at("springs")) {
-    const int i = s.at("i").get<int>(), j = s.at("j").get<int>();
-    double rest = 0.0;
-    if (s.contains("rest")) {
-      rest = s["rest"].get<double>();
-    } else {
-      for (int r = 0; r < D; ++r) rest += (x0[i * D + r] - x0[j * D + r]) * (x0[i * D + r] - x0[j * D + r]);
-      rest = std::sqrt(rest);
-    }
-    if (s.value("damping", 0.0) != 0.0) {
-      std::fprintf(stderr, "lbfgs_reference: error: %s: spring damping is not modelled\n", argv[1]);
-      return 2;
-    }
-    springs.push_back({i, j, s.at("k").get<double>(), rest});
-  }
-  double g[3] = {0, 0, 0};
-  const double drag = scene.value("drag", 0.0);
-  if (scene.contains("gravity")) for (int r = 0; r < D; ++r) g[r] = vec(scene["gravity"], r);
+  const int D = scene.D, n = scene.n, free = scene.free;
+  const std::vector<double>& x0 = scene.x;
+  const std::vector<double>& m = scene.m;
+  const std::vector<int>& row = scene.row;  // the particle's row among the free ones; -1: fixed
+  const std::vector<Spring>& springs = scene.springs;
+  const double* g = scene.g;
+  const double drag = scene.drag;
 
   // The unknowns: the free particles' coordinates, particle by particle.
   // The springs see all particles, the free ones first (in the unknowns'
@@ -182,14 +143,10 @@ int run(int argc, char** argv) {
     if (row[i] < 0) continue;
     for (int r = 0; r < D; ++r) {
       x[row[i] * D + r] = x0[i * D + r];
-      v[row[i] * D + r] = v0[i * D + r];
+      v[row[i] * D + r] = scene.v[i * D + r];
       mass[row[i] * D + r] = m[i];
     }
   }
-  // A particle's position in a state y of the free ones.
-  auto at = [&](const Eigen::VectorXd& y, int p, int r) {
-    return row[p] >= 0 ? y[row[p] * D + r] : x0[p * D + r];
-  };
 
   // The springs' energy and force (on every particle: f_all) at the
   // positions in `all`.
@@ -229,50 +186,18 @@ int run(int argc, char** argv) {
     for (int c = 0; c < N; ++c) e -= mass[c] * g[c % D] * y[c];
     return e;
   };
-
-  // The scale the divergence test compares with (as pd_reference).
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < D; ++r) {
-      lo[r] = std::min(lo[r], x0[i * D + r]);
-      hi[r] = std::max(hi[r], x0[i * D + r]);
-    }
-  }
-  double diameter = 0.0, g_norm = 0.0;
-  for (int r = 0; r < D; ++r) {
-    diameter += (hi[r] - lo[r]) * (hi[r] - lo[r]);
-    g_norm += g[r] * g[r];
-  }
-  diameter = std::sqrt(diameter);
-  g_norm = std::sqrt(g_norm);
+  // The kinetic + spring energy, which the divergence test watches.
   auto kinetic_plus_spring = [&]() {
     all.head(N) = x;
     return 0.5 * v.cwiseAbs2().dot(mass) + spring_energy();
   };
-  double scale = kinetic_plus_spring();
-  for (int i = 0; i < n; ++i) {
-    if (row[i] >= 0) scale += m[i] * g_norm * diameter;
-  }
+  reference::TimeLoop loop(args.dt, args.t_end, reference::energy_scale(scene, kinetic_plus_spring()));
 
   // H0 = M + h^2 Lap (free particles only), factored once per h.
-  using SparseMatrix = Eigen::SparseMatrix<double>;
-  Eigen::CholmodSimplicialLLT<SparseMatrix, Eigen::Lower> factor;
+  Eigen::CholmodSimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
   double factored_h = 0.0;
   auto factorize = [&](double h) {
-    std::vector<Eigen::Triplet<double>> entries;
-    for (int i = 0; i < n; ++i) {
-      if (row[i] >= 0) entries.emplace_back(row[i], row[i], m[i]);
-    }
-    for (const Spring& s : springs) {
-      const double w = h * h * s.k;
-      const int a = row[s.i], b = row[s.j];
-      if (a >= 0) entries.emplace_back(a, a, w);
-      if (b >= 0) entries.emplace_back(b, b, w);
-      if (a >= 0 && b >= 0) entries.emplace_back(std::max(a, b), std::min(a, b), -w);  // lower triangle
-    }
-    SparseMatrix A(free, free);
-    A.setFromTriplets(entries.begin(), entries.end());
-    factor.compute(A);
+    factor.compute(reference::mass_spring_matrix(scene, h, 0.0));
     factored_h = h;
     return factor.info() == Eigen::Success;
   };
@@ -286,7 +211,7 @@ int run(int argc, char** argv) {
   };
 
   // One step's problem: x, v the step's start, h its size.
-  double h = dt;
+  double h = args.dt;
   Eigen::VectorXd f(N);
   auto residual = [&](const Eigen::VectorXd& u, Eigen::VectorXd& r) {  // r = M (u - v) - h F
     all.head(N) = x + h * u;
@@ -408,14 +333,8 @@ int run(int argc, char** argv) {
     return false;
   };
 
-  const double exact = t_end / dt;
-  const long steps = std::abs(exact - std::round(exact)) <= 1e-9 ? std::lround(exact)
-                                                                 : static_cast<long>(std::ceil(exact));
-  double t = 0.0;
-  long taken = 0;
-  bool diverged = false;
-  for (long step = 0; step < steps && !diverged; ++step) {
-    h = step + 1 == steps ? t_end - t : dt;
+  while (loop.running()) {
+    h = loop.h();
     if (std::abs(h - factored_h) > 1e-12 * h && !factorize(h)) {
       std::fprintf(stderr, "lbfgs_reference: M + h^2 L is not positive definite\n");
       return 1;
@@ -423,30 +342,17 @@ int run(int argc, char** argv) {
     if (!lbfgs_step()) ++stalls;  // the last iterate is kept
     x += h * u;
     v = u;
-    t += h;
-    ++taken;
-    const double e = kinetic_plus_spring();
-    diverged = !std::isfinite(e) || (scale > 0.0 && e > 1000.0 * scale);
+    loop.step_done(h, kinetic_plus_spring());
   }
-  double x_sum = 0.0;
+  // Every particle's final position, scene order (the fixed ones where they were).
+  std::vector<double> positions = x0;
   for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < D; ++r) x_sum += at(x, i, r);
+    if (row[i] >= 0) for (int r = 0; r < D; ++r) positions[i * D + r] = x[row[i] * D + r];
   }
-  if (!positions_file.empty()) {
-    std::FILE* out = std::fopen(positions_file.c_str(), "w");
-    if (out == nullptr) { std::fprintf(stderr, "lbfgs_reference: cannot write %s\n", positions_file.c_str()); return 1; }
-    for (int i = 0; i < n; ++i) {
-      std::fprintf(out, "%d", i);
-      for (int r = 0; r < D; ++r) std::fprintf(out, ",%.17g", at(x, i, r));
-      std::fprintf(out, "\n");
-    }
-    std::fclose(out);
-  }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("{\"steps\": %ld, \"diverged\": %s, \"diverged_at\": %s, \"energy_final\": %.17g, "
-              "\"seconds\": %.9g, \"x_sum\": %.17g, \"lbfgs_iterations\": %ld, \"stalls\": %ld}\n",
-              taken, diverged ? "true" : "false", diverged ? std::to_string(t).c_str() : "null",
-              kinetic_plus_spring() + gravity_energy(x), seconds, x_sum, iterations, stalls);
+  if (!reference::write_positions(args.program, positions_file, scene, positions)) return 1;
+  reference::print_summary(loop, kinetic_plus_spring() + gravity_energy(x), args.start,
+                           {{"x_sum", reference::number(reference::coordinate_sum(positions))},
+                            {"lbfgs_iterations", std::to_string(iterations)}, {"stalls", std::to_string(stalls)}});
   return 0;
 }
 

@@ -1,7 +1,8 @@
 // newton_reference: a plain projected Newton for backward Euler on a
 // mass-spring scene, written for comparison only (issue 37). It shares no
-// code with springlab's solvers: one file, a scene file in, a few numbers
-// out, so that `springlab run --integrator implicit-euler` (Newton, the
+// code with springlab's solvers: one file (and the references'
+// reference_scene.h: the command line, the scene file, the energies, the time
+// loop and the output), a scene file in, a few numbers out, so that `springlab run --integrator implicit-euler` (Newton, the
 // defaults) can be timed and checked against it
 // (benchmarks/bench_fast_reference.cc).
 //
@@ -41,7 +42,7 @@
 // iterations with the supernodal factor and more than 200 with the
 // simplicial one (the same matrices, other rounding).
 //
-// Where springlab's implicit-euler (integrators/newton_loop.cc) differs in
+// Where springlab's implicit-euler (integrators/newton/newton_loop.cc) differs in
 // how, not what: it uses the exact Hessian after a full update and the
 // projected one only after a cut step (this program: the projected one
 // always, so it converges linearly near a buckling state, not
@@ -73,29 +74,23 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
-#include <nlohmann/json.hpp>
+
+#include "reference_scene.h"
 
 namespace {
 
-struct Spring {
-  int i, j;
-  double k, rest;
-};
+using reference::Spring;
 
 constexpr int D = 3;               // the cloth is 3-D; a 2-D scene is refused
 constexpr int kMaxIterations = 1000;  // see the header
 constexpr double kArmijo = 1e-4;   // the sufficient decrease's constant
 constexpr int kMaxHalvings = 50;
-
-double vec(const nlohmann::json& j, int r) { return r < static_cast<int>(j.size()) ? j[r].get<double>() : 0.0; }
 
 int refuse(const char* scene, const std::string& where, const std::string& what) {
   std::fprintf(stderr, "newton_reference: error: %s: %s: %s\n", scene, where.c_str(), what.c_str());
@@ -105,22 +100,13 @@ int refuse(const char* scene, const std::string& where, const std::string& what)
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: newton_reference SCENE.json --dt H --t-end T [--tol TOL] [--positions FILE]\n");
+  reference::CommandLine args;
+  double tol = 1e-4;
+  std::string positions_file;
+  if (!reference::read_command_line("newton_reference", argc, argv,
+                                    {{"--tol", "TOL", &tol}, {"--positions", "FILE", &positions_file}}, args)) {
     return 2;
   }
-  double dt = 1.0 / 60.0, t_end = 1.0, tol = 1e-4;
-  std::string positions_file;
-  for (int a = 2; a + 1 < argc; a += 2) {
-    const std::string key = argv[a];
-    const double value = std::atof(argv[a + 1]);
-    if (key == "--dt") dt = value;
-    else if (key == "--t-end") t_end = value;
-    else if (key == "--tol") tol = value;
-    else if (key == "--positions") positions_file = argv[a + 1];
-    else { std::fprintf(stderr, "unknown option %s\n", key.c_str()); return 2; }
-  }
-  const auto start = std::chrono::steady_clock::now();
   // One thread, as springlab runs: one BLAS thread (CHOLMOD's supernodal
   // factorization calls BLAS), and CHOLMOD's OpenMP regions, of a fixed
   // thread count, made inactive (max-active-levels 0). OpenBLAS and libgomp
@@ -130,94 +116,27 @@ int main(int argc, char** argv) {
   if (auto set = reinterpret_cast<SetInt>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))) set(0);
 
   // The scene.
-  std::ifstream file(argv[1]);
-  const nlohmann::json scene = nlohmann::json::parse(file);
-  for (const auto& [key, value] : scene.items()) {
-    if (key != "name" && key != "dimension" && key != "gravity" && key != "drag" && key != "particles" &&
-        key != "springs") {
-      return refuse(argv[1], key, "not modelled (only gravity, drag, springs, fixed particles)");
-    }
+  reference::Scene scene;
+  const reference::Refusal refusal = reference::read_scene(args.scene, {.dimension = D}, scene);
+  switch (refusal.what) {
+    case reference::Unmodelled::kKey:
+      return refuse(args.scene, refusal.key, "not modelled (only gravity, drag, springs, fixed particles)");
+    case reference::Unmodelled::kDimension: return refuse(args.scene, "dimension", "only 3 is modelled");
+    case reference::Unmodelled::kSpringDamping: return refuse(args.scene, "springs", "spring damping is not modelled");
+    default: break;
   }
-  if (scene.at("dimension").get<int>() != D) return refuse(argv[1], "dimension", "only 3 is modelled");
-  const int n = static_cast<int>(scene.at("particles").size());
-  std::vector<double> x(n * D), v(n * D, 0.0), m(n);
+  const int n = scene.n, unknowns = D * scene.free;
   std::vector<int> row(n, -1);  // the particle's first row in the matrix; -1: fixed
-  int unknowns = 0;
-  for (int i = 0; i < n; ++i) {
-    const nlohmann::json& q = scene["particles"][i];
-    m[i] = q.value("mass", 1.0);
-    if (!q.value("fixed", false)) {
-      row[i] = unknowns;
-      unknowns += D;
-    }
-    for (int r = 0; r < D; ++r) {
-      x[i * D + r] = vec(q["x"], r);
-      if (q.contains("v") && row[i] >= 0) v[i * D + r] = vec(q["v"], r);
-    }
-  }
-  std::vector<Spring> springs;
-  for (const nlohmann::json& s : scene.at("springs")) {
-    const int i = s.at("i").get<int>(), j = s.at("j").get<int>();
-    double rest = 0.0;
-    if (s.contains("rest")) {
-      rest = s["rest"].get<double>();
-    } else {
-      for (int r = 0; r < D; ++r) rest += (x[i * D + r] - x[j * D + r]) * (x[i * D + r] - x[j * D + r]);
-      rest = std::sqrt(rest);
-    }
-    if (s.value("damping", 0.0) != 0.0) return refuse(argv[1], "springs", "spring damping is not modelled");
-    springs.push_back({i, j, s.at("k").get<double>(), rest});
-  }
-  double g[3] = {0, 0, 0};
-  const double drag = scene.value("drag", 0.0);
-  if (scene.contains("gravity")) for (int r = 0; r < D; ++r) g[r] = vec(scene["gravity"], r);
+  for (int i = 0; i < n; ++i) if (!scene.fixed(i)) row[i] = D * scene.row[i];
+  const std::vector<double>& m = scene.m;
+  const std::vector<Spring>& springs = scene.springs;
+  const double* g = scene.g;
+  const double drag = scene.drag;
+  std::vector<double> x = scene.x, v = scene.v;
 
-  // Energies, and the scale the divergence test compares with (as
-  // pd_reference.cc).
-  auto spring_energy = [&](const std::vector<double>& at) {
-    double e = 0.0;
-    for (const Spring& s : springs) {
-      double l = 0.0;
-      for (int r = 0; r < D; ++r) l += (at[s.i * D + r] - at[s.j * D + r]) * (at[s.i * D + r] - at[s.j * D + r]);
-      const double stretch = std::sqrt(l) - s.rest;
-      e += 0.5 * s.k * stretch * stretch;
-    }
-    return e;
-  };
-  auto kinetic_plus_spring = [&]() {
-    double e = spring_energy(x);
-    for (int i = 0; i < n; ++i) {
-      if (row[i] < 0) continue;
-      for (int r = 0; r < D; ++r) e += 0.5 * m[i] * v[i * D + r] * v[i * D + r];
-    }
-    return e;
-  };
-  auto gravity_energy = [&]() {
-    double e = 0.0;
-    for (int i = 0; i < n; ++i) {
-      if (row[i] < 0) continue;
-      for (int r = 0; r < D; ++r) e -= m[i] * g[r] * x[i * D + r];
-    }
-    return e;
-  };
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < D; ++r) {
-      lo[r] = std::min(lo[r], x[i * D + r]);
-      hi[r] = std::max(hi[r], x[i * D + r]);
-    }
-  }
-  double diameter = 0.0, g_norm = 0.0;
-  for (int r = 0; r < D; ++r) {
-    diameter += (hi[r] - lo[r]) * (hi[r] - lo[r]);
-    g_norm += g[r] * g[r];
-  }
-  diameter = std::sqrt(diameter);
-  g_norm = std::sqrt(g_norm);
-  double scale = kinetic_plus_spring();
-  for (int i = 0; i < n; ++i) {
-    if (row[i] >= 0) scale += m[i] * g_norm * diameter;
-  }
+  // Energies, and the scale the divergence test compares with.
+  auto kinetic_plus_spring = [&] { return reference::kinetic_energy(scene, v, reference::spring_energy(scene, x)); };
+  reference::TimeLoop loop(args.dt, args.t_end, reference::energy_scale(scene, kinetic_plus_spring()));
 
   // H's pattern (lower triangle: CHOLMOD reads only that), built once; for
   // every entry a spring or a particle adds to, its place in H's value
@@ -269,7 +188,7 @@ int main(int argc, char** argv) {
   // The step's pieces. V: the velocities of the unknowns; position(V, i, r)
   // the stage x* = x_n + h v.
   using Vector = Eigen::VectorXd;
-  double h = dt;
+  double h = args.dt;
   Vector vn(unknowns), V(unknowns), grad(unknowns), dv(unknowns), trial(unknowns);
   std::vector<double> xs(n * D);
   auto stage = [&](const Vector& at) {
@@ -280,7 +199,7 @@ int main(int argc, char** argv) {
   // Phi (less its constant terms) at `at`; leaves x* staged.
   auto potential = [&](const Vector& at) {
     stage(at);
-    double phi = spring_energy(xs);
+    double phi = reference::spring_energy(scene, xs);
     for (int i = 0; i < n; ++i) {
       if (row[i] < 0) continue;
       for (int r = 0; r < D; ++r) {
@@ -336,14 +255,9 @@ int main(int argc, char** argv) {
     }
   };
 
-  const double exact = t_end / dt;
-  const long steps = std::abs(exact - std::round(exact)) <= 1e-9 ? std::lround(exact)
-                                                                 : static_cast<long>(std::ceil(exact));
-  double t = 0.0;
-  long taken = 0, newton_iterations = 0, factorizations = 0;
-  bool diverged = false;
-  for (long step = 0; step < steps && !diverged; ++step) {
-    h = step + 1 == steps ? t_end - t : dt;
+  long newton_iterations = 0, factorizations = 0;
+  while (loop.running()) {
+    h = loop.h();
     for (int i = 0; i < n; ++i) {
       if (row[i] >= 0) for (int r = 0; r < D; ++r) vn[row[i] + r] = v[i * D + r];
     }
@@ -352,20 +266,20 @@ int main(int argc, char** argv) {
     for (int iteration = 0;; ++iteration) {
       if (iteration == kMaxIterations) {
         std::fprintf(stderr, "newton_reference: no convergence in %d Newton iterations at t = %g; try a smaller --dt\n",
-                     kMaxIterations, t);
+                     kMaxIterations, loop.t);
         return 1;
       }
       gradient_and_hessian(V);
       factor.factorize(H);
       ++factorizations;
       if (factor.info() != Eigen::Success) {
-        std::fprintf(stderr, "newton_reference: the projected Hessian is not positive definite at t = %g\n", t);
+        std::fprintf(stderr, "newton_reference: the projected Hessian is not positive definite at t = %g\n", loop.t);
         return 1;
       }
       dv = factor.solve(-grad);
       ++newton_iterations;
       if (!dv.allFinite()) {
-        std::fprintf(stderr, "newton_reference: the Newton update is not finite at t = %g; try a smaller --dt\n", t);
+        std::fprintf(stderr, "newton_reference: the Newton update is not finite at t = %g; try a smaller --dt\n", loop.t);
         return 1;
       }
       if (dv.lpNorm<Eigen::Infinity>() <= tol) {
@@ -377,7 +291,7 @@ int main(int argc, char** argv) {
       int halvings = 0;
       for (;; alpha *= 0.5, ++halvings) {
         if (halvings == kMaxHalvings) {
-          std::fprintf(stderr, "newton_reference: the line search could not decrease Phi at t = %g; try a smaller --dt\n", t);
+          std::fprintf(stderr, "newton_reference: the line search could not decrease Phi at t = %g; try a smaller --dt\n", loop.t);
           return 1;
         }
         trial = V + alpha * dv;
@@ -394,27 +308,12 @@ int main(int argc, char** argv) {
         x[i * D + r] += h * V[row[i] + r];
       }
     }
-    t += h;
-    ++taken;
-    const double e = kinetic_plus_spring();
-    diverged = !std::isfinite(e) || (scale > 0.0 && e > 1000.0 * scale);
+    loop.step_done(h, kinetic_plus_spring());
   }
-  double x_sum = 0.0;
-  for (double c : x) x_sum += c;
-  if (!positions_file.empty()) {
-    std::FILE* out = std::fopen(positions_file.c_str(), "w");
-    if (out == nullptr) { std::fprintf(stderr, "newton_reference: cannot write %s\n", positions_file.c_str()); return 1; }
-    for (int i = 0; i < n; ++i) {
-      std::fprintf(out, "%d", i);
-      for (int r = 0; r < D; ++r) std::fprintf(out, ",%.17g", x[i * D + r]);
-      std::fprintf(out, "\n");
-    }
-    std::fclose(out);
-  }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("{\"steps\": %ld, \"diverged\": %s, \"diverged_at\": %s, \"energy_final\": %.17g, "
-              "\"seconds\": %.9g, \"newton_iterations\": %ld, \"factorizations\": %ld, \"x_sum\": %.17g}\n",
-              taken, diverged ? "true" : "false", diverged ? std::to_string(t).c_str() : "null",
-              kinetic_plus_spring() + gravity_energy(), seconds, newton_iterations, factorizations, x_sum);
+  if (!reference::write_positions(args.program, positions_file, scene, x)) return 1;
+  reference::print_summary(loop, kinetic_plus_spring() + reference::gravity_energy(scene, x), args.start,
+                           {{"newton_iterations", std::to_string(newton_iterations)},
+                            {"factorizations", std::to_string(factorizations)},
+                            {"x_sum", reference::number(reference::coordinate_sum(x))}});
   return 0;
 }

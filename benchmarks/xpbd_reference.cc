@@ -1,6 +1,7 @@
 // xpbd_reference: a plain XPBD, written for comparison only (issue 37). It
-// shares no code with springlab's solvers: one file, a scene file in, a few
-// numbers out, so that `springlab run --integrator xpbd` can be timed and
+// shares no code with springlab's solvers: one file (and the references'
+// reference_scene.h: the command line, the scene file, the energies, the time
+// loop and the output), a scene file in, a few numbers out, so that `springlab run --integrator xpbd` can be timed and
 // checked against it (benchmarks/bench_fast_reference.cc).
 //
 //   xpbd_reference SCENE.json --dt H --t-end T [--substeps S] [--iterations N]
@@ -25,146 +26,49 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include "reference_scene.h"
 
-namespace {
-
-struct Spring {
-  int i, j;
-  double k, rest, damping;
-};
-
-double vec(const nlohmann::json& j, int r) { return r < static_cast<int>(j.size()) ? j[r].get<double>() : 0.0; }
-
-}  // namespace
+using reference::Spring;
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: xpbd_reference SCENE.json --dt H --t-end T [--substeps S] [--iterations N]\n");
+  reference::CommandLine args;
+  int substeps = 10, iterations = 1;
+  if (!reference::read_command_line("xpbd_reference", argc, argv,
+                                    {{"--substeps", "S", &substeps}, {"--iterations", "N", &iterations}}, args)) {
     return 2;
   }
-  double dt = 1.0 / 60.0, t_end = 1.0;
-  int substeps = 10, iterations = 1;
-  for (int a = 2; a + 1 < argc; a += 2) {
-    const std::string key = argv[a];
-    const double value = std::atof(argv[a + 1]);
-    if (key == "--dt") dt = value;
-    else if (key == "--t-end") t_end = value;
-    else if (key == "--substeps") substeps = static_cast<int>(value);
-    else if (key == "--iterations") iterations = static_cast<int>(value);
-    else { std::fprintf(stderr, "unknown option %s\n", key.c_str()); return 2; }
-  }
-  const auto start = std::chrono::steady_clock::now();
 
-  std::ifstream file(argv[1]);
-  const nlohmann::json scene = nlohmann::json::parse(file);
-  const int D = scene.at("dimension").get<int>();
-  const int n = static_cast<int>(scene.at("particles").size());
-  std::vector<double> x(n * D), v(n * D, 0.0), p(n * D), w(n), m(n);
-  for (int i = 0; i < n; ++i) {
-    const nlohmann::json& q = scene["particles"][i];
-    m[i] = q.value("mass", 1.0);
-    w[i] = q.value("fixed", false) ? 0.0 : 1.0 / m[i];
-    for (int r = 0; r < D; ++r) {
-      x[i * D + r] = vec(q["x"], r);
-      if (q.contains("v") && w[i] > 0.0) v[i * D + r] = vec(q["v"], r);
-    }
-  }
-  std::vector<Spring> springs;
-  for (const nlohmann::json& s : scene.at("springs")) {
-    const int i = s.at("i").get<int>(), j = s.at("j").get<int>();
-    double rest = 0.0;
-    if (s.contains("rest")) {
-      rest = s["rest"].get<double>();
-    } else {
-      for (int r = 0; r < D; ++r) rest += (x[i * D + r] - x[j * D + r]) * (x[i * D + r] - x[j * D + r]);
-      rest = std::sqrt(rest);
-    }
-    springs.push_back({i, j, s.at("k").get<double>(), rest, s.value("damping", 0.0)});
-  }
-  double g[3] = {0, 0, 0}, wind[3] = {0, 0, 0};
-  double drag = scene.value("drag", 0.0), wind_c = 0.0, gust = 0.0, frequency = 0.0;
-  if (scene.contains("gravity")) for (int r = 0; r < D; ++r) g[r] = vec(scene["gravity"], r);
-  if (scene.contains("wind")) {
-    const nlohmann::json& wj = scene["wind"];
-    for (int r = 0; r < D; ++r) wind[r] = vec(wj.at("velocity"), r);
-    wind_c = wj.value("coefficient", 0.0);
-    gust = wj.value("gust", 0.0);
-    frequency = wj.value("frequency", 0.0);
-  }
+  // The scene, with spring damping and wind; other keys (planes, elements, ...) are ignored.
+  reference::Scene scene;
+  reference::read_scene(args.scene, {.ignore_other_keys = true, .spring_damping = true, .wind = true}, scene);
+  const int D = scene.D, n = scene.n;
+  const std::vector<double>& m = scene.m;
+  const std::vector<Spring>& springs = scene.springs;
+  const reference::Wind& wind = scene.wind;
+  std::vector<double> x = scene.x, v = scene.v, p(n * D), w(n);
+  for (int i = 0; i < n; ++i) w[i] = scene.fixed(i) ? 0.0 : 1.0 / m[i];
   bool damped = false;
   for (const Spring& s : springs) damped = damped || s.damping > 0.0;
 
-  // Energies, and the scale the divergence test compares with.
-  auto kinetic_plus_spring = [&]() {
-    double e = 0.0;
-    for (int i = 0; i < n; ++i) {
-      if (w[i] == 0.0) continue;
-      for (int r = 0; r < D; ++r) e += 0.5 * m[i] * v[i * D + r] * v[i * D + r];
-    }
-    for (const Spring& s : springs) {
-      double l = 0.0;
-      for (int r = 0; r < D; ++r) l += (x[s.i * D + r] - x[s.j * D + r]) * (x[s.i * D + r] - x[s.j * D + r]);
-      const double stretch = std::sqrt(l) - s.rest;
-      e += 0.5 * s.k * stretch * stretch;
-    }
-    return e;
-  };
-  auto gravity_energy = [&]() {
-    double e = 0.0;
-    for (int i = 0; i < n; ++i) {
-      if (w[i] == 0.0) continue;
-      for (int r = 0; r < D; ++r) e -= m[i] * g[r] * x[i * D + r];
-    }
-    return e;
-  };
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < D; ++r) {
-      lo[r] = std::min(lo[r], x[i * D + r]);
-      hi[r] = std::max(hi[r], x[i * D + r]);
-    }
-  }
-  double diameter = 0.0, g_norm = 0.0, w_max = 0.0;
-  for (int r = 0; r < D; ++r) {
-    diameter += (hi[r] - lo[r]) * (hi[r] - lo[r]);
-    g_norm += g[r] * g[r];
-    w_max += wind[r] * wind[r];
-  }
-  diameter = std::sqrt(diameter);
-  g_norm = std::sqrt(g_norm);
-  w_max = std::sqrt(w_max) * (1.0 + std::abs(gust));
-  double scale = kinetic_plus_spring();
-  for (int i = 0; i < n; ++i) {
-    if (w[i] > 0.0) scale += m[i] * (g_norm * diameter + 0.5 * w_max * w_max);
-  }
-
-  const double exact = t_end / dt;
-  const long steps = std::abs(exact - std::round(exact)) <= 1e-9 ? std::lround(exact)
-                                                                 : static_cast<long>(std::ceil(exact));
+  auto kinetic_plus_spring = [&] { return reference::spring_energy(scene, x, reference::kinetic_energy(scene, v)); };
+  reference::TimeLoop loop(args.dt, args.t_end, reference::energy_scale(scene, kinetic_plus_spring()));
   const double pi = std::acos(-1.0);
   std::vector<double> lambda(springs.size());
-  double t = 0.0;
-  long taken = 0;
-  bool diverged = false;
-  for (long step = 0; step < steps && !diverged; ++step) {
-    const double H = step + 1 == steps ? t_end - t : dt;
+  while (loop.running()) {
+    const double H = loop.h(), t = loop.t;
     const double h = H / substeps;
     for (int s = 0; s < substeps; ++s) {
       const double ts = t + s * h;
       // Explicit forces.
-      const double gust_factor = 1.0 + gust * std::sin(2.0 * pi * frequency * ts);
+      const double gust_factor = 1.0 + wind.gust * std::sin(2.0 * pi * wind.frequency * ts);
       for (int i = 0; i < n; ++i) {
         if (w[i] == 0.0) continue;
         for (int r = 0; r < D; ++r) {
-          const double f = m[i] * g[r] - drag * v[i * D + r] +
-                           wind_c * (wind[r] * gust_factor - v[i * D + r]);
+          const double f = m[i] * scene.g[r] - scene.drag * v[i * D + r] +
+                           wind.coefficient * (wind.velocity[r] * gust_factor - v[i * D + r]);
           v[i * D + r] += h * w[i] * f;
         }
       }
@@ -217,17 +121,9 @@ int main(int argc, char** argv) {
         x[k] = p[k];
       }
     }
-    t += H;
-    ++taken;
-    const double e = kinetic_plus_spring();
-    diverged = !std::isfinite(e) || (scale > 0.0 && e > 1000.0 * scale);
+    loop.step_done(H, kinetic_plus_spring());
   }
-  double x_sum = 0.0;
-  for (double c : x) x_sum += c;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("{\"steps\": %ld, \"diverged\": %s, \"diverged_at\": %s, \"energy_final\": %.17g, "
-              "\"seconds\": %.9g, \"x_sum\": %.17g}\n",
-              taken, diverged ? "true" : "false", diverged ? std::to_string(t).c_str() : "null",
-              kinetic_plus_spring() + gravity_energy(), seconds, x_sum);
+  reference::print_summary(loop, kinetic_plus_spring() + reference::gravity_energy(scene, x), args.start,
+                           {{"x_sum", reference::number(reference::coordinate_sum(x))}});
   return 0;
 }

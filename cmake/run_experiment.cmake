@@ -2,7 +2,12 @@
 # are current: the report after `cmake --workflow --preset bench` (or after
 # drawing changes in report/) then takes seconds, not minutes.
 #   cmake -DSPRINGLAB=path/to/springlab -DDEFINITION=experiments/x.json -DOUT=report-data
+#         [-DPLUGIN_PATH=build/release/plugins] [-DPYTHON=python3 -DPYTHON_MODULE_DIR=build/release/python]
 #         -P run_experiment.cmake
+# A definition that names its own methods ("plugins", "python":
+# docs/your-own-integrator.md) finds plug-ins named by a plain file name in
+# PLUGIN_PATH, and one with "python" runs through the Python module
+# (springlab.experiment) instead of the command line.
 # Results are current when OUT/<name>.stamp, written after the run succeeded,
 # holds the SHA-256 of the definition, of every scene (or data) file it names and of
 # the springlab executable, exactly as they are now, and the settings file
@@ -30,7 +35,7 @@ endif()
 file(SHA256 "${DEFINITION}" hash)
 set(stamp_text "definition ${hash}\n")
 get_filename_component(definition_dir "${DEFINITION}" DIRECTORY)
-string(REGEX MATCHALL "\"[^\"]+\\.(json|csv)\"" named "${text}")
+string(REGEX MATCHALL "\"[^\"]+\\.(json|csv|py)\"" named "${text}")
 list(REMOVE_DUPLICATES named)
 foreach(quoted IN LISTS named)
   string(REGEX REPLACE "^\"(.*)\"$" "\\1" scene "${quoted}")
@@ -41,6 +46,25 @@ foreach(quoted IN LISTS named)
 endforeach()
 file(SHA256 "${SPRINGLAB}" hash)
 string(APPEND stamp_text "springlab ${hash}\n")
+# Plug-ins (plain names, found in PLUGIN_PATH) and, for Python methods, the module.
+string(REGEX MATCHALL "\"[^\"/]+\\.so\"" plugins "${text}")
+foreach(quoted IN LISTS plugins)
+  string(REGEX REPLACE "^\"(.*)\"$" "\\1" plugin "${quoted}")
+  if(DEFINED PLUGIN_PATH AND EXISTS "${PLUGIN_PATH}/${plugin}")
+    file(SHA256 "${PLUGIN_PATH}/${plugin}" hash)
+    string(APPEND stamp_text "plugin ${plugin} ${hash}\n")
+  endif()
+endforeach()
+string(JSON python_files ERROR_VARIABLE no_python GET "${text}" python)
+set(uses_python FALSE)
+if(NOT no_python)
+  set(uses_python TRUE)
+  file(GLOB module "${PYTHON_MODULE_DIR}/springlab*.so")
+  foreach(m IN LISTS module)
+    file(SHA256 "${m}" hash)
+    string(APPEND stamp_text "module ${hash}\n")
+  endforeach()
+endif()
 
 set(stamp "${OUT}/${name}.stamp")
 set(current FALSE)
@@ -79,8 +103,26 @@ endif()
 if(NOT name STREQUAL "")
   file(REMOVE "${stamp}")
 endif()
-execute_process(COMMAND "${SPRINGLAB}" experiment "${DEFINITION}" --out "${OUT}"
-                RESULT_VARIABLE status)
+set(plugin_env)
+if(DEFINED PLUGIN_PATH)
+  set(plugin_env "SPRINGLAB_PLUGIN_PATH=${PLUGIN_PATH}")
+endif()
+if(uses_python)
+  file(GLOB module "${PYTHON_MODULE_DIR}/springlab*.so")
+  if(NOT PYTHON OR NOT module)
+    message("[${name}] skipped: its Python methods need the Python module (pybind11-dev python3-dev)")
+    return()
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env ${plugin_env} "PYTHONPATH=${PYTHON_MODULE_DIR}"
+                          PYTHONDONTWRITEBYTECODE=1 "${PYTHON}" -c
+                          "import sys, springlab; springlab.experiment(sys.argv[1], out=sys.argv[2])"
+                          "${DEFINITION}" "${OUT}"
+                  RESULT_VARIABLE status)
+else()
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env ${plugin_env}
+                          "${SPRINGLAB}" experiment "${DEFINITION}" --out "${OUT}"
+                  RESULT_VARIABLE status)
+endif()
 if(NOT status EQUAL 0)
   message(FATAL_ERROR "springlab experiment ${DEFINITION} failed (exit status ${status})")
 endif()

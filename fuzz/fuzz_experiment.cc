@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <string>
 
-#include "experiments/definition.h"
-#include "experiments/experiment.h"
-#include "models/scene.h"
+#include "experiments/kinds/definition.h"
+#include "experiments/kinds/experiment.h"
+#include "models/core/scene.h"
 
 namespace {
 volatile std::size_t sink;  // keeps the computed values from being optimized away

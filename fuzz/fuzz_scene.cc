@@ -9,8 +9,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "models/elastic_model.h"
-#include "models/scene.h"
+#include "models/model/model.h"
+#include "models/core/scene.h"
+#include "models/model/scene_file.h"
 
 namespace {
 volatile double sink;  // keeps the computed values from being optimized away
@@ -32,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       springlab::scene_to_json(again) != springlab::scene_to_json(scene)) {
     std::abort();
   }
-  const springlab::ElasticModel model(scene);
+  const springlab::Model model(scene);
   const springlab::Energies e =
       model.energies(model.initial_positions(), model.initial_velocities());
   sink = e.total() + model.energy_scale();

@@ -10,6 +10,7 @@
 // scene checks, the same option checks (keyword `newton_tol` is `--newton-tol`),
 // the same messages. A bad input raises springlab.Error whose text is the one
 // line `springlab` prints after "springlab: error: ".
+#include <dlfcn.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -24,13 +25,19 @@
 #include <string>
 #include <vector>
 
-#include "experiments/cli.h"
-#include "experiments/experiment_runner.h"
-#include "experiments/integrator_table.h"
-#include "experiments/simulation.h"
-#include "models/elastic_model.h"
-#include "models/element_kind.h"
-#include "models/scene.h"
+#include "experiments/analysis/claims.h"
+#include "experiments/cli/cli.h"
+#include "experiments/kinds/experiment_runner.h"
+#include "experiments/cli/integrator_table.h"
+#include "experiments/driver/simulation.h"
+#include "models/model/model.h"
+#include "models/core/element_kind.h"
+#include "models/core/scene.h"
+#include "models/model/scene_file.h"
+#include "models/model/element_registry.h"
+#include "integrators/registry/plugins.h"
+#include "integrators/registry/registry.h"
+#include "python_integrator.h"
 
 namespace py = pybind11;
 using namespace springlab;
@@ -56,7 +63,7 @@ std::string option_text(const py::handle& value) {
 // The state at each output time, and the energies there.
 class Recorder final : public Observer {
  public:
-  explicit Recorder(const ElasticModel& model) : model_(model) {}
+  explicit Recorder(const Model& model) : model_(model) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     t_.push_back(t);
     x_.push_back(model_.scene_positions(x));
@@ -68,7 +75,7 @@ class Recorder final : public Observer {
   std::vector<std::vector<double>> e_;
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
 };
 
 py::array_t<double> stack(const std::vector<Eigen::MatrixXd>& frames, Eigen::Index rows,
@@ -97,7 +104,7 @@ Scene load_scene(const py::object& source, const py::kwargs& parameters) {
   return resolve_scene(path, p);
 }
 
-py::dict run_result(const ElasticModel& model, const RunResult& r, const Recorder& rec) {
+py::dict run_result(const Model& model, const RunResult& r, const Recorder& rec) {
   py::dict out;
   const Eigen::Index n = model.particle_count(), d = model.dimension();
   py::array_t<double> t(static_cast<py::ssize_t>(rec.t_.size()));
@@ -121,10 +128,62 @@ py::dict run_result(const ElasticModel& model, const RunResult& r, const Recorde
   out["diverged"] = r.diverged();
   out["diverged_at"] = r.diverged_at ? py::object(py::float_(*r.diverged_at)) : py::object(py::none());
   out["failure"] = r.failure.empty() ? py::object(py::none()) : py::object(py::str(r.failure));
+  out["verdict"] = r.verdict ? from_json_text(verdict_json(*r.verdict).dump()) : py::object(py::none());
+  py::list warnings;
+  for (const std::string& w : warning_texts(r.warnings, r.integrator)) warnings.append(w);
+  out["warnings"] = warnings;
   out["t_final"] = r.t_final;
   out["energy_scale"] = model.energy_scale();
   out["wall_seconds"] = r.wall_seconds;
   return out;
+}
+
+// A plug-in calls the springlab it is loaded into: Python loads this module
+// with RTLD_LOCAL, so before the first plug-in its symbols are made global.
+void make_symbols_global() {
+  static const bool done = [] {
+    Dl_info self{};
+    if (::dladdr(reinterpret_cast<void*>(&make_symbols_global), &self) != 0 && self.dli_fname) {
+      ::dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
+    }
+    return true;
+  }();
+  (void)done;
+}
+
+// Runs `work` on a thread of its own while this one, the GIL released,
+// wakes every kSignalCheck to ask Python for signals (PyErr_CheckSignals,
+// with the GIL): Ctrl-C (a notebook's "interrupt kernel") sets `stop`,
+// which every simulate() on that thread honours (StopScope), and raises
+// the handler's KeyboardInterrupt once the work has stopped. Python only
+// notes a signal and runs its handler when the main thread asks.
+template <class Result>
+Result interruptible(const std::function<Result()>& work, std::atomic<bool>& stop) {
+  constexpr auto kSignalCheck = std::chrono::milliseconds(20);
+  bool interrupted = false;
+  Result result{};
+  {
+    py::gil_scoped_release release;
+    std::future<Result> running = std::async(std::launch::async, [&] {
+      const StopScope scope(&stop);
+      return work();
+    });
+    while (running.wait_for(kSignalCheck) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        interrupted = true;
+        stop = true;
+        break;
+      }
+    }
+    try {
+      result = running.get();  // rethrows the work's exception
+    } catch (const StopRequested&) {
+      if (!interrupted) throw;
+    }
+  }
+  if (interrupted) throw py::error_already_set();  // the handler's exception, still set
+  return result;
 }
 
 }  // namespace
@@ -173,9 +232,13 @@ PYBIND11_MODULE(springlab, m) {
 
   m.def(
       "run",
-      [](const Scene& scene, const std::string& integrator, double dt, double t_end, int every,
+      [](const Scene& scene, const py::object& method, double dt, double t_end, int every,
          const py::kwargs& options) {
         validate_scene(scene, scene.name);
+        if (options.contains("plugin")) make_symbols_global();
+        // A springlab.Integrator instance is registered under its name.
+        const std::string integrator = springlab::python::method_name(method);
+        if (springlab::python::restore_step_error()) PyErr_Clear();
         std::vector<std::pair<std::string, std::string>> typed;
         for (const auto& [key, value] : options) {
           std::string option = "--" + py::str(key).cast<std::string>();
@@ -186,14 +249,11 @@ PYBIND11_MODULE(springlab, m) {
             typed.emplace_back(option, option_text(value));
           }
         }
-        const ElasticModel model(scene);
-        std::string notes;
+        const Model model(scene);
+        std::vector<std::string> notes;
         const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
-        for (std::size_t at = 0; at < notes.size();) {  // "springlab: note: ..." as Python warnings
-          const std::size_t end = notes.find('\n', at);
-          const std::string line = notes.substr(at, end - at);
-          PyErr_WarnEx(PyExc_UserWarning, line.substr(line.find("note: ") + 6).c_str(), 1);
-          at = end == std::string::npos ? notes.size() : end + 1;
+        for (const std::string& note : notes) {  // `run`'s "springlab: note: ..." as warnings
+          PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1);
         }
         const TimeGrid grid = make_time_grid(dt, t_end);
         const double frames = 1.0 + std::floor(static_cast<double>(grid.steps) / every) + 1.0;
@@ -204,50 +264,29 @@ PYBIND11_MODULE(springlab, m) {
                                    " particles, over the cap of 10000000 rows: keep every K-th step with every=K");
         }
         Recorder recorder(model);
-        // Ctrl-C (a notebook's "interrupt kernel"): Python only notes the
-        // signal and runs its handler when the main thread asks. So the run
-        // goes on a thread of its own while this one, the GIL released,
-        // wakes every kSignalCheck to ask (PyErr_CheckSignals, with the
-        // GIL); on a signal it asks the run to stop (settings.options.stop:
-        // checked between steps and inside adaptive methods' internal
-        // steps), waits for it and raises the handler's KeyboardInterrupt.
-        constexpr auto kSignalCheck = std::chrono::milliseconds(20);
         std::atomic<bool> stop{false};
-        RunSettings interruptible = settings;
-        interruptible.options.stop = &stop;
+        RunSettings interruptible_settings = settings;
+        interruptible_settings.options.stop = &stop;
         // A pairing the method refuses (xpbd and a neo-Hookean material, the
         // barrier with a projection method) raises springlab.Error, as the
         // command line refuses it; a failure during the run is a result.
-        std::unique_ptr<Integrator> prepared = prepare_run(model, interruptible, "");
-        RunResult r;
-        bool interrupted = false;
-        {
-          py::gil_scoped_release release;
-          std::future<RunResult> running = std::async(std::launch::async, [&] {
-            return simulate(model, interruptible, {&recorder}, std::move(prepared));
-          });
-          while (running.wait_for(kSignalCheck) != std::future_status::ready) {
-            py::gil_scoped_acquire acquire;
-            if (PyErr_CheckSignals() != 0) {
-              interrupted = true;
-              stop = true;
-              break;
-            }
-          }
-          try {
-            r = running.get();  // rethrows the run's exception
-          } catch (const StopRequested&) {
-            if (!interrupted) throw;
-          }
-        }
-        if (interrupted) throw py::error_already_set();  // the handler's exception, still set
+        std::unique_ptr<Integrator> prepared = prepare_run(model, interruptible_settings, "");
+        const RunResult r = interruptible<RunResult>(
+            [&] { return simulate(model, interruptible_settings, {&recorder}, std::move(prepared)); },
+            stop);
+        // A Python method's step that raised: its exception, with its traceback.
+        if (springlab::python::restore_step_error()) throw py::error_already_set();
         return run_result(model, r, recorder);
       },
       py::arg("scene"), py::arg("integrator"), py::arg("dt"), py::arg("t_end"), py::arg("every") = 1,
-      "Runs a scene with one integrator, as `springlab run` does. Keywords are run's options\n"
+      "Runs a scene with one integrator, as `springlab run` does: a registered name, or an\n"
+      "instance of a springlab.Integrator subclass (your own method, registered under its name).\n"
+      "Keywords are run's options\n"
       "(newton_tol=1e-6 is --newton-tol 1e-6, stald=True is --stald). Returns a dict: t (frames,),\n"
       "x and v (frames, particles, dimension), energies (column -> (frames,)), stats (the\n"
-      "statistics every integrator reports), status, diverged, diverged_at, failure, t_final,\n"
+      "statistics every integrator reports), status, diverged, diverged_at, failure, verdict\n"
+      "(the rule that ended a diverged run: rule, value, bound, where), warnings (one line\n"
+      "each, as `run --json`), t_final,\n"
       "energy_scale, wall_seconds. A divergence or a solver failure is a result, not an error;\n"
       "a pairing the method refuses before its first step raises springlab.Error.");
 
@@ -260,14 +299,40 @@ PYBIND11_MODULE(springlab, m) {
 
   m.def(
       "experiment",
-      [](const py::object& source, const std::string& out, int jobs) {
-        // A dict is written to a temporary file first (removed after the run).
+      [](const py::object& source, const std::string& out, int jobs, const py::object& integrators) {
+        make_symbols_global();  // its "plugins" are loaded into this process
+        // A dict, or a definition whose integrators are replaced, is written
+        // to a temporary file first (removed after the run): beside the
+        // definition, so that its scene paths still resolve.
         py::object temporary = py::none();
         std::string definition;
-        if (py::isinstance<py::dict>(source)) {
-          temporary = py::module_::import("tempfile").attr("NamedTemporaryFile")(
-              py::arg("mode") = "w", py::arg("suffix") = ".json");
-          temporary.attr("write")(to_json_text(source));
+        if (py::isinstance<py::dict>(source) || !integrators.is_none()) {
+          py::object json = source;
+          std::string folder;
+          if (!py::isinstance<py::dict>(source)) {
+            definition = py::str(source).cast<std::string>();
+            const py::object path = py::module_::import("pathlib").attr("Path")(definition);
+            json = py::module_::import("json").attr("loads")(path.attr("read_text")());
+            folder = py::str(path.attr("parent")).cast<std::string>();
+          } else {
+            json = py::module_::import("copy").attr("deepcopy")(source);
+          }
+          if (!integrators.is_none()) {
+            py::list names;
+            for (const py::handle& method : integrators) {
+              names.append(springlab::python::method_name(py::reinterpret_borrow<py::object>(method)));
+            }
+            json["integrators"] = names;
+          }
+          py::dict file_options;
+          file_options["mode"] = "w";
+          file_options["suffix"] = ".json";
+          if (!folder.empty()) {
+            file_options["dir"] = folder;
+            file_options["prefix"] = ".springlab-";
+          }
+          temporary = py::module_::import("tempfile").attr("NamedTemporaryFile")(**file_options);
+          temporary.attr("write")(to_json_text(json));
           temporary.attr("flush")();
           definition = temporary.attr("name").cast<std::string>();
         } else {
@@ -282,14 +347,79 @@ PYBIND11_MODULE(springlab, m) {
           py::gil_scoped_release release;
           summary = run_experiment(definition, options);
         }
+        if (springlab::python::restore_step_error()) PyErr_Clear();  // failures are in the tables
         py::dict result;
         result["tasks_total"] = summary.tasks_total;
         result["tasks_done"] = summary.tasks_done;
         result["out"] = out;
         return result;
       },
-      py::arg("definition"), py::arg("out"), py::arg("jobs") = 1,
+      py::arg("definition"), py::arg("out"), py::arg("jobs") = 1, py::arg("integrators") = py::none(),
       "Runs an experiment definition (a path to one of experiments/*.json, or a dict in that\n"
       "format) into the folder `out`, as `springlab experiment` does; its tables are CSV files\n"
-      "there. Returns {tasks_total, tasks_done, out}.");
+      "there. integrators=[...] replaces the definition's list: names and your own methods\n"
+      "(springlab.Integrator instances) side by side. A definition's \"python\": [files] registers\n"
+      "the springlab.Integrator classes those files define. Returns {tasks_total, tasks_done, out}.");
+
+  springlab::python::bind_python_methods(m);
+
+  m.def(
+      "load_plugin",
+      [](const std::string& path) {
+        make_symbols_global();
+        return load_plugin(path);
+      },
+      py::arg("path"),
+      "Loads a plug-in of C++ integrators (springlab_add_plugin, docs/your-own-integrator.md)\n"
+      "and returns the names it registered.");
+
+  m.def(
+      "check",
+      [](const py::object& method, const py::object& order, const py::object& stable_limit,
+         bool a_stable, bool symplectic, bool dissipative, bool momentum, bool deterministic,
+         const py::object& plugin) {
+        std::string plugin_arguments;
+        if (!plugin.is_none()) {
+          make_symbols_global();
+          const std::string path = py::str(plugin).cast<std::string>();
+          load_plugin(path);
+          plugin_arguments = " --plugin " + path;
+        }
+        const bool python = !py::isinstance<py::str>(method);
+        const std::string name = springlab::python::method_name(method);
+        if (!is_integrator(name)) make_integrator(name);  // the registry's message
+        Claims claims;
+        if (!order.is_none()) claims.order = order.cast<int>();
+        if (!stable_limit.is_none()) claims.stable_limit = stable_limit.cast<double>();
+        claims.a_stable = a_stable;
+        claims.symplectic = symplectic;
+        claims.dissipative = dissipative;
+        claims.momentum = momentum;
+        claims.deterministic = deterministic;
+        if (claims.stable_limit && claims.a_stable) {
+          throw std::invalid_argument("stable_limit and a_stable: a method has a limit or none, not both");
+        }
+        if (!claims.any()) claims = stated_claims(make_integrator(name)->info());
+        CheckSubject subject{name, "--integrator " + name + plugin_arguments,
+                             "springlab check " + name + plugin_arguments};
+        if (python) {
+          const std::string cls = py::str(py::type::of(method).attr("__name__")).cast<std::string>();
+          subject.python_call = cls + "()";
+        }
+        std::atomic<bool> stop{false};
+        const CheckReport report = interruptible<CheckReport>(
+            [&] { return check_claims(subject, claims); }, stop);
+        if (springlab::python::restore_step_error()) PyErr_Clear();  // failures are results
+        py::dict out = from_json_text(check_report_json(report).dump());
+        out["text"] = check_report_text(report);
+        return out;
+      },
+      py::arg("method"), py::arg("order") = py::none(), py::arg("stable_limit") = py::none(),
+      py::arg("a_stable") = false, py::arg("symplectic") = false, py::arg("dissipative") = false,
+      py::arg("momentum") = false, py::arg("deterministic") = false, py::arg("plugin") = py::none(),
+      "Runs a method against its claims, as `springlab check` does: a registered name or your\n"
+      "own springlab.Integrator instance; claims as keywords (order=2, stable_limit=2.0,\n"
+      "a_stable=True, symplectic=True, dissipative=True, momentum=True, deterministic=True);\n"
+      "none given: the ones it states (its class attributes). Returns a dict: passed, claims\n"
+      "(each claim, passed, measured, figures, run), sanity, and text (the report as printed).");
 }

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "csv_fields.h"
-#include "experiments/definition.h"
-#include "experiments/experiment.h"
+#include "experiments/kinds/definition.h"
+#include "experiments/kinds/experiment.h"
 
 namespace springlab::testing {
 

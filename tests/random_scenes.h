@@ -9,8 +9,9 @@
 #include <string_view>
 #include <vector>
 
-#include "models/element_kind.h"
-#include "models/scene.h"
+#include "models/core/element_kind.h"
+#include "models/core/scene.h"
+#include "models/model/element_registry.h"
 
 namespace springlab::testing {
 

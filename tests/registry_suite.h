@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab::testing {
 

@@ -12,8 +12,9 @@ output (stdout or stderr) must contain:
   only `...` stands for lines left out and is not checked.
 The blocks run in order in one fresh scratch folder (a later block may read
 what an earlier one wrote) with the build's springlab and python3 first on
-PATH, the Python module on PYTHONPATH and `experiments` linked to the
-source's experiments/ folder, as if run from the repository's root with
+PATH, the Python module on PYTHONPATH, `experiments`, `examples` and `report`
+linked to the source's folders (and, with --build-dir, `build/release` to
+the build), as if run from the repository's root with
 `export PATH=$PWD/build/release:$PATH PYTHONPATH=$PWD/build/release/python`.
 Fails (exit 1) on a non-zero exit, a missing expected line, or a document
 without recipes.
@@ -118,6 +119,8 @@ def main():
                     "that import springlab are skipped)")
     ap.add_argument("--source-dir", required=True, help="the repository (for experiments/)")
     ap.add_argument("--work", required=True, help="scratch folder (emptied first)")
+    ap.add_argument("--build-dir", help="the build, linked as build/release (for recipes that "
+                    "install it)")
     ap.add_argument("--timeout", type=float, default=240, help="seconds per recipe")
     args = ap.parse_args()
 
@@ -130,8 +133,11 @@ def main():
     os.makedirs(bin_dir)
     os.symlink(os.path.abspath(args.springlab), os.path.join(bin_dir, "springlab"))
     os.symlink(os.path.abspath(args.python), os.path.join(bin_dir, "python3"))
-    os.symlink(os.path.join(os.path.abspath(args.source_dir), "experiments"),
-               os.path.join(work, "experiments"))
+    for folder in ("experiments", "examples", "report"):
+        os.symlink(os.path.join(os.path.abspath(args.source_dir), folder), os.path.join(work, folder))
+    if args.build_dir:
+        os.makedirs(os.path.join(work, "build"))
+        os.symlink(os.path.abspath(args.build_dir), os.path.join(work, "build", "release"))
     env = dict(os.environ, PATH=bin_dir + os.pathsep + os.environ.get("PATH", ""),
                MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1")
     if args.pythonpath:

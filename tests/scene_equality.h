@@ -8,11 +8,12 @@
 
 #include <string>
 
-#include "models/drag.h"
-#include "models/gravity.h"
-#include "models/scene.h"
-#include "models/springs.h"
-#include "models/wind.h"
+#include "models/springs/drag.h"
+#include "models/springs/gravity.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
+#include "models/springs/wind.h"
+#include "models/model/scene_file.h"
 
 namespace springlab::testing {
 

@@ -4,11 +4,11 @@
 
 #include <cmath>
 
-#include "models/drag.h"
-#include "models/gravity.h"
-#include "models/scene.h"
-#include "models/springs.h"
-#include "models/wind.h"
+#include "models/springs/drag.h"
+#include "models/springs/gravity.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
+#include "models/springs/wind.h"
 
 namespace springlab::testing {
 

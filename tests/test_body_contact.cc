@@ -1,4 +1,4 @@
-// Contact between rigid bodies (models/body_body_contact.cc, docs/physics.md
+// Contact between rigid bodies (models/bodies/body_body_contact.cc, docs/physics.md
 // "Contact between bodies"): the pair force conserves the total linear and
 // angular momentum through a collision (implicit midpoint), and a two-box
 // stack comes to rest with the top box on the bottom one at the heights
@@ -12,18 +12,19 @@
 #include <cmath>
 #include <string>
 
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/springs.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/springs/springs.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
 
-RunResult run(const ElasticModel& model, const std::string& integrator, double dt, double t_end,
+RunResult run(const Model& model, const std::string& integrator, double dt, double t_end,
               double newton_tol) {
   RunSettings s;
   s.integrator = integrator;
@@ -81,7 +82,7 @@ void total_momentum(const Scene& scene, const Vector& x, const Vector& v, Eigen:
 // than 10 % of the thrown one's momentum.
 TEST(BodyContact, ACollisionConservesTotalMomentum) {
   const Scene scene = collision(0.0);
-  const ElasticModel model(scene);
+  const Model model(scene);
   Eigen::Vector3d P0, L0, P, L;
   total_momentum(scene, model.initial_positions(), model.initial_velocities(), P0, L0);
   const RunResult r = run(model, "implicit-midpoint", 1e-3, 0.5, 1e-13);
@@ -107,12 +108,12 @@ TEST(BodyContact, ACollisionConservesTotalMomentum) {
 // spinning otherwise than without it (by more than 5 %).
 TEST(BodyContact, FrictionBetweenBodiesIsAPairForceAtOnePoint) {
   const Scene scene = collision(0.5);
-  const ElasticModel model(scene);
+  const Model model(scene);
   Eigen::Vector3d P0, L0, P, L;
   total_momentum(scene, model.initial_positions(), model.initial_velocities(), P0, L0);
   class Torques final : public Observer {
    public:
-    explicit Torques(const ElasticModel& m) : model(m) {}
+    explicit Torques(const Model& m) : model(m) {}
     void observe(double t, const Vector& x, const Vector& v) override {
       Vector f;
       model.force(t, x, v, f);
@@ -129,7 +130,7 @@ TEST(BodyContact, FrictionBetweenBodiesIsAPairForceAtOnePoint) {
         ++loaded;
       }
     }
-    const ElasticModel& model;
+    const Model& model;
     double worst = 0.0;
     int loaded = 0;
   } torques(model);
@@ -148,7 +149,7 @@ TEST(BodyContact, FrictionBetweenBodiesIsAPairForceAtOnePoint) {
   EXPECT_LT((P - P0).norm() / P0.norm(), 1e-10);
   RecordProperty("friction_L_drift", std::to_string((L - L0).norm() / L0.norm()));
 
-  const ElasticModel smooth(collision(0.0));
+  const Model smooth(collision(0.0));
   const RunResult without = run(smooth, "implicit-midpoint", 1e-3, 0.5, 1e-13);
   ASSERT_EQ(without.status, RunStatus::kCompleted) << without.failure;
   const BodyLayout layout = body_layout(scene, 0);
@@ -189,7 +190,7 @@ TEST(BodyContact, ABoxSlidingOnAFixedBoxDeceleratesAtMuG) {
   scene.block<Bodies>().push_back(table);
   scene.block<Bodies>().push_back(cube);
   validate_scene(scene, "slide");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const RunResult r = run(model, "implicit-euler", 1e-3, T, 1e-8);
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const BodyLayout layout = body_layout(scene, 0);
@@ -218,7 +219,7 @@ TEST(BodyContact, ABoxSlidingOnAFixedBoxDeceleratesAtMuG) {
 TEST(BodyContact, ATwoBoxStackComesToRestUnderImplicitEuler) {
   const Scene scene = make_builtin_scene("box-pile", {{"n", "2"}});
   ASSERT_EQ(scene.get<Bodies>()[1].friction, 0.5);
-  const ElasticModel model(scene);
+  const Model model(scene);
   const RunResult r = run(model, "implicit-euler", 2e-3, 2.0, 1e-8);
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const BodyLayout layout = body_layout(scene, 0);

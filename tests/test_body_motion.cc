@@ -1,4 +1,4 @@
-// The motion experiment with rigid bodies (experiments/motion_experiment.cc,
+// The motion experiment with rigid bodies (experiments/kinds/motion_experiment.cc,
 // docs/experiments-and-report.md "The report's player"): each frame holds the
 // particles then every body's surface vertices at x = p + A X, and the
 // settings give the player the points per frame and the bodies' surface
@@ -9,10 +9,10 @@
 
 #include "csv_fields.h"
 #include "experiment_tasks.h"
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 
 namespace springlab {
 namespace {
@@ -36,7 +36,7 @@ TEST(BodyMotion, FramesHoldTheBodiesSurfaceVerticesAndTheSettingsTheirFaces) {
   ASSERT_EQ(rows[1].size(), 3u);  // t = 0, 0.05, 0.1
   ASSERT_EQ(rows[0].size(), 3u * 17u);
   // The last frame: the run's final state, p + A X for every vertex.
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.01;

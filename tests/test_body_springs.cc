@@ -1,4 +1,4 @@
-// Springs with a body point at an end (models/body_springs.h, docs/physics.md
+// Springs with a body point at an end (models/bodies/body_springs.h, docs/physics.md
 // "Springs to body points"), against closed forms: a box hung by a corner
 // of its mesh frame swings at the compound pendulum's period; a spring
 // between two spinning bodies conserves their total linear and angular
@@ -16,15 +16,16 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation.h"
-#include "models/bodies.h"
-#include "models/body_springs.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/mass_properties.h"
-#include "models/springs.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/bodies/body_springs.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/bodies/mass_properties.h"
+#include "models/springs/springs.h"
 #include "registry_suite.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -71,7 +72,7 @@ SpringEnd body_end(int b, const Eigen::Vector3d& X) {
 }
 
 // Where a spring end is in state (x): a particle's place or p + A X_p.
-Eigen::Vector3d end_point(const ElasticModel& model, const Vector& x, const SpringEnd& e) {
+Eigen::Vector3d end_point(const Model& model, const Vector& x, const SpringEnd& e) {
   const Scene& scene = model.scene();
   if (!e.is_body()) {
     // (The tests' particles are fixed: at their scene place.)
@@ -128,7 +129,7 @@ TEST(BodySprings, ABoxHungByAMeshPointSwingsAtTheCompoundPendulumPeriod) {
   // The mesh-frame point starts at the pivot.
   EXPECT_LT(spring_end_rest_point(scene, hinge.j).norm(), 1e-14);
 
-  const ElasticModel model(scene);
+  const Model model(scene);
   Recorder rec;
   const RunResult r = simulate(model, settings("implicit-midpoint", 1e-3, 1.6), {&rec});
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -188,7 +189,7 @@ TEST(BodySprings, APairOfBodiesConservesTotalMomentum) {
   s.rest = 0.6;
   scene.block<BodySprings>().push_back(s);
   validate_scene(scene, "pair");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const BodyLayout layout = body_layout(scene, 0);
   struct Momenta {
     Eigen::Vector3d P = Eigen::Vector3d::Zero(), L = Eigen::Vector3d::Zero(), L0;
@@ -257,7 +258,7 @@ TEST(BodySprings, AParticleHungFromAFixedBodyRestsAtTheClosedFormPlaceUnderEvery
   plain.block<Springs>().push_back({.i = 0, .j = 1, .k = k, .rest = rest});
 
   const Eigen::Vector3d equilibrium = anchor - Eigen::Vector3d(0.0, rest + m * g / k, 0.0);
-  const ElasticModel model(scene), reference(plain);
+  const Model model(scene), reference(plain);
   for (const char* method : {"implicit-euler", "quasi-newton", "projective-dynamics", "xpbd"}) {
     const bool quasi = std::string(method) == "quasi-newton";
     RunSettings run = settings(quasi ? "implicit-euler" : method, 0.01, 5.0);
@@ -292,7 +293,7 @@ class EveryIntegratorOnBoxChain : public testing::RegistryTest {};
 TEST_P(EveryIntegratorOnBoxChain, RunsOrRefusesInOneLine) {
   const Scene scene = make_builtin_scene("box-chain");
   ASSERT_EQ(scene.get<BodySprings>().size(), 3u);
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings run = settings(1e-4, 0.02);
   run.options.newton_tol = 1e-9;  // m/s, at speeds ~ 0.1 m/s
   const RunResult r = simulate(model, run);

@@ -12,8 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "models/builtin_scenes.h"
+#include "models/scenes/builtin_scenes.h"
 #include "scene_equality.h"
+#include "models/model/scene_file.h"
+#include "models/fem/fem.h"
+#include "models/materials/material.h"
 
 namespace springlab {
 namespace {
@@ -177,6 +180,43 @@ TEST(BuiltinScenesTest, ExactMessages) {
   EXPECT_EQ(build_error("oscillator", {{"rest", "1"}, {"amplitude", "-1"}}),
             "scene 'oscillator': parameter 'amplitude' must satisfy rest + amplitude > 0 (got rest "
             "1, amplitude -1)");
+  EXPECT_EQ(build_error("chain", {{"stretc", "1"}}),
+            "scene 'chain': unknown parameter 'stretc' (did you mean 'stretch'?) (parameters: n, k, "
+            "mass, length, drag, g, horizontal, stretch)");
+  EXPECT_EQ(build_error("beam", {{"model", "corotatd"}}),
+            "scene 'beam': parameter 'model' must be one of linear, corotated, stvk, neo-hookean, "
+            "stable-neo-hookean or its number 0 to 4 (got 'corotatd') (did you mean 'corotated'?)");
+  EXPECT_EQ(build_error("block", {{"model", "5"}}),
+            "scene 'block': parameter 'model' must be one of linear, corotated, stvk, neo-hookean, "
+            "stable-neo-hookean or its number 0 to 4 (got '5')");
+}
+
+// Every material of the registry is usable in every finite-element scene by
+// its name (issue 47: one file and one line add a material, usable here),
+// and the name gives exactly the scene its registry number gives.
+TEST(BuiltinScenesTest, AMaterialIsChosenByNameOrByItsNumber) {
+  int scenes_with_a_model = 0;
+  for (const BuiltinScene& s : builtin_scenes()) {
+    const auto model = std::find_if(s.parameters.begin(), s.parameters.end(),
+                                    [](const SceneParameter& p) { return p.name == "model"; });
+    if (model == s.parameters.end()) continue;
+    ++scenes_with_a_model;
+    const std::vector<const MaterialModel*> materials = material_models();
+    ASSERT_EQ(model->choices.size(), materials.size()) << s.name;
+    for (std::size_t i = 0; i < materials.size(); ++i) {
+      const std::string name(materials[i]->name);
+      SCOPED_TRACE(s.name + " " + name);
+      EXPECT_EQ(model->choices[i], name);
+      const std::string by_name_error = build_error(s.name, {{"model", name}});
+      EXPECT_EQ(by_name_error, build_error(s.name, {{"model", std::to_string(i)}}));
+      if (by_name_error != "(no error)") continue;  // e.g. a model without a membrane form
+      const Scene by_name = make_builtin_scene(s.name, {{"model", name}});
+      expect_same_scene(by_name, make_builtin_scene(s.name, {{"model", std::to_string(i)}}));
+      ASSERT_EQ(by_name.get<Materials>().size(), 1u);
+      EXPECT_EQ(by_name.get<Materials>()[0].model, name);
+    }
+  }
+  EXPECT_EQ(scenes_with_a_model, 3);  // beam, block, membrane
 }
 
 TEST(BuiltinScenesTest, AcceptsOrdinaryNumberSpellingsAndTheLastValueWins) {

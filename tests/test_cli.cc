@@ -24,7 +24,7 @@
 
 #include "csv_fields.h"
 #include "run_process.h"
-#include "integrators/registry.h"
+#include "integrators/registry/registry.h"
 
 #ifndef SPRINGLAB_EXE
 #error "SPRINGLAB_EXE must name the springlab executable"

@@ -10,17 +10,18 @@
 #include <numbers>
 #include <string>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
 #include "random_scenes.h"
 #include "registry_suite.h"
-#include "experiments/stability.h"
-#include "models/contact.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/scene.h"
-#include "models/springs.h"
+#include "experiments/analysis/stability.h"
+#include "models/contact/contact.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -53,7 +54,7 @@ Scene drop(double m, double y0, double g, ContactModel model, double stiffness,
 // Implicit Euler at a step of 10 s is a static solve (inertia negligible).
 TEST(Contact, PenaltyRestingGapIsWeightOverStiffness) {
   const double m = 2.0, g = 9.81, k = 5e4;
-  const ElasticModel model(drop(m, 0.0, g, ContactModel::kPenalty, k));
+  const Model model(drop(m, 0.0, g, ContactModel::kPenalty, k));
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 10.0;
@@ -85,7 +86,7 @@ TEST(Contact, ExplicitStabilityLimitIsTheContactFrequency) {
   top.point = {0.0, -depth, 0.0};
   top.normal = {0.0, -1.0, 0.0};  // penetrated above y = -depth
   s.block<Planes>().push_back(top);
-  const ElasticModel model(s);
+  const Model model(s);
   const double w = std::sqrt(2.0 * k / m), limit = 2.0 * std::sqrt(2.0) / w;
   StabilitySettings settings;
   settings.run.integrator = "rk4";
@@ -101,7 +102,7 @@ TEST(Contact, ExplicitStabilityLimitIsTheContactFrequency) {
 // Without friction or drag a bounce stores and returns the energy: the
 // implicit midpoint rule keeps the total within 1 % over several bounces.
 TEST(Contact, BounceUnderImplicitMidpointKeepsTheEnergy) {
-  const ElasticModel model(drop(1.0, 0.1, 9.81, ContactModel::kPenalty, 1e5));
+  const Model model(drop(1.0, 0.1, 9.81, ContactModel::kPenalty, 1e5));
   RunSettings s;
   s.integrator = "implicit-midpoint";
   s.dt = 5e-4;
@@ -122,7 +123,7 @@ TEST(Contact, AdmissibleFractionIsWhereTheFirstGapCloses) {
   Particle second;
   second.x = {1.0, 0.05, 0.0};
   s.particles.push_back(second);
-  const ElasticModel barrier(s);
+  const Model barrier(s);
   const Vector x = barrier.initial_positions();
   Vector dx(4);
   dx << 0.0, -0.4, 0.0, -0.2;  // gaps 0.2 and 0.05: closed at 0.5 and 0.25
@@ -132,7 +133,7 @@ TEST(Contact, AdmissibleFractionIsWhereTheFirstGapCloses) {
   dx << 0.0, 0.1, 0.0, 0.2;
   EXPECT_EQ(barrier.admissible_fraction(x, dx), std::numeric_limits<double>::infinity());
   s.block<Contact>().model = ContactModel::kPenalty;
-  const ElasticModel penalty(s);
+  const Model penalty(s);
   dx << 0.0, -0.4, 0.0, -0.2;
   EXPECT_EQ(penalty.admissible_fraction(x, dx), std::numeric_limits<double>::infinity());
 }
@@ -145,7 +146,7 @@ TEST(Contact, AdmissibleFractionIsWhereTheFirstGapCloses) {
 TEST(Contact, LaggedFrictionIsTheGradientOfItsDissipationPotential) {
   for (int dim : {2, 3}) {
     for (unsigned seed = 1; seed <= 3; ++seed) {
-      const ElasticModel model(
+      const Model model(
           testing::random_scene({&testing::kind_named("friction")}, dim, seed));
       ASSERT_FALSE(model.derives_from_potentials());
       ASSERT_FALSE(model.jacobian_symmetric());
@@ -200,7 +201,7 @@ class LowestGap final : public Observer {
 // to take a smaller step, never with a closed gap. Explicit Euler steps
 // through the plane and ends diverged.
 TEST(Contact, BarrierKeepsEveryGapPositiveForImplicitMethods) {
-  const ElasticModel model(drop(1.0, 0.2, 9.81, ContactModel::kBarrier, 1e3, 0.01));
+  const Model model(drop(1.0, 0.2, 9.81, ContactModel::kBarrier, 1e3, 0.01));
   for (const char* name : {"implicit-euler", "implicit-midpoint", "discrete-gradient"}) {
     for (double dt : {1.0 / 30.0, 1.0 / 120.0}) {
       RunSettings s;
@@ -234,12 +235,12 @@ TEST(Contact, BarrierKeepsEveryGapPositiveForImplicitMethods) {
 // rk4, whose stage inside the plane makes the state non-finite, diverged
 // with no message at all. Both now name what keeps gaps open.
 TEST(Contact, BarrierDivergenceSaysToUseImplicitEulerAndWhy) {
-  const ElasticModel drop_model(drop(1.0, 0.2, 9.81, ContactModel::kBarrier, 1e3, 0.01));
+  const Model drop_model(drop(1.0, 0.2, 9.81, ContactModel::kBarrier, 1e3, 0.01));
   // (On the drop linear-implicit-euler's linear solve fails first; the
   // block, dropped on the ground, it steps through.)
-  const ElasticModel block(make_builtin_scene("block", {{"n", "2"}, {"contact", "1"}}));
+  const Model block(make_builtin_scene("block", {{"n", "2"}, {"contact", "1"}}));
   for (const char* name : {"explicit-euler", "linear-implicit-euler", "rk4"}) {
-    const ElasticModel& model =
+    const Model& model =
         std::string(name) == "linear-implicit-euler" ? block : drop_model;
     RunSettings s;
     s.integrator = name;
@@ -264,7 +265,7 @@ TEST(Contact, HugeFiniteNormalIsNormalizedWithoutOverflow) {
           "planes": [{"point": [0, 0, 0], "normal": [0, 1e308, 1e308]}],
           "contact": {"model": "penalty", "stiffness": 100}})",
       "huge-normal.json");
-  const ElasticModel model(s);
+  const Model model(s);
   const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   // gap d = n.x = -1/sqrt(2): k/2 d^2 = 25 J.
   EXPECT_NEAR(e["contact"], 25.0, 1e-12);
@@ -306,7 +307,7 @@ TEST(Contact, BarrierKeepsTheBlockAndTheClothAboveTheGround) {
         "cvode-bdf", "ida", "arkode-dirk", "arkode-imex"}},
   };
   for (const Case& c : cases) {
-    const ElasticModel model(make_builtin_scene(c.scene, c.parameters));
+    const Model model(make_builtin_scene(c.scene, c.parameters));
     for (const char* name : c.integrators) {
       RunSettings s;
       s.integrator = name;
@@ -332,7 +333,7 @@ class Friction : public testing::RegistryTest {
   // Runs slope with `parameters`; false when the run did not complete.
   bool run(const std::vector<std::pair<std::string, std::string>>& parameters, double t_end,
            RunResult& r, Observer* observer = nullptr) {
-    const ElasticModel model(make_builtin_scene("slope", parameters));
+    const Model model(make_builtin_scene("slope", parameters));
     RunSettings s = settings(1e-4, t_end);
     s.options.newton_tol = 1e-10;
     std::vector<Observer*> observers;
@@ -367,7 +368,7 @@ class SpeedAt final : public Observer {
 TEST_P(Friction, SticksWhenTheSlopeIsBelowTheFrictionAngle) {
   const double theta = radians(20.0), mu = 0.5, t = 2.0;
   RunResult r;
-  const ElasticModel start(make_builtin_scene("slope", {{"angle", "20"}, {"friction", "0.5"}}));
+  const Model start(make_builtin_scene("slope", {{"angle", "20"}, {"friction", "0.5"}}));
   if (!run({{"angle", "20"}, {"friction", "0.5"}}, t, r)) GTEST_SKIP() << r.failure;
   const double creep = (r.x_final - start.initial_positions()).head(2).norm();
   EXPECT_LE(creep, kEps * t);
@@ -410,7 +411,7 @@ TEST_P(Friction, StopsAfterTheCoulombDistance) {
 // iterations.
 TEST(Contact, FastSolversRestingGapIsWeightOverStiffness) {
   const double m = 2.0, g = 9.81, k = 5e4;
-  const ElasticModel model(drop(m, 0.0, g, ContactModel::kPenalty, k));
+  const Model model(drop(m, 0.0, g, ContactModel::kPenalty, k));
   for (const char* name : {"xpbd", "projective-dynamics"}) {
     for (int substeps : {1, 10}) {
       for (int iterations : {1, 3}) {
@@ -428,7 +429,7 @@ TEST(Contact, FastSolversRestingGapIsWeightOverStiffness) {
     }
   }
   // The barrier is refused by both, with a message that says what to use.
-  const ElasticModel barrier(drop(m, 0.1, g, ContactModel::kBarrier, 1e3, 0.01));
+  const Model barrier(drop(m, 0.1, g, ContactModel::kBarrier, 1e3, 0.01));
   for (const char* name : {"xpbd", "projective-dynamics"}) {
     RunSettings s;
     s.integrator = name;
@@ -447,19 +448,19 @@ INSTANTIATE_TEST_SUITE_P(Registry, Friction, ::testing::ValuesIn(integrator_name
 // own dissipation being O(h)), within 1 % of the energy lost.
 class PowerIntegral final : public Observer {
  public:
-  explicit PowerIntegral(const ElasticModel& m) : model(m) {}
+  explicit PowerIntegral(const Model& m) : model(m) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     const double p = model.nonconservative_power(t, x, v);
     if (t > 0.0) work += 0.5 * (t - t_last) * (p + p_last);
     t_last = t;
     p_last = p;
   }
-  const ElasticModel& model;
+  const Model& model;
   double work = 0.0, t_last = 0.0, p_last = 0.0;
 };
 
 TEST(Contact, FrictionWorkIsTheEnergyLost) {
-  const ElasticModel model(make_builtin_scene("slope", {{"angle", "30"}, {"friction", "0.3"}}));
+  const Model model(make_builtin_scene("slope", {{"angle", "30"}, {"friction", "0.3"}}));
   RunSettings s;
   s.integrator = "rk4";
   s.dt = 1e-4;

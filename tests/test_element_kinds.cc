@@ -1,4 +1,4 @@
-// Shared suites over the element kind registry (models/element_kind.h), in
+// Shared suites over the element kind registry (models/core/element_kind.h), in
 // 2-D and 3-D, on each kind's own random instances and on all kinds at once:
 // a kind is covered by registering it.
 //   - its random instance is a valid scene whose file reads back to the same
@@ -15,9 +15,11 @@
 #include <ostream>
 #include <string>
 
-#include "models/elastic_model.h"
+#include "models/model/model.h"
 #include "random_scenes.h"
 #include "registry_suite.h"
+#include "models/model/scene_file.h"
+#include "models/model/element_registry.h"
 
 namespace springlab {
 namespace {
@@ -62,7 +64,7 @@ class EveryKind : public ::testing::TestWithParam<KindCase> {
   Scene potential_scene(unsigned seed, RandomStates states = RandomStates::kAny) const {
     std::vector<const ElementKind*> kinds;
     for (const ElementKind* kind : kinds_of(GetParam())) {
-      if (ElasticModel(random_scene({kind}, GetParam().dim, seed)).derives_from_potentials()) {
+      if (Model(random_scene({kind}, GetParam().dim, seed)).derives_from_potentials()) {
         kinds.push_back(kind);
       }
     }
@@ -110,7 +112,7 @@ TEST_P(EveryKind, RandomInstanceIsAValidSceneThatReadsBack) {
     const std::string text = scene_to_json(s);
     const Scene again = parse_scene(text, "random.json");
     EXPECT_EQ(scene_to_json(again), text);
-    const ElasticModel model(s), reread(again);
+    const Model model(s), reread(again);
     Vector f, g;
     model.force(0.3, model.initial_positions(), model.initial_velocities(), f);
     reread.force(0.3, reread.initial_positions(), reread.initial_velocities(), g);
@@ -123,7 +125,7 @@ TEST_P(EveryKind, RandomInstanceIsAValidSceneThatReadsBack) {
 // has no such form (spring damping) is never asked for one.
 TEST_P(EveryKind, ForceIsMinusGradientOfItsReportedPotentials) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    const ElasticModel model(potential_scene(seed));
+    const Model model(potential_scene(seed));
     if (!model.derives_from_potentials()) GTEST_SKIP() << "no potential";
     const double t = 0.7;
     const Vector x = model.initial_positions();
@@ -152,7 +154,7 @@ TEST_P(EveryKind, ForceIsMinusGradientOfItsReportedPotentials) {
 
 TEST_P(EveryKind, JacobiansMatchCentralDifferences) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    const ElasticModel model(scene(seed));
+    const Model model(scene(seed));
     const double t = 0.37 * seed;
     const Vector x = model.initial_positions();
     const Vector v = model.initial_velocities();
@@ -189,7 +191,7 @@ TEST_P(EveryKind, JacobiansMatchCentralDifferences) {
 TEST_P(EveryKind, DefinitePartIsSemidefiniteAndExactWhereItCanBe) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
     for (RandomStates states : {RandomStates::kAny, RandomStates::kDefinite}) {
-      const ElasticModel model(potential_scene(seed, states));
+      const Model model(potential_scene(seed, states));
       if (!model.derives_from_potentials()) GTEST_SKIP() << "no potential: no definite part";
       const Vector x = model.initial_positions();
       const Vector v = model.initial_velocities();
@@ -212,7 +214,7 @@ TEST_P(EveryKind, DefinitePartIsSemidefiniteAndExactWhereItCanBe) {
 TEST_P(EveryKindOnItsOwn, StoredEnergyIsInTheKindsColumn) {
   const KindCase& c = GetParam();
   const Scene s = scene(4);
-  const ElasticModel model(s);
+  const Model model(s);
   const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   const double potential = e.total() - e.kinetic();
   if (c.kind->energy.name.empty()) {

@@ -1,5 +1,5 @@
-// The accuracy experiments (experiments/convergence_experiment.cc,
-// experiments/work_precision_experiment.cc) in-process: small definitions
+// The accuracy experiments (experiments/kinds/convergence_experiment.cc,
+// experiments/kinds/work_precision_experiment.cc) in-process: small definitions
 // parsed with parse_experiment, tasks run directly, their CSV rows read back
 // and checked against what the methods must do (fitted orders against
 // IntegratorInfo.order, errors shrinking with the tolerance, cost growing as
@@ -15,8 +15,8 @@
 
 #include "csv_fields.h"
 #include "experiment_tasks.h"
-#include "experiments/experiment.h"
-#include "integrators/registry.h"
+#include "experiments/kinds/experiment.h"
+#include "integrators/registry/registry.h"
 
 namespace springlab {
 namespace {

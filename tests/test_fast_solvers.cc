@@ -10,14 +10,15 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/fem.h"
-#include "models/gravity.h"
-#include "models/scene.h"
-#include "models/springs.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/fem/fem.h"
+#include "models/springs/gravity.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -33,7 +34,7 @@ Scene linear_spring() {
 
 RunResult run(const Scene& scene, const std::string& method, double dt, double t_end,
               int iterations = 0, int substeps = 0) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = method;
   s.dt = dt;
@@ -92,7 +93,7 @@ TEST(FastSolvers, XpbdProjectsTheSpringsInTheScenesOrder) {
     p[s.i] += w[s.i] * dl * d / l;
     p[s.j] -= w[s.j] * dl * d / l;
   }
-  const ElasticModel model(scene);
+  const Model model(scene);
   const Eigen::MatrixXd got = model.scene_positions(xpbd.x_final);
   double error = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -109,7 +110,7 @@ TEST(FastSolvers, XpbdProjectsTheSpringsInTheScenesOrder) {
 // the peak is 29 J (2.1 E_s). Cloth 128 runs in the soak label.
 class PeakEnergy final : public Observer {
  public:
-  explicit PeakEnergy(const ElasticModel& model) : model_(model), e_(model.energies(
+  explicit PeakEnergy(const Model& model) : model_(model), e_(model.energies(
       model.initial_positions(), model.initial_velocities())) {}
   void observe(double, const Vector& x, const Vector& v) override {
     model_.energies(x, v, e_);
@@ -118,12 +119,12 @@ class PeakEnergy final : public Observer {
   double peak = 0.0;
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
   Energies e_;
 };
 
 TEST(FastSolvers, XpbdClothStaysBoundedAtTenSubstepsOfOneIteration) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "64"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "64"}}));
   RunSettings s;
   s.integrator = "xpbd";
   s.dt = 1.0 / 60.0;
@@ -205,7 +206,7 @@ TEST(FastSolvers, ProjectiveDynamicsSolvesCorotatedElementsDescendingToImplicitE
   for (const Scene& scene : projective_element_scenes()) {
     SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
                  std::to_string(scene.get<Tetrahedra>().size()) + " tetrahedra");
-    const ElasticModel model(scene);
+    const Model model(scene);
     const Vector x0 = model.initial_positions(), v0 = model.initial_velocities();
     const auto Phi = [&](const Vector& x) {
       const Vector d = x - x0 - h * v0;
@@ -248,11 +249,11 @@ std::vector<Scene> volume_element_scenes() {
 
 // The system's projective elements (none, with a failure, if it has no
 // projective form).
-std::vector<ProjectiveElement> projective_elements(const ElasticModel& model) {
+std::vector<ProjectiveElement> projective_elements(const Model& model) {
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
-  std::string why;
-  EXPECT_TRUE(model.projective_form(constraints, elements, why)) << why;
+  Refusal why;
+  EXPECT_TRUE(model.projective_form(constraints, elements, why)) << why.text;
   return elements;
 }
 
@@ -287,7 +288,7 @@ TEST(FastSolvers, CorotatedsProjectiveFormHasItsStiffnessAtRest) {
   for (const Scene& scene : volume_element_scenes()) {
     SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
                  std::to_string(scene.particles.size()) + " particles");
-    const ElasticModel model(scene);
+    const Model model(scene);
     const std::vector<ProjectiveElement> elements = projective_elements(model);
     ASSERT_FALSE(elements.empty());
     const int dim = scene.dimension;
@@ -337,7 +338,7 @@ TEST(FastSolvers, ProjectiveDynamicsSolvesCorotatedsVolumeForm) {
   for (const Scene& scene : volume_element_scenes()) {
     SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
                  std::to_string(scene.particles.size()) + " particles");
-    const ElasticModel model(scene);
+    const Model model(scene);
     const std::vector<ProjectiveElement> elements = projective_elements(model);
     ASSERT_FALSE(elements.empty());
     const int dim = scene.dimension;
@@ -420,7 +421,7 @@ TEST(FastSolvers, XpbdSolvesCorotatedElementsApproachingImplicitEulerAtTheSubste
   for (const Scene& scene : projective_element_scenes()) {
     SCOPED_TRACE(std::to_string(scene.dimension) + "-D, " +
                  std::to_string(scene.get<Tetrahedra>().size()) + " tetrahedra");
-    const ElasticModel model(scene);
+    const Model model(scene);
     RunSettings settings;
     settings.integrator = "implicit-euler";
     settings.dt = h / substeps;
@@ -470,7 +471,7 @@ TEST(FastSolvers, XpbdHangingMassSettlesAtWeightOverStiffness) {
 // second confirms it.
 TEST(QuasiNewton, AgreesWithNewtonToTheTolerance) {
   const Scene cloth = make_builtin_scene("cloth", {{"n", "12"}});
-  const ElasticModel model(cloth);
+  const Model model(cloth);
   auto step = [&](Solver solver, double tol, double t_end, IntegratorStats* stats = nullptr) {
     RunSettings s;
     s.integrator = "implicit-euler";
@@ -499,7 +500,7 @@ TEST(QuasiNewton, AgreesWithNewtonToTheTolerance) {
 }
 
 TEST(QuasiNewton, OneIterationOnALinearSpring) {
-  const ElasticModel spring(linear_spring());
+  const Model spring(linear_spring());
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.05;
@@ -516,7 +517,7 @@ TEST(QuasiNewton, OneIterationOnALinearSpring) {
 // step up first: with --max-newton 1 neither reaches 1e-6 m/s on the first
 // step of a falling cloth.
 TEST(QuasiNewton, AStallThenANewtonFailureAreBothNamed) {
-  const ElasticModel cloth(make_builtin_scene("cloth", {{"n", "8"}}));
+  const Model cloth(make_builtin_scene("cloth", {{"n", "8"}}));
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 1.0 / 60.0;
@@ -536,7 +537,7 @@ TEST(QuasiNewton, AStallThenANewtonFailureAreBothNamed) {
 
 // Implicit Euler on `model` to t_end at dt, solved by Newton and by
 // quasi-Newton to one --newton-tol; both runs must complete.
-void newton_and_quasi_newton(const ElasticModel& model, double dt, double t_end, double tol,
+void newton_and_quasi_newton(const Model& model, double dt, double t_end, double tol,
                              RunResult& newton, RunResult& quasi) {
   RunSettings s;
   s.integrator = "implicit-euler";
@@ -568,7 +569,7 @@ TEST(QuasiNewton, ExtrapolationLandsOnTheMinimumOfAQuadraticStep) {
       "particles": [{"x": [0, 0, 0], "fixed": true}, {"x": [0, 1, 0], "fixed": true},
                     {"x": [0, 0, 1], "fixed": true}, {"x": [0.1, 0, 0]}],
       "springs": [], "tetrahedra": [{"nodes": [0, 1, 2, 3], "material": "m"}]})";
-  const ElasticModel tet(parse_scene(text, "tet.json"));
+  const Model tet(parse_scene(text, "tet.json"));
   RunResult newton, quasi;
   // dt = 0.01: h^2 mu W / L^2 = 500 W, m = 250 W, a* = 1250 / 750
   ASSERT_NO_FATAL_FAILURE(newton_and_quasi_newton(tet, 0.01, 0.01, 1e-12, newton, quasi));
@@ -584,7 +585,7 @@ TEST(QuasiNewton, ExtrapolationLandsOnTheMinimumOfAQuadraticStep) {
 TEST(QuasiNewton, SolvesElementsOfAnyMaterialAsNewtonDoes) {
   for (const char* dimension : {"2", "3"}) {
     SCOPED_TRACE(std::string(dimension) + "-D");
-    const ElasticModel beam(
+    const Model beam(
         make_builtin_scene("beam", {{"dimension", dimension}, {"nx", "10"}, {"ny", "2"}}));
     RunResult newton, quasi;
     ASSERT_NO_FATAL_FAILURE(newton_and_quasi_newton(beam, 1.0 / 60.0, 0.5, 1e-9, newton, quasi));
@@ -598,7 +599,7 @@ TEST(QuasiNewton, SolvesElementsOfAnyMaterialAsNewtonDoes) {
 // implicit Euler's converged step with rho = 0.99 than without; with
 // rho = 0 (off) the iterates are the plain ones, bit for bit.
 TEST(FastSolvers, ChebyshevBringsProjectiveDynamicsCloserAtEqualIterations) {
-  const ElasticModel cloth(make_builtin_scene("cloth", {{"n", "16"}}));
+  const Model cloth(make_builtin_scene("cloth", {{"n", "16"}}));
   const double h = 1.0 / 60.0;
   IntegratorOptions tight;
   tight.newton_tol = 1e-12;
@@ -625,10 +626,10 @@ TEST(FastSolvers, ChebyshevBringsProjectiveDynamicsCloserAtEqualIterations) {
 }
 
 // The model's physics alone (MechanicalSystem, parts 1 and 2 of
-// models/mechanical_system.h's map), without the fast solvers' views.
+// models/core/mechanical_system.h's map), without the fast solvers' views.
 class PhysicsOnly final : public MechanicalSystem {
  public:
-  explicit PhysicsOnly(const ElasticModel& model) : m_(model) {}
+  explicit PhysicsOnly(const Model& model) : m_(model) {}
   using MechanicalSystem::force;
   using MechanicalSystem::jacobians;
   Eigen::Index dofs() const override { return m_.dofs(); }
@@ -660,16 +661,16 @@ class PhysicsOnly final : public MechanicalSystem {
   VelocityDependence velocity_dependence() const override { return m_.velocity_dependence(); }
 
  private:
-  const ElasticModel& m_;
+  const Model& m_;
 };
 
 // The fast solvers see a system only through its views
-// (MechanicalSystem::fast_solver_views, models/fast_solver_views.h): a
+// (MechanicalSystem::fast_solver_views, models/core/fast_solver_views.h): a
 // system without them is refused with the message that names the method
 // to use, while Newton's implicit Euler, which needs only the physics,
 // steps it exactly as it steps the model.
 TEST(FastSolvers, ASystemWithoutViewsIsRefusedAndNewtonStillRunsIt) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "4"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "4"}}));
   const PhysicsOnly physics(model);
   ASSERT_EQ(model.fast_solver_views(), static_cast<const FastSolverViews*>(&model));
   ASSERT_EQ(physics.fast_solver_views(), nullptr);

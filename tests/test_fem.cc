@@ -16,16 +16,17 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/fem.h"
-#include "models/fem_elements.h"
-#include "models/gravity.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/fem/fem.h"
+#include "models/fem/fem_elements.h"
+#include "models/springs/gravity.h"
 #include "models/materials/material.h"
-#include "models/scene.h"
+#include "models/core/scene.h"
 #include "registry_suite.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -74,7 +75,7 @@ TEST(FiniteElements, PatchTestUniformStrainHasNoInteriorForce) {
         A = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix() * A;
       }
       const Scene scene = deformed_uniformly(rest, A, Eigen::Vector3d(0.2, -0.1, 0.3));
-      const ElasticModel model_(scene);
+      const Model model_(scene);
       const Energies e = model_.energies(model_.initial_positions(), model_.initial_velocities());
       // Psi(F) with F the deformation in the element's own frame.
       const MaterialModel& m = *material_models()[model];
@@ -124,7 +125,7 @@ TEST(FiniteElements, TetrahedronFastPathIsThePlainElementForce) {
     SCOPED_TRACE(std::string(material_models()[m]->name));
     const Scene scene = make_builtin_scene(
         "beam", {{"dimension", "3"}, {"nx", "3"}, {"ny", "2"}, {"model", std::to_string(m)}});
-    // Internal order: free particles first (as ElasticModel numbers them).
+    // Internal order: free particles first (as Model numbers them).
     ParticleOrder order;
     order.dim = 3;
     order.internal_of_scene.assign(scene.particles.size(), -1);
@@ -204,14 +205,14 @@ TEST(FiniteElements, TetrahedraResultsDependOnlyOnTheStateAskedAt) {
   for (std::size_t m = 0; m < material_models().size(); ++m) {
     SCOPED_TRACE(std::string(material_models()[m]->name));
     const Scene scene = make_builtin_scene("block", {{"n", "2"}, {"model", std::to_string(m)}});
-    const auto state = [&](const ElasticModel& model, unsigned seed) {
+    const auto state = [&](const Model& model, unsigned seed) {
       std::mt19937 rng(seed);
       std::uniform_real_distribution<double> noise(-0.01, 0.01);
       Vector x = model.initial_positions();
       for (Eigen::Index k = 0; k < x.size(); ++k) x[k] = 1.1 * x[k] + noise(rng);
       return x;
     };
-    ElasticModel kept(scene);
+    Model kept(scene);
     const Vector xa = state(kept, 1), xb = state(kept, 2), v = kept.initial_velocities();
     Vector f_kept, f_fresh;
     SparseMatrix K_kept = kept.jacobian_pattern(), K_fresh = K_kept;
@@ -228,7 +229,7 @@ TEST(FiniteElements, TetrahedraResultsDependOnlyOnTheStateAskedAt) {
         {'V', &xb}, {'K', &xb}, {'V', &xb}, {'f', &xb}, {'f', &xa}, {'V', &xa},
         {'K', &xa}, {'K', &xb}, {'V', &xa}};
     for (const auto& [call, x] : calls) {
-      ElasticModel fresh(scene);
+      Model fresh(scene);
       if (call == 'V') {
         const double V_fresh = fresh.position_potential(0.0, *x);
         EXPECT_GT(std::abs(V_fresh), 0.0);
@@ -281,7 +282,7 @@ TEST(FiniteElements, CantileverTipDeflectionApproachesBeamTheory) {
     const Scene scene = make_builtin_scene(
         "beam", {{"model", "0"}, {"young", "1e9"}, {"poisson", "0"}, {"nx", std::to_string(nx)},
                  {"ny", std::to_string(ny)}});
-    const ElasticModel model(scene);
+    const Model model(scene);
     RunSettings s;
     s.integrator = "implicit-euler";
     s.dt = 100.0;
@@ -317,7 +318,7 @@ TEST(FiniteElements, FirstBendingModeApproachesBeamTheory) {
   const double theory = 1.875 * 1.875 * std::sqrt(E * I / (rho * A * std::pow(L, 4)));
   double previous_error = 1e300;
   for (const auto& [nx, ny] : {std::pair{20, 2}, std::pair{40, 4}, std::pair{80, 8}}) {
-    const ElasticModel model(make_builtin_scene(
+    const Model model(make_builtin_scene(
         "beam", {{"model", "0"}, {"young", "1e9"}, {"poisson", "0"}, {"density", "1000"},
                  {"g", "0"}, {"nx", std::to_string(nx)}, {"ny", std::to_string(ny)}}));
     SparseMatrix dfdx;
@@ -354,7 +355,7 @@ TEST(FiniteElements, TetrahedralCantileverModeAndSagApproachBeamTheory) {
         "beam", {{"dimension", "3"}, {"model", "0"}, {"young", "1e9"}, {"poisson", "0"},
                  {"density", "1000"}, {"g", "9.81"}, {"nx", std::to_string(nx)},
                  {"ny", std::to_string(ny)}});
-    const ElasticModel model(scene);
+    const Model model(scene);
     SparseMatrix dfdx;
     model.jacobians(0.0, model.initial_positions(), model.initial_velocities(), &dfdx, nullptr);
     const SparseMatrix K = -dfdx;
@@ -412,7 +413,7 @@ TEST(FiniteElements, TetrahedralCantileverModeAndSagApproachBeamTheory) {
 TEST(FiniteElements, InvertingANeoHookeanElementIsDivergenceImplicitEulerKeepsJPositive) {
   const Scene block =
       make_builtin_scene("block", {{"n", "2"}, {"young", "1e6"}, {"spin", "20"}});
-  const ElasticModel model(block);
+  const Model model(block);
   RunSettings s;
   s.dt = 0.01;
   s.t_end = 0.5;
@@ -434,7 +435,7 @@ TEST_P(EveryIntegratorOnElements, RunsTheBeamInTwoAndThreeDimensions) {
   for (const char* dimension : {"2", "3"}) {
     const Scene scene =
         make_builtin_scene("beam", {{"dimension", dimension}, {"nx", "4"}, {"ny", "1"}});
-    const ElasticModel model(scene);
+    const Model model(scene);
     RunSettings s = settings(2e-4, 4e-3);
     s.options.newton_tol = 1e-9;
     const RunResult r = simulate(model, s);
@@ -523,14 +524,14 @@ namespace {
 // The largest total energy of the states a run accepts (t = 0 included).
 class MaxEnergy : public Observer {
  public:
-  explicit MaxEnergy(const ElasticModel& model) : model_(model) {}
+  explicit MaxEnergy(const Model& model) : model_(model) {}
   void observe(double, const Vector& x, const Vector& v) override {
     max_ = std::max(max_, model_.energies(x, v).total());
   }
   double max() const { return max_; }
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
   double max_ = -std::numeric_limits<double>::infinity();
 };
 
@@ -541,7 +542,7 @@ class MaxEnergy : public Observer {
 // taken and Newton solves the step: the run completes at Newton's 7.87 J
 // (the issue's Newton run: 7.89 J), never above its start.
 TEST(FemSolvers, ImplicitEulerNeverTakesAStepThatRaisesTheIncrementalPotential) {
-  const ElasticModel model(make_builtin_scene(
+  const Model model(make_builtin_scene(
       "block", {{"n", "3"}, {"model", "1"}, {"poisson", "0.49999999999"}}));
   RunSettings settings;
   settings.integrator = "implicit-euler";
@@ -575,10 +576,10 @@ TEST(FemSolvers, ImplicitEulerNeverTakesAStepThatRaisesTheIncrementalPotential) 
 // Issue #38's one tetrahedron: StVK at poisson 0.49999999999999994 (lambda
 // ~ 3e20 Pa), no gravity, its nodes moving apart at 1 m/s (3 J, most of it
 // a change of volume the material all but forbids).
-Scene nearly_incompressible_tetrahedron() {
-  return parse_scene(R"({
+Scene nearly_incompressible_tetrahedron(const char* poisson = "0.49999999999999994") {
+  return parse_scene(std::string(R"({
     "name": "tet", "dimension": 3, "gravity": [0, 0, 0],
-    "materials": {"m": {"model": "stvk", "young": 1e5, "poisson": 0.49999999999999994,
+    "materials": {"m": {"model": "stvk", "young": 1e5, "poisson": )") + poisson + R"(,
                         "density": 1000}},
     "particles": [{"x": [0, 0, 0], "v": [1, 0, 0], "mass": 1},
                   {"x": [1, 0, 0], "v": [0, 1, 0], "mass": 1},
@@ -589,8 +590,9 @@ Scene nearly_incompressible_tetrahedron() {
                      "tet.json");
 }
 
-RunResult run_tetrahedron(Solver solver, double dt, double& max_energy) {
-  const ElasticModel model(nearly_incompressible_tetrahedron());
+RunResult run_tetrahedron(Solver solver, double dt, double& max_energy,
+                          const char* poisson = "0.49999999999999994") {
+  const Model model(nearly_incompressible_tetrahedron(poisson));
   RunSettings settings;
   settings.integrator = "implicit-euler";
   settings.dt = dt;
@@ -602,18 +604,26 @@ RunResult run_tetrahedron(Solver solver, double dt, double& max_energy) {
   return r;
 }
 
-// Newton from v_n converged to a point 1,494 J above the step's start
-// state's potential (3 J): before, the run "diverged" at t = 0.009 with
-// 2,841 J. That answer is refused and Newton solves the step again from
-// the start state x_n (v = 0), where it finds the minimizer: the energy
-// only falls, 3 J -> 3.4e-13 J in 1 s.
+// At poisson 0.49999999999999994 Newton from v_n converged to a point
+// 1,494 J above the step's start state's potential (3 J): the run
+// "diverged" at t = 0.009 with 2,841 J. There lambda is set by one unit of
+// round-off of 1 - 2 nu and the Newton matrix's condition is ~5e13: which
+// point Newton reaches, if any, depends on how the BLAS kernel rounds the
+// factorization (issue 46.15: under OPENBLAS_CORETYPE=Haswell it wandered
+// for 200 iterations instead). At 1 - 2 nu = 2e-10 (lambda ~ 8e14 Pa) the
+// outcome does not: on every kernel tried, about 90 of Newton's 1000
+// answers raise the energy (the first at t = 0.099, 2.25644 J -> 2.25794
+// J); each is refused and Newton solves the step again from the start
+// state x_n (v = 0), where it finds the minimizer: the run completes and
+// its energy only falls (3 J -> 2.07 J in 1 s, as backward Euler damps
+// the spin).
 TEST(FemSolvers, ImplicitEulerNewtonSolvesANearlyIncompressibleStepFromItsStartState) {
   double max_energy = 0.0;
-  const RunResult r = run_tetrahedron(Solver::kNewton, 0.001, max_energy);
+  const RunResult r = run_tetrahedron(Solver::kNewton, 0.001, max_energy, "0.4999999999");
   EXPECT_DOUBLE_EQ(r.energy_initial, 3.0);
   EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LE(max_energy, r.energy_initial);
-  EXPECT_LT(r.energy_final, 1e-6);
+  EXPECT_LT(r.energy_final, r.energy_initial);
   // Each refused answer costs a second solve (counted as a failure).
   EXPECT_GE(r.stats.nonlinear_failures, 1);
 }

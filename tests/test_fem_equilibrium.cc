@@ -20,9 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "models/elastic_model.h"
+#include "models/model/model.h"
 #include "models/materials/material.h"
-#include "models/scene.h"
+#include "models/core/scene.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -117,7 +118,7 @@ Scene mesh_scene(const Mesh& m, const std::string& model, double poisson) {
 }
 
 // unknown[p][r]: the model's unknown of scene particle p, coordinate r.
-std::vector<std::array<Eigen::Index, 3>> unknowns(const ElasticModel& model) {
+std::vector<std::array<Eigen::Index, 3>> unknowns(const Model& model) {
   Vector index(model.dofs());
   for (Eigen::Index k = 0; k < index.size(); ++k) index[k] = static_cast<double>(k);
   const Eigen::MatrixXd at = model.scene_positions(index);
@@ -129,7 +130,7 @@ std::vector<std::array<Eigen::Index, 3>> unknowns(const ElasticModel& model) {
 
 // Newton on f(x) = 0 over the unknowns not `prescribed` (which keep their
 // value in x).
-Vector solve_static(const ElasticModel& model, Vector x, const std::vector<bool>& prescribed) {
+Vector solve_static(const Model& model, Vector x, const std::vector<bool>& prescribed) {
   const Vector v = Vector::Zero(x.size());
   Vector f;
   SparseMatrix dfdx, dfdv;
@@ -164,7 +165,7 @@ TEST_P(EquilibriumOfEveryModel, PatchTestAffineBoundaryGivesAffineInterior) {
   for (int dim : {2, 3}) {
     SCOPED_TRACE(std::to_string(dim) + "-D");
     const Mesh mesh = unit_mesh(dim, dim == 2 ? 4 : 3, 0.2);
-    const ElasticModel model(mesh_scene(mesh, std::string(GetParam()->name), 0.3));
+    const Model model(mesh_scene(mesh, std::string(GetParam()->name), 0.3));
     const auto unknown = unknowns(model);
     Eigen::Matrix3d A;
     A << 1.02, 0.01, -0.015, -0.005, 0.99, 0.02, 0.01, 0.004, 1.012;
@@ -199,7 +200,7 @@ TEST_P(EquilibriumOfEveryModel, PatchTestAffineBoundaryGivesAffineInterior) {
 // 3-D) a second against the rotation about x.
 double lateral_strain(int dim, const std::string& model_name, double nu, double e) {
   const Mesh mesh = unit_mesh(dim, 3, 0.0);
-  const ElasticModel model(mesh_scene(mesh, model_name, nu));
+  const Model model(mesh_scene(mesh, model_name, nu));
   const auto unknown = unknowns(model);
   Vector x = model.initial_positions();
   std::vector<bool> prescribed(x.size(), false);

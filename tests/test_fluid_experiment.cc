@@ -1,4 +1,4 @@
-// The fluid experiment (experiments/fluid_experiment.cc): a coarse dam
+// The fluid experiment (experiments/kinds/fluid_experiment.cc): a coarse dam
 // break's rows against Martin and Moyce's table (the interpolated reference
 // point, the front at T = 0, Ritter's bound, the energy budget), a refused
 // run's row, the step limit's search beside the acoustic mode's theory, the

@@ -10,12 +10,12 @@
 
 #include <Eigen/Dense>
 
-#include "experiments/simulation.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/fluid_pressure_hessian.h"
-#include "models/fluids.h"
-#include "models/sph_particles.h"
+#include "experiments/driver/simulation.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/fluids/fluid_pressure_hessian.h"
+#include "models/fluids/fluids.h"
+#include "models/fluids/sph_particles.h"
 
 namespace springlab {
 namespace {
@@ -55,7 +55,7 @@ Scene blob(int dim, int n, unsigned seed, double viscosity, int fixed = 0) {
 // exact and definite, in 2-D and 3-D, with walls among the particles.
 TEST(FluidPressureHessian, ColumnAssemblyEqualsThePlainOne) {
   for (int dim : {2, 3}) {
-    const ElasticModel model(blob(dim, dim == 2 ? 60 : 50, 7, 0.0, 9));
+    const Model model(blob(dim, dim == 2 ? 60 : 50, 7, 0.0, 9));
     const Vector x = model.initial_positions(), v = model.initial_velocities();
     SparseMatrix dfdx;
     model.jacobians(0.0, x, v, &dfdx, nullptr);  // updates the particles at x
@@ -95,7 +95,7 @@ TEST(FluidPressureHessian, ColumnAssemblyEqualsThePlainOne) {
 // from it, the lagged kappa's. Cleared, it is live again.
 TEST(FluidViscosity, LaggedIsTheGradientOfItsDissipationPotential) {
   for (int dim : {2, 3}) {
-    const ElasticModel model(blob(dim, dim == 2 ? 40 : 30, 13, 0.05, 5));
+    const Model model(blob(dim, dim == 2 ? 40 : 30, 13, 0.05, 5));
     ASSERT_FALSE(model.derives_from_potentials());
     ASSERT_FALSE(model.jacobian_symmetric());
     const Vector x = model.initial_positions(), v = model.initial_velocities();
@@ -153,7 +153,7 @@ struct Watched {
 
 class Watch final : public Observer {
  public:
-  Watch(const ElasticModel& model, Watched& w) : model_(model), w_(w) {}
+  Watch(const Model& model, Watched& w) : model_(model), w_(w) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     const Eigen::MatrixXd p = model_.scene_positions(x);
     double sum = 0.0;
@@ -172,11 +172,11 @@ class Watch final : public Observer {
   }
 
  private:
-  const ElasticModel& model_;
+  const Model& model_;
   Watched& w_;
 };
 
-RunResult watched_run(const ElasticModel& model, const std::string& integrator, double dt,
+RunResult watched_run(const Model& model, const std::string& integrator, double dt,
                       double t_end, Watched& w) {
   RunSettings s;
   s.integrator = integrator;
@@ -198,7 +198,7 @@ RunResult watched_run(const ElasticModel& model, const std::string& integrator, 
 // 1/120 s it keeps the water in the box.
 TEST(FluidFrameSteps, ImplicitMethodsCompleteTheDamBreakAtOneSixtieth) {
   const Scene scene = make_builtin_scene("dam-break", {{"spacing", "0.02"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double a = 0.1, l = 0.02;
   auto in_box = [&](const Watched& w) {
     return w.lowest > -l && w.nearest > -l && w.farthest < 5.0 * a + l;
@@ -271,7 +271,7 @@ TEST(FluidFrameSteps, SloshingPeriodAtOneSixtieth) {
   const Scene scene = make_builtin_scene(
       "sloshing", {{"width", "0.4"}, {"depth", "0.2"}, {"spacing", "0.02"},
                    {"amplitude", "0.008"}, {"alpha", "0.02"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   for (const char* name : {"implicit-euler", "bdf2"}) {
     Watched w;
     const RunResult r = watched_run(model, name, kFrame, 1.6, w);

@@ -12,13 +12,14 @@
 #include <random>
 #include <sstream>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
-#include "models/fluids.h"
-#include "models/neighbour_grid.h"
-#include "models/sph_kernel.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/fluids/fluids.h"
+#include "models/fluids/neighbour_grid.h"
+#include "models/fluids/sph_kernel.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -177,7 +178,7 @@ Scene random_blob(int dim, int n, unsigned seed, double viscosity) {
 
 TEST(FluidForces, ConserveMomentumWithoutBoundaries) {
   for (int dim : {2, 3}) {
-    const ElasticModel model(random_blob(dim, 200, 3, 0.05));
+    const Model model(random_blob(dim, 200, 3, 0.05));
     Vector f;
     model.force(0.0, model.initial_positions(), model.initial_velocities(), f);
     Eigen::Vector3d total = Eigen::Vector3d::Zero();
@@ -199,7 +200,7 @@ TEST(FluidForces, ConserveMomentumWithoutBoundaries) {
 // pressure's force against its energy.
 TEST(FluidForces, JacobiansMatchCentralDifferences) {
   for (int dim : {2, 3}) {
-    const ElasticModel model(random_blob(dim, dim == 2 ? 40 : 30, 11, 0.05));
+    const Model model(random_blob(dim, dim == 2 ? 40 : 30, 11, 0.05));
     const Vector x = model.initial_positions(), v = model.initial_velocities();
     SparseMatrix dfdx, dfdv;
     model.jacobians(0.0, x, v, &dfdx, &dfdv);
@@ -235,7 +236,7 @@ TEST(FluidForces, JacobiansMatchCentralDifferences) {
 // The pattern follows the neighbours: after the particles rearrange, the
 // Jacobian comes on a new pattern (a new version) and is still exact.
 TEST(FluidForces, PatternFollowsTheNeighbours) {
-  const ElasticModel model(random_blob(2, 40, 5, 0.05));
+  const Model model(random_blob(2, 40, 5, 0.05));
   ASSERT_TRUE(model.pattern_varies());
   const Vector x = model.initial_positions(), v = model.initial_velocities();
   SparseMatrix dfdx, dfdv;
@@ -287,7 +288,7 @@ class Recorder final : public Observer {
   Samples& run_;
 };
 
-Samples simulate_scene(const ElasticModel& model, const std::string& integrator, double dt,
+Samples simulate_scene(const Model& model, const std::string& integrator, double dt,
                    double t_end, int every) {
   RunSettings s;
   s.integrator = integrator;
@@ -311,7 +312,7 @@ TEST(FluidScenes, TankSettlesToHydrostaticPressure) {
   const Scene scene = make_builtin_scene(
       "tank", {{"width", "0.2"}, {"depth", "0.2"}, {"spacing", "0.0125"}, {"sound", "15"},
                {"alpha", "0.3"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   const Fluid& fluid = scene.get<Fluids>().front();
   const double dt = explicit_step(scene);
   const double g = 9.81, depth = 0.2, l = fluid.spacing;
@@ -362,7 +363,7 @@ TEST(FluidScenes, SloshingPeriodMatchesLinearTheory) {
   const Scene scene = make_builtin_scene(
       "sloshing", {{"width", "0.4"}, {"depth", "0.2"}, {"spacing", "0.02"},
                    {"amplitude", "0.008"}, {"alpha", "0.02"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double g = 9.81, k = std::numbers::pi / width;
   const double period = 2.0 * std::numbers::pi / std::sqrt(g * k * std::tanh(k * depth));
   const double dt = explicit_step(scene);
@@ -427,7 +428,7 @@ TEST(FluidScenes, DamBreakFrontAgainstRitterAndMartinMoyce) {
   ASSERT_EQ(table.size(), 15u);
   const double a = 0.1, g = 9.81;
   const Scene scene = make_builtin_scene("dam-break", {{"a", "0.1"}, {"spacing", "0.01"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double l = scene.get<Fluids>().front().spacing;
   const double dt = explicit_step(scene);
   const double time_scale = std::sqrt(2.0 * g / a);  // T = t sqrt(2 g / a)
@@ -472,7 +473,7 @@ TEST(FluidScenes, DamBreakFrontAgainstRitterAndMartinMoyce) {
 TEST(FluidScenes, EveryIntegratorRunsOrRefusesAtTheStart) {
   const Scene scene = make_builtin_scene(
       "tank", {{"width", "0.1"}, {"depth", "0.05"}, {"spacing", "0.0125"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double dt = explicit_step(scene);
   int ran = 0;
   for (const std::string& name : integrator_names()) {
@@ -524,15 +525,15 @@ TEST(FluidScenes, BoxBlockFillsItsLatticeAtRestDensity) {
   EXPECT_EQ(again.get<Fluids>().front().first, 1);
 }
 
-// ---- Position-based fluids (xpbd; models/fluid_density_projection.cc) ----
+// ---- Position-based fluids (xpbd; models/fluids/fluid_density_projection.cc) ----
 
 // The system's projections, as xpbd reads them.
-std::vector<std::unique_ptr<PositionProjection>> projections_of(const ElasticModel& model) {
+std::vector<std::unique_ptr<PositionProjection>> projections_of(const Model& model) {
   std::vector<DistanceConstraint> constraints;
   std::vector<ProjectiveElement> elements;
   std::vector<std::unique_ptr<PositionProjection>> projections;
-  std::string why;
-  EXPECT_TRUE(model.position_based_form(constraints, elements, projections, why)) << why;
+  Refusal why;
+  EXPECT_TRUE(model.position_based_form(constraints, elements, projections, why)) << why.text;
   return projections;
 }
 
@@ -542,7 +543,7 @@ std::vector<std::unique_ptr<PositionProjection>> projections_of(const ElasticMod
 TEST(FluidPositionBased, ProjectionKeepsMomentumAndRelievesCompression) {
   for (int dim : {2, 3}) {
     const Scene scene = random_blob(dim, dim == 2 ? 150 : 120, 9, 0.0);
-    const ElasticModel model(scene);
+    const Model model(scene);
     auto projections = projections_of(model);
     ASSERT_EQ(projections.size(), 1u);
     Vector x = model.initial_positions();
@@ -575,7 +576,7 @@ TEST(FluidPositionBased, ProjectionKeepsMomentumAndRelievesCompression) {
 
 // Interior density of the free particles a kernel support or more below
 // the surface, at the run's last state: the largest |rho / rho0 - 1|.
-double interior_density_error(const ElasticModel& model, const Vector& x_free) {
+double interior_density_error(const Model& model, const Vector& x_free) {
   const Scene& scene = model.scene();
   const Fluid& fluid = scene.get<Fluids>().front();
   const Eigen::MatrixXd x = model.scene_positions(x_free);
@@ -603,7 +604,7 @@ double interior_density_error(const ElasticModel& model, const Vector& x_free) {
 TEST(FluidPositionBased, TankAtRestKeepsItsDensity) {
   const Scene scene = make_builtin_scene(
       "tank", {{"width", "0.2"}, {"depth", "0.2"}, {"spacing", "0.0125"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = "xpbd";
   s.dt = 1.0 / 120.0;
@@ -633,7 +634,7 @@ TEST(FluidPositionBased, TankAtRestKeepsItsDensity) {
 TEST(FluidPositionBased, DamBreakFrontStaysBelowRittersBound) {
   const double a = 0.1, g = 9.81;
   const Scene scene = make_builtin_scene("dam-break", {{"a", "0.1"}, {"spacing", "0.01"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double l = 0.01, time_scale = std::sqrt(2.0 * g / a);
   RunSettings s;
   s.integrator = "xpbd";
@@ -671,7 +672,7 @@ TEST(FluidPositionBased, DamBreakFrontStaysBelowRittersBound) {
 
 // The other fast solvers refuse a fluid, naming the one that runs it.
 TEST(FluidPositionBased, ProjectiveDynamicsRefusesNamingXpbd) {
-  const ElasticModel model(make_builtin_scene(
+  const Model model(make_builtin_scene(
       "tank", {{"width", "0.1"}, {"depth", "0.05"}, {"spacing", "0.0125"}}));
   RunSettings s;
   s.integrator = "projective-dynamics";

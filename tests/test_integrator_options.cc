@@ -1,4 +1,4 @@
-// The run options declared once (integrators/integrator_options.h, issue
+// The run options declared once (integrators/core/integrator_options.h, issue
 // 32.4): every option a method reads is declared; the command line offers
 // and checks exactly the declared ones; an experiment definition reads and
 // checks them through the same declaration.
@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "experiments/definition.h"
-#include "experiments/experiment_support.h"
-#include "integrators/integrator_options.h"
-#include "integrators/registry.h"
+#include "experiments/kinds/definition.h"
+#include "experiments/kinds/experiment_support.h"
+#include "integrators/core/integrator_options.h"
+#include "integrators/registry/registry.h"
 #include "run_process.h"
 
 namespace springlab {

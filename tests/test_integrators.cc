@@ -8,10 +8,10 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
@@ -40,7 +40,7 @@ bool symplectic(const IntegratorInfo& i) { return i.symplectic; }
 class EveryNewtonIntegrator : public testing::RegistryTest {};
 bool iterates_newton(const IntegratorInfo& i) { return i.iterates_to_tolerance; }
 
-double mechanical_energy(const ElasticModel& m, const Vector& x, const Vector& v) {
+double mechanical_energy(const Model& m, const Vector& x, const Vector& v) {
   return m.energies(x, v).total();
 }
 
@@ -48,7 +48,7 @@ double mechanical_energy(const ElasticModel& m, const Vector& x, const Vector& v
 // exactly, for any method whose step is the scalar map R on y' = lambda y.
 TEST_P(EveryIntegratorWithR, OscillatorEnergyFactorPerStepIsExact) {
   const IntegratorInfo i = info();
-  const ElasticModel model(oscillator(100.0, 1.0));
+  const Model model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double wh : {0.1, 0.7, 2.5}) {
     auto integrator = make_integrator(GetParam());
@@ -72,7 +72,7 @@ TEST_P(EveryIntegratorWithR, OscillatorEnergyFactorPerStepIsExact) {
 // observed order log2(e(h) / e(h/2)) must be within 0.2 of the declared one.
 double observed_order(const std::string& name, int order, const Scene& scene, double t_end,
                       const Vector& x_ref, const Vector& v_ref, double w) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double h = order == 1 ? 1e-3 : (order == 2 ? 1e-2 : 1e-2);
   double error[2];
   for (int k = 0; k < 2; ++k) {
@@ -100,7 +100,7 @@ TEST_P(EveryFixedStepIntegrator, ConvergenceOrderOnOscillatorMatchesTheory) {
 }
 
 RunResult reference_run(const Scene& scene, double t_end) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = "rk4";
   s.dt = 2.5e-5;
@@ -121,7 +121,7 @@ TEST_P(EveryFixedStepIntegrator, ConvergenceOrderOnNonlinearScenesMatchesTheory)
 // Symplectic methods: the energy error oscillates without drift.
 TEST_P(EverySymplecticIntegrator, SymplecticEnergyStaysBoundedOver10000Steps) {
   for (const Scene& scene : {oscillator(), swinging_spring()}) {
-    const ElasticModel model(scene);
+    const Model model(scene);
     auto integrator = make_integrator(GetParam());
     ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
                                        model.initial_velocities(), IntegratorOptions{}).ok);
@@ -152,7 +152,7 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
   s.block<Gravity>().acceleration = Eigen::Vector3d(-9.81, 0, 0);
   s.particles[1].x.x() = 1.0 - 2.0 * 9.81 / 100.0;
   s.block<Drag>().gamma = 0.5;
-  const ElasticModel model(s);
+  const Model model(s);
   const RunResult r = simulate(model, settings(0.01, 1.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT((r.x_final - model.initial_positions()).norm(), 1e-12);
@@ -164,7 +164,7 @@ TEST_P(EveryIntegrator, EquilibriumIsAFixedPoint) {
 // linearized step, Baraff-Witkin's, has no such guarantee: it diverges here.)
 TEST_P(EveryNewtonIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
   const IntegratorInfo i = info();
-  const ElasticModel model(testing::compressed_chain());
+  const Model model(testing::compressed_chain());
   const double h = 0.2;
   SparseMatrix dfdx;
   model.jacobians(0.0, model.initial_positions(), model.initial_velocities(), &dfdx, nullptr);
@@ -202,7 +202,7 @@ TEST_P(EveryNewtonIntegrator, NewtonConvergesThroughAnIndefiniteMatrix) {
 // convergence); minimizing the incremental potential with definite matrices
 // where needed converges at every step.
 TEST(ImplicitEuler, ConvergesOnAFoldingClothAtLargeSteps) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "16"}}));
   ASSERT_TRUE(model.derives_from_potentials());
   RunSettings s;
   s.integrator = "implicit-euler";
@@ -225,7 +225,7 @@ TEST(ImplicitEuler, ConvergesOnAFoldingClothAtLargeSteps) {
 // 2002: each compressed spring's negative transverse stiffness dropped) the
 // matrix stays above M and the energy of this undamped chain only falls.
 TEST(LinearImplicitEuler, DefiniteStiffnessKeepsTheCompressedChainCalm) {
-  const ElasticModel model(testing::compressed_chain());
+  const Model model(testing::compressed_chain());
   RunSettings s;
   s.integrator = "linear-implicit-euler";
   s.dt = 0.2;
@@ -256,7 +256,7 @@ TEST(DiscreteGradient, ConservesEnergyToTheNewtonTolerance) {
       {make_builtin_scene("chain", {{"n", "10"}, {"horizontal", "1"}}), 0.01, 2.0}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene.name);
-    const ElasticModel model(c.scene);
+    const Model model(c.scene);
     ASSERT_EQ(model.velocity_dependence(), VelocityDependence::kNone) << "no damping";
     auto drift = [&](const std::string& name, double tol) {
       auto integrator = make_integrator(name);
@@ -291,7 +291,7 @@ TEST(DiscreteGradient, ConservesEnergyToTheNewtonTolerance) {
 // undamped, never gains energy in a step: backward Euler solved to the
 // tolerance only dissipates.
 TEST(ImplicitEuler, SolverErrorIsFarBelowTheStepsAndEnergyNeverGrows) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "16"}}));
   const double h = 1.0 / 60.0, tol = IntegratorOptions{}.newton_tol;
   auto run = make_integrator("implicit-euler");
   ASSERT_TRUE(run->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(),
@@ -328,7 +328,7 @@ TEST(ImplicitEuler, SolverErrorIsFarBelowTheStepsAndEnergyNeverGrows) {
 // steps) until the energy check stops the run -- a divergence with its time,
 // not a Newton failure (Newton solves every step).
 TEST(ImplicitMidpoint, EnergyGrowthOnTheFoldingClothIsReportedAsDivergence) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "16"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "16"}}));
   RunSettings s;
   s.integrator = "implicit-midpoint";
   s.dt = 1.0 / 60.0;
@@ -348,7 +348,7 @@ TEST(ImplicitMidpoint, EnergyGrowthOnTheFoldingClothIsReportedAsDivergence) {
 
 // A Newton that cannot converge is a result naming the reason, not a crash.
 TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
-  const ElasticModel model(testing::compressed_chain());
+  const Model model(testing::compressed_chain());
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.2;
@@ -367,7 +367,7 @@ TEST(ImplicitEuler, NewtonFailureIsReportedInTheResult) {
 
 TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
   const IntegratorInfo i = info();
-  const ElasticModel model(damped_windy_chain());
+  const Model model(damped_windy_chain());
   const RunResult r = simulate(model, settings(0.001, 0.01));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   const IntegratorStats& s = r.stats;
@@ -425,9 +425,9 @@ TEST_P(EveryIntegrator, ReportsConsistentStatistics) {
 }
 
 TEST_P(EveryIntegrator, SameInputsGiveBitIdenticalResults) {
-  const ElasticModel model(damped_windy_chain());
+  const Model model(damped_windy_chain());
   const RunResult a = simulate(model, settings(0.002, 0.1));
-  const RunResult b = simulate(ElasticModel(damped_windy_chain()), settings(0.002, 0.1));
+  const RunResult b = simulate(Model(damped_windy_chain()), settings(0.002, 0.1));
   ASSERT_EQ(a.x_final.size(), b.x_final.size());
   for (Eigen::Index k = 0; k < a.x_final.size(); ++k) {
     EXPECT_EQ(a.x_final[k], b.x_final[k]);
@@ -473,8 +473,8 @@ Scene chain_in_order(const std::vector<int>& order, double rest, double damping)
 // An integrator serves one system once: a second initialize() is refused and
 // leaves the first run untouched, for every method.
 TEST(Integrator, SecondInitializeIsRefusedAndChangesNothing) {
-  const ElasticModel first(testing::swinging_spring());
-  const ElasticModel second(testing::compressed_chain());
+  const Model first(testing::swinging_spring());
+  const Model second(testing::compressed_chain());
   for (const std::string& name : integrator_names()) {
     auto integrator = make_integrator(name);
     ASSERT_TRUE(integrator->initialize(first, 0.0, first.initial_positions(),
@@ -501,7 +501,7 @@ TEST(Integrator, SecondInitializeIsRefusedAndChangesNothing) {
 // ran `a` (its caches built for a's pattern), else with a new one, as every
 // caller now does. Returns the final positions.
 Vector run_after_another_system(const std::string& name, const MechanicalSystem& a,
-                                const ElasticModel& b, const Vector& xa, const Vector& va) {
+                                const Model& b, const Vector& xa, const Vector& va) {
   IntegratorOptions options;
   options.newton_tol = 1e-13;
   auto integrator = make_integrator(name);
@@ -525,8 +525,8 @@ Vector run_after_another_system(const std::string& name, const MechanicalSystem&
 // springs (linear forces) its one Newton step is exact, so it must agree
 // with implicit Euler solved to 1e-13.
 TEST(Integrator, LinearImplicitEulerOnSameCountsOtherTopologyIsRight) {
-  const ElasticModel a(chain_in_order({0, 1, 2, 3, 4, 5}, 0.0, 0.0));
-  const ElasticModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.0, 0.0));
+  const Model a(chain_in_order({0, 1, 2, 3, 4, 5}, 0.0, 0.0));
+  const Model b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.0, 0.0));
   ASSERT_EQ(a.jacobian_pattern().nonZeros(), b.jacobian_pattern().nonZeros());
   const Vector x = run_after_another_system("linear-implicit-euler", a, b, a.initial_positions(),
                                             a.initial_velocities());
@@ -546,8 +546,8 @@ TEST(Integrator, LinearImplicitEulerOnSameCountsOtherTopologyIsRight) {
 // (glibc: "malloc(): unaligned tcache chunk detected"). It must end exactly
 // where a new verlet on that scene ends.
 TEST(Integrator, VerletOnASecondSpringDampedSceneIsRight) {
-  const ElasticModel a(testing::damped_windy_chain());
-  const ElasticModel b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.25, 0.5));
+  const Model a(testing::damped_windy_chain());
+  const Model b(chain_in_order({0, 3, 5, 1, 4, 2}, 0.25, 0.5));
   ASSERT_EQ(b.velocity_dependence(), VelocityDependence::kCoupled);
   const Vector x =
       run_after_another_system("verlet", a, b, a.initial_positions(), a.initial_velocities());
@@ -572,7 +572,7 @@ namespace {
 // of issue 37 the same happened at --newton-tol 1e-3: 7.5e-4 m/s, rate
 // 0.59, 1.08e-3 m/s left; the iterates now differ within the tolerance.)
 TEST(ImplicitEuler, NoConvergenceSaysWhyAnUpdateBelowTheToleranceDidNotEndIt) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "32"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "32"}}));
   RunSettings s;
   s.integrator = "implicit-euler";
   s.dt = 0.0166667;

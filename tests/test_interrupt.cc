@@ -14,7 +14,7 @@
 #include <sstream>
 #include <thread>
 
-#include "integrators/registry.h"
+#include "integrators/registry/registry.h"
 
 extern char** environ;
 

@@ -14,10 +14,10 @@
 #include <utility>
 #include <vector>
 
-#include "models/materials/kinematics.h"
+#include "models/materials/kernels/kinematics.h"
 #include "models/materials/material.h"
-#include "models/materials/tangent3.h"
-#include "models/materials/tet_kernel.h"
+#include "models/materials/kernels/tangent3.h"
+#include "models/materials/kernels/tet_kernel.h"
 #include "registry_suite.h"
 
 namespace springlab {

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/sparse_direct_solver.h"
+#include "integrators/linear/sparse_direct_solver.h"
 #include "run_process.h"
 
 namespace springlab {

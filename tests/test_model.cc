@@ -10,16 +10,17 @@
 #include <random>
 #include <stdexcept>
 
-#include "models/fluids.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/drag.h"
-#include "models/gravity.h"
-#include "models/bodies.h"
-#include "models/elastic_model.h"
-#include "models/springs.h"
-#include "models/wind.h"
+#include "models/fluids/fluids.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/springs/drag.h"
+#include "models/springs/gravity.h"
+#include "models/bodies/bodies.h"
+#include "models/model/model.h"
+#include "models/springs/springs.h"
+#include "models/springs/wind.h"
 #include "random_scenes.h"
+#include "models/model/energy_layout.h"
 
 namespace springlab {
 namespace {
@@ -41,7 +42,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
   s.remove<Wind>();
   s.remove<Gravity>();
   for (Plane& plane : s.block<Planes>()) plane.friction = 0.0;  // affine in v
-  const ElasticModel damped(s);
+  const Model damped(s);
   EXPECT_FALSE(damped.jacobian_symmetric());  // spring damping's dF/dx is not symmetric
   EXPECT_EQ(damped.velocity_dependence(), VelocityDependence::kCoupled);
   EXPECT_FALSE(damped.derives_from_potentials());
@@ -50,7 +51,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
                                          damped.initial_velocities()), 0.0);
   for (Spring& spring : s.block<Springs>()) spring.damping = 0.0;
   for (Fluid& fluid : s.block<Fluids>()) fluid.viscosity = 0.0;  // a fluid's viscosity: no term
-  const ElasticModel undamped(s);
+  const Model undamped(s);
   EXPECT_TRUE(undamped.jacobian_symmetric());
   EXPECT_EQ(undamped.velocity_dependence(), VelocityDependence::kDiagonal);
   EXPECT_TRUE(undamped.derives_from_potentials());
@@ -67,7 +68,7 @@ TEST_P(ModelDimensions, DampingDissipatesAndSymmetryIsReported) {
 TEST_P(ModelDimensions, SpringDefinitePartDropsOnlyTheIndefinitePart) {
   const int dim = GetParam();
   Scene s = random_scene({&kind_named("spring")}, dim, 2);
-  const ElasticModel model(s);
+  const Model model(s);
   const Vector x = model.initial_positions();
   const Vector v = model.initial_velocities();
   SparseMatrix dfdx, definite_dfdx;
@@ -81,7 +82,7 @@ TEST_P(ModelDimensions, SpringDefinitePartDropsOnlyTheIndefinitePart) {
     const double l = (s.particles[spring.i].x - s.particles[spring.j].x).norm();
     spring.rest = std::min(spring.rest, 0.9 * l);  // none compressed
   }
-  const ElasticModel stretched(s);
+  const Model stretched(s);
   stretched.jacobians(0.0, x, v, &dfdx, nullptr);
   stretched.definite_jacobians(0.0, x, v, &definite_dfdx, nullptr);
   EXPECT_EQ(Eigen::MatrixXd(definite_dfdx), Eigen::MatrixXd(dfdx));
@@ -92,7 +93,7 @@ INSTANTIATE_TEST_SUITE_P(Dimensions, ModelDimensions, ::testing::Values(2, 3),
 
 TEST(Model, FixedParticlesAreNotUnknownsAndStayPut) {
   Scene s = random_scene(3, 11);
-  const ElasticModel model(s);
+  const Model model(s);
   // 6 particles, one fixed; and 12 unknowns per free rigid body after them.
   const Eigen::Index bodies = 3 * body_pseudo_particles(s);
   EXPECT_EQ(model.dofs(), 5 * 3 + bodies);
@@ -115,7 +116,7 @@ Scene hanging_spring() {
 }
 
 TEST(Model, EnergiesFollowSpecFormulas) {
-  const ElasticModel model(hanging_spring());
+  const Model model(hanging_spring());
   const Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   EXPECT_DOUBLE_EQ(e.kinetic(), 0.5 * 2.0 * 4.0);
   EXPECT_DOUBLE_EQ(e["spring"], 0.5 * 100.0 * 1.0);
@@ -147,11 +148,11 @@ TEST(Model, BlowUpMeasureAddsPotentialMagnitudesSoNoneCancels) {
 TEST(Model, EnergyColumnsAreTheSpecsAndAbsentPotentialsAreZero) {
   const std::vector<std::string> spec = {"kinetic", "spring", "gravity", "total"};
   Scene s = hanging_spring();
-  const ElasticModel model(s);
+  const Model model(s);
   EXPECT_EQ(model.energy_columns(), spec);
   s.remove<Gravity>();
   s.block<Springs>().clear();
-  const ElasticModel bare(s);
+  const Model bare(s);
   EXPECT_EQ(bare.energy_columns(), spec);
   const Energies e = bare.energies(bare.initial_positions(), bare.initial_velocities());
   ASSERT_EQ(e.values().size(), 4u);
@@ -166,7 +167,7 @@ TEST(Model, EnergyColumnsAreTheSpecsAndAbsentPotentialsAreZero) {
 
 // The energies of a state, filled in place, match the ones returned.
 TEST(Model, EnergiesIntoAnExistingObjectMatch) {
-  const ElasticModel model(random_scene(3, 6));
+  const Model model(random_scene(3, 6));
   Energies e = model.energies(model.initial_positions(), model.initial_velocities());
   const Vector x = model.initial_positions() * 1.1;
   const Vector v = model.initial_velocities() * 0.5;
@@ -181,7 +182,7 @@ TEST(Model, AbsentForcesAreNotAssembled) {
                  {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
   s.block<Springs>() = {{0, 1, 10.0, 1.0, 0.0}};
   s.block<Drag>().gamma = 0.0;  // present but zero: no term
-  const ElasticModel model(s);
+  const Model model(s);
   ASSERT_EQ(model.terms().size(), 1u);
   EXPECT_EQ(model.terms()[0]->name(), "spring");
   EXPECT_EQ(model.velocity_dependence(), VelocityDependence::kNone);
@@ -191,7 +192,7 @@ TEST(Model, AbsentForcesAreNotAssembled) {
 // must be exactly the whole, forces and Jacobians alike.
 TEST(Model, StiffAndNonstiffPartsAddUpToTheWhole) {
   const Scene s = random_scene(3, 5);
-  const ElasticModel model(s);
+  const Model model(s);
   const Vector& x = model.initial_positions();
   const Vector& v = model.initial_velocities();
   Vector all, stiff, nonstiff;

@@ -1,5 +1,5 @@
 // When NewtonLinearSolver refreshes its kept Cholesky factor
-// (integrators/newton_linear_solver.h): once the CG iterations the kept
+// (integrators/newton/newton_linear_solver.h): once the CG iterations the kept
 // factor costs beyond a fresh one's, summed since it was made, exceed
 // kRefreshCost; for the exact matrix, beyond the count its first solve with
 // the factor took (the exact and definite matrices' own difference, which
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/newton_linear_solver.h"
+#include "integrators/newton/newton_linear_solver.h"
 
 namespace springlab {
 namespace {

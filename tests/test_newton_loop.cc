@@ -1,4 +1,4 @@
-// The Newton loop (integrators/newton_loop.h) on problems that are not a
+// The Newton loop (integrators/newton/newton_loop.h) on problems that are not a
 // time step: a plain residual with a non-symmetric Jacobian, and the
 // gradient of a convex potential from far away, through the same pieces
 // the implicit methods give it (policy, line search, linear solver).
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/newton_loop.h"
+#include "integrators/newton/newton_loop.h"
 
 namespace springlab {
 namespace {

@@ -1,6 +1,6 @@
 // implicit-euler's step (newton_loop.h: inexact CG with a kept Cholesky
 // factor, line search, definite matrices, negative curvature) against the
-// textbook reference (integrators/reference_backward_euler.h: full Newton
+// textbook reference (integrators/methods/reference_backward_euler.h: full Newton
 // updates, a dense LU): both solve the same equations, so on small scenes,
 // each solved to 1e-12 m/s, they must land on the same states.
 #include <gtest/gtest.h>
@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "integrators/reference_backward_euler.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "integrators/methods/reference_backward_euler.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 
 namespace springlab {
 namespace {
@@ -33,7 +33,7 @@ struct Difference {
 };
 
 Difference compare(const Case& c) {
-  const ElasticModel model(make_builtin_scene(c.scene, c.parameters));
+  const Model model(make_builtin_scene(c.scene, c.parameters));
   std::unique_ptr<Integrator> fast = make_integrator("implicit-euler");
   IntegratorOptions options;
   options.newton_tol = kTol;
@@ -61,7 +61,7 @@ Difference compare(const Case& c) {
 // direction) against the closed form of backward Euler:
 //   v1 = (v0 - h w^2 (x0 - 0)) / (1 + h^2 w^2),  x1 = x0 + h v1,  w^2 = k/m.
 TEST(ReferenceBackwardEuler, OneStepOnTheOscillatorIsTheClosedForm) {
-  const ElasticModel model(make_builtin_scene("oscillator", {{"k", "100"}, {"mass", "2"}}));
+  const Model model(make_builtin_scene("oscillator", {{"k", "100"}, {"mass", "2"}}));
   Vector x = model.initial_positions(), v = model.initial_velocities();
   const Vector x0 = x, v0 = v;
   const double h = 0.05, w2 = 100.0 / 2.0;

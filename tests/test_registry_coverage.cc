@@ -23,10 +23,11 @@
 #include <utility>
 #include <vector>
 
-#include "integrators/registry.h"
-#include "models/element_kind.h"
+#include "integrators/registry/registry.h"
+#include "models/core/element_kind.h"
 #include "models/materials/material.h"
 #include "registry_suite.h"
+#include "models/model/element_registry.h"
 
 namespace springlab {
 namespace {

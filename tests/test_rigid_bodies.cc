@@ -16,19 +16,20 @@
 #include <sstream>
 #include <string>
 
-#include "experiments/body_output.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/bodies.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/mass_properties.h"
-#include "models/scene.h"
-#include "models/springs.h"
+#include "experiments/io/body_output.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/bodies/bodies.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/bodies/mass_properties.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
 #include "registry_suite.h"
 #include "run_process.h"
+#include "models/model/scene_file.h"
 
 namespace springlab {
 namespace {
@@ -129,7 +130,7 @@ Body box(const Eigen::Vector3d& size, double rigidity = 1e6) {
 }
 
 TEST(Rigidity, ForceAndJacobiansMatchCentralDifferences) {
-  const ElasticModel model(one_body(box({0.3, 0.2, 0.1}, 50.0)));
+  const Model model(one_body(box({0.3, 0.2, 0.1}, 50.0)));
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 5; ++trial) {
@@ -164,7 +165,7 @@ TEST(Rigidity, ForceAndJacobiansMatchCentralDifferences) {
 // Two states of one body far apart, for the discrete-gradient tests: x
 // its rest state with A strained by up to 0.4, y that turned by up to 1 rad
 // about a random axis and strained by up to 0.1 more.
-void two_far_states(const ElasticModel& model, std::mt19937& rng,
+void two_far_states(const Model& model, std::mt19937& rng,
                     std::uniform_real_distribution<double>& u, Vector& x, Vector& y) {
   x = model.initial_positions();
   for (Eigen::Index k = 3; k < 12; ++k) x[k] += 0.4 * u(rng);
@@ -187,7 +188,7 @@ void two_far_states(const ElasticModel& model, std::mt19937& rng,
 // which Gonzalez's generic correction c D does (more than 1e-4 of it; the
 // least: 7.7e-4); and at y = x it is the gradient (d = 0).
 TEST(Rigidity, OwnDiscreteGradientIsExactAndTorqueFree) {
-  const ElasticModel model(one_body(box({0.3, 0.2, 0.1}, 50.0)));
+  const Model model(one_body(box({0.3, 0.2, 0.1}, 50.0)));
   ASSERT_TRUE(model.has_own_discrete_gradients());
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -241,7 +242,7 @@ TEST(Rigidity, OwnDiscreteGradientIsExactAndTorqueFree) {
 // is symmetric and negative semidefinite.
 TEST(Rigidity, OwnDiscreteGradientJacobianMatchesCentralDifferences) {
   const Body body = box({0.3, 0.2, 0.1}, 50.0);
-  const ElasticModel model(one_body(body));
+  const Model model(one_body(body));
   const double kappa_v = body.rigidity * rigid_body(body).mass.volume;
   std::mt19937 rng(13);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -340,7 +341,7 @@ class Recorder final : public Observer {
 
 RunResult run(const Scene& scene, const std::string& integrator, double dt, double t_end,
               Recorder* recorder = nullptr, double newton_tol = 1e-12) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = integrator;
   s.dt = dt;
@@ -361,7 +362,7 @@ TEST(RigidBodies, FreeFallIsExactAndKeepsA) {
   b.v = Eigen::Vector3d(0.5, 1.0, -0.2);
   b.orientation = {0.3, -0.2, 0.5};
   const Scene scene = one_body(b, 9.81);
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double T = 1.0;
   for (const char* method : {"rk4", "verlet", "implicit-midpoint"}) {
     const RunResult r = run(scene, method, 0.01, T);
@@ -424,14 +425,14 @@ TEST(RigidBodies, AxisymmetricBodyPrecessesAtTheClosedFormRate) {
 // exerted the torque h sum_k x_mid,k x c D_k and L drifted by 7.2e-6
 // relative over the same steps. The discrete gradient also keeps the
 // energy to its Newton tolerance (1e-10 relative).
-Eigen::Vector3d momentum(const ElasticModel& model, const Vector& x, const Vector& v) {
+Eigen::Vector3d momentum(const Model& model, const Vector& x, const Vector& v) {
   const BodyLayout layout = body_layout(model.scene(), model.free_particle_count());
   return body_state(layout.bodies[0], layout.first[0], x.data(), v.data()).angular_momentum;
 }
 
 TEST(RigidBodies, ImplicitMidpointAndDiscreteGradientConserveAngularMomentum) {
   const Scene scene = make_builtin_scene("tumbling-box");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const Eigen::Vector3d L0 = momentum(model, model.initial_positions(), model.initial_velocities());
   const double E0 = model.energies(model.initial_positions(), model.initial_velocities()).total();
   for (const std::string method : {"implicit-midpoint", "discrete-gradient"}) {
@@ -456,7 +457,7 @@ TEST(RigidBodies, ImplicitMidpointAndDiscreteGradientConserveAngularMomentum) {
 // keeps the energy within a bounded band (no drift) over 10^4 steps.
 TEST(RigidBodies, SymplecticEulerEnergyStaysBounded) {
   const Scene scene = make_builtin_scene("tumbling-box");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const double E0 = model.energies(model.initial_positions(), model.initial_velocities()).total();
   Recorder rec;
   const RunResult r = run(scene, "symplectic-euler", 2e-4, 2.0, &rec);
@@ -491,7 +492,7 @@ TEST(RigidBodies, ExplicitEulersEnergyGrowsByOnePlusWHSquaredPerStep) {
   const double w = std::sqrt(8.0 * box.rigidity * rb.mass.volume / rb.mass.J.minCoeff());
   const double h = 0.1 / w;
   const int steps = 200;
-  const ElasticModel model(scene);
+  const Model model(scene);
   const Energies start = model.energies(model.initial_positions(), model.initial_velocities());
   const double spin = start.kinetic();
   Recorder rec;
@@ -539,7 +540,7 @@ Eigen::Vector3d down_slope(double degrees) {
 
 TEST(RigidBodies, BoxOnSlopeSticksBelowTheFrictionAngle) {
   const Scene scene = make_builtin_scene("box-on-slope", {{"angle", "20"}, {"friction", "0.5"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   // Newton to 1e-6 m/s (far below the creep bound): at 1e-8 the line search
   // stalls on round-off of the incremental potential once the box creeps.
   const RunResult r = run(scene, "implicit-euler", 1e-3, 1.0, nullptr, 1e-6);
@@ -572,7 +573,7 @@ TEST(RigidBodies, BoxOnSlopeSlidesWithTheCoulombAcceleration) {
 // t = 0 (principal frame = world axes: I = diag(J_2 + J_3, J_1 + J_3, J_1 + J_2)).
 TEST(RigidBodies, JsonMomentaAreTheRigidBodys) {
   const Scene scene = make_builtin_scene("tumbling-box");
-  const ElasticModel model(scene);
+  const Model model(scene);
   const auto j = bodies_json(model, model.initial_positions(), model.initial_velocities());
   ASSERT_EQ(j.size(), 1u);
   const RigidBody rb = rigid_body(scene.get<Bodies>()[0]);
@@ -672,7 +673,7 @@ class EveryIntegratorOnBodies : public testing::RegistryTest {};
 
 TEST_P(EveryIntegratorOnBodies, RunsTheTumblingBoxOrRefuses) {
   const Scene scene = make_builtin_scene("tumbling-box");
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s = settings(2e-4, 0.02);
   s.options.newton_tol = 1e-10;
   const RunResult r = simulate(model, s);

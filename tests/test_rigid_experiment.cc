@@ -1,5 +1,5 @@
-// The rigid experiment (experiments/rigid_experiment.cc) and its reference,
-// the torque-free rigid body (experiments/rigid_reference.h), against closed
+// The rigid experiment (experiments/kinds/rigid_experiment.cc) and its reference,
+// the torque-free rigid body (experiments/analysis/rigid_reference.h), against closed
 // forms: the axisymmetric body's body-frame precession at
 // Omega = (I_3 - I_1) / I_1 w_3 and its world motion
 // R(t) = exp(t [L / I_1]) R_0 exp(-t Omega [e_3]); the asymmetric body's
@@ -16,7 +16,7 @@
 #include <string>
 
 #include "experiment_tasks.h"
-#include "experiments/rigid_reference.h"
+#include "experiments/analysis/rigid_reference.h"
 
 namespace springlab {
 namespace {

@@ -1,4 +1,4 @@
-// --vtk with rigid bodies (experiments/vtk_bodies.h): each body's surface as
+// --vtk with rigid bodies (experiments/io/vtk_bodies.h): each body's surface as
 // triangles after the particles, its vertices at x = p + A X, where p and A
 // are the run's final state as `run --json` reports it.
 #include <gtest/gtest.h>
@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "models/bodies.h"
-#include "models/builtin_scenes.h"
-#include "models/scene.h"
+#include "models/bodies/bodies.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/core/scene.h"
 #include "run_process.h"
 
 namespace springlab {

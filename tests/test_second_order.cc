@@ -11,14 +11,14 @@
 #include <Eigen/Eigenvalues>
 #include <vector>
 
-#include "experiments/simulation.h"
-#include "experiments/spectral.h"
-#include "experiments/stability.h"
-#include "integrators/newmark_family.h"
-#include "integrators/registry.h"
-#include "integrators/yoshida.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "experiments/analysis/spectral.h"
+#include "experiments/analysis/stability.h"
+#include "integrators/methods/newmark_family.h"
+#include "integrators/registry/registry.h"
+#include "integrators/methods/yoshida.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 #include "scenes_for_tests.h"
 
 namespace springlab {
@@ -114,7 +114,7 @@ TEST(SecondOrder, NewmarkWithGammaAboveOneHalfDamps) {
 
 // The trapezoidal rule conserves a linear system's quadratic energy.
 TEST(SecondOrder, AverageAccelerationConservesTheEnergyOfALinearSystem) {
-  const ElasticModel model(oscillator(100.0, 1.0, 0.0, 0.1));
+  const Model model(oscillator(100.0, 1.0, 0.0, 0.1));
   RunSettings s;
   s.integrator = "newmark";
   s.dt = 0.05;  // w h = 0.5
@@ -130,7 +130,7 @@ TEST(SecondOrder, AverageAccelerationConservesTheEnergyOfALinearSystem) {
 // The explicit limits, measured by the stability search on the oscillator
 // (w = 10): 2 / sqrt(1 - 4 beta) for gamma = 1/2.
 TEST(SecondOrder, NewmarkLimitsAreMeasuredByTheStabilitySearch) {
-  const ElasticModel model(oscillator(100.0, 1.0, 0.0, 0.1));
+  const Model model(oscillator(100.0, 1.0, 0.0, 0.1));
   const double w = 10.0;
   struct Case {
     const char* name;
@@ -156,7 +156,7 @@ TEST(SecondOrder, NewmarkLimitsAreMeasuredByTheStabilitySearch) {
 // 2): its stable steps are not one interval, so a bisection (which assumes
 // they are) cannot find its limit; runs at the edges show the island.
 TEST(SecondOrder, Yoshida6HasAStabilityIsland) {
-  const ElasticModel model(oscillator(100.0, 1.0, 0.0, 0.1));
+  const Model model(oscillator(100.0, 1.0, 0.0, 0.1));
   const double w = 10.0, limit = make_integrator("yoshida6")->info().stability_limit;
   for (const auto& [wh, diverges] : {std::pair{0.99 * limit, false}, std::pair{1.01 * limit, true},
                                      std::pair{2.5, false}, std::pair{3.0, true}}) {
@@ -176,7 +176,7 @@ TEST(SecondOrder, Yoshida6HasAStabilityIsland) {
 TEST(SecondOrder, NewmarkWithBetaZeroIsVelocityVerlet) {
   for (const Scene& scene : {testing::swinging_spring(), testing::damped_windy_chain()}) {
     SCOPED_TRACE(scene.name);
-    const ElasticModel model(scene);
+    const Model model(scene);
     RunSettings s;
     s.dt = 0.01;
     s.t_end = 2.0;
@@ -199,7 +199,7 @@ TEST(SecondOrder, NewmarkWithBetaZeroIsVelocityVerlet) {
 TEST(SecondOrder, Bdf2EqualsItsDefinitionOnALinearSystem) {
   const double k = 100.0, w2 = k, h = 0.02, amplitude = 0.1;
   const int steps = 200;
-  const ElasticModel model(oscillator(k, 1.0, 0.0, amplitude));
+  const Model model(oscillator(k, 1.0, 0.0, amplitude));
   RunSettings s;
   s.integrator = "bdf2";
   s.dt = h;
@@ -228,7 +228,7 @@ TEST(SecondOrder, Bdf2EqualsItsDefinitionOnALinearSystem) {
 
 // One Yoshida step is the Verlet steps w_i h in turn, each written out.
 TEST(SecondOrder, YoshidaStepsAreCompositionsOfVerletSteps) {
-  const ElasticModel model(testing::swinging_spring());
+  const Model model(testing::swinging_spring());
   const double h = 0.05;
   for (const auto& [name, weights] :
        {std::pair{"yoshida4", yoshida4_weights()}, std::pair{"yoshida6", yoshida6_weights()}}) {
@@ -279,7 +279,7 @@ TEST(SecondOrder, AlphaParametersFollowThePapers) {
 // and spring damping, against a tight RK4 run.
 TEST(SecondOrder, OrderTwoOnADampedCloth) {
   Scene scene = make_builtin_scene("cloth", {{"n", "4"}, {"drag", "0.05"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings reference;
   reference.integrator = "rk4";
   reference.dt = 1e-5;

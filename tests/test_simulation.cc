@@ -1,5 +1,5 @@
-// The run driver (experiments/simulation.h) and the stability search
-// (experiments/stability.h) in-process: the output time grid of
+// The run driver (experiments/driver/simulation.h) and the stability search
+// (experiments/analysis/stability.h) in-process: the output time grid of
 // docs/command-line.md "The command line", the observer protocol, the divergence rule (the E_s
 // threshold) and the bisection on dt, each checked against a value worked out by hand.
 #include <gtest/gtest.h>
@@ -14,18 +14,18 @@
 #include <string>
 #include <vector>
 
-#include "experiments/divergence_check.h"
-#include "experiments/simulation.h"
-#include "experiments/stability.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/drag.h"
-#include "models/elastic_model.h"
-#include "models/gravity.h"
-#include "models/modal_analysis.h"
-#include "models/scene.h"
-#include "models/springs.h"
-#include "models/wind.h"
+#include "experiments/driver/divergence_check.h"
+#include "experiments/driver/simulation.h"
+#include "experiments/analysis/stability.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/springs/drag.h"
+#include "models/model/model.h"
+#include "models/springs/gravity.h"
+#include "models/model/modal_analysis.h"
+#include "models/core/scene.h"
+#include "models/springs/springs.h"
+#include "models/springs/wind.h"
 
 namespace springlab {
 namespace {
@@ -168,7 +168,7 @@ TEST(SimulationTimeGrid, BadStepOrEndTimeThrows) {
 }
 
 TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   EXPECT_THROW(simulate(model, settings("rk4", 0.0, 1.0)), std::invalid_argument);
   EXPECT_THROW(simulate(model, settings("rk4", -0.1, 1.0)), std::invalid_argument);
   EXPECT_THROW(simulate(model, settings("rk4", 0.1, 0.0)), std::invalid_argument);
@@ -180,7 +180,7 @@ TEST(SimulationTimeGrid, SimulateRefusesBadSettings) {
 // ----------------------------------------------------------------- observer
 
 TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   RecordingObserver a, b;
   const RunResult r = simulate(model, settings("verlet", 0.1, 1.0), {&a, &b});
   EXPECT_FALSE(r.diverged());
@@ -204,7 +204,7 @@ TEST(SimulationObserver, SeesInitialStateFirstAndEndTimeLast) {
 }
 
 TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   {
     RecordingObserver o;
     RunSettings s = settings("rk4", 0.1, 1.0);
@@ -230,14 +230,14 @@ TEST(SimulationObserver, EveryKthGridTimeAndAlwaysTheLast) {
     RecordingObserver o;  // shortened last step (w h = 0.3: stable)
     RunSettings s = settings("symplectic-euler", 0.3, 1.0);
     s.every = 2;
-    const RunResult r = simulate(ElasticModel(linear_oscillator(1.0)), s, {&o});
+    const RunResult r = simulate(Model(linear_oscillator(1.0)), s, {&o});
     EXPECT_FALSE(r.diverged());
     EXPECT_EQ(o.times, (std::vector<double>{0.0, 2 * 0.3, 1.0}));
   }
 }
 
 TEST(SimulationObserver, NotCalledForTheDivergedStep) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   RecordingObserver o;
   const RunResult r = simulate(model, settings("explicit-euler", 0.05, 10.0), {&o});
   ASSERT_TRUE(r.diverged());
@@ -254,7 +254,7 @@ TEST(SimulationObserver, NotCalledForTheDivergedStep) {
 // 1 + w^2 h^2 per step. Here E(0) = E_s, so with blowup B the run diverges at
 // the first step n with (1 + w^2 h^2)^n > B.
 TEST(SimulationDivergence, ExplicitEulerDivergesAtThePredictedStep) {
-  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const Model model(linear_oscillator(100.0, 1.0, 0.1));
   ASSERT_DOUBLE_EQ(model.energy_scale(), 0.5);
   const double h = 0.05, w = 10.0;
   const double growth = 1.0 + w * w * h * h;  // 1.25
@@ -309,7 +309,7 @@ TEST(SimulationDivergence, CheapCertificateDecidesAsTheEnergyRuleAtEveryStep) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene.name + " " + c.integrator + " dt " + std::to_string(c.dt));
-    const ElasticModel model(c.scene);
+    const Model model(c.scene);
     RunSettings s = settings(c.integrator, c.dt, c.t_end);
     s.blowup = c.blowup;
     const RunResult r = simulate(model, s);
@@ -365,7 +365,7 @@ TEST(SimulationDivergence, CertificateLeavesFewStepsToTheEnergy) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene.name);
-    const ElasticModel model(c.scene);
+    const Model model(c.scene);
     const double dt = 0.5 / max_angular_frequency(model);
     auto integrator = make_integrator("symplectic-euler");
     ASSERT_TRUE(integrator->initialize(model, 0.0, model.initial_positions(),
@@ -392,7 +392,7 @@ TEST(SimulationDivergence, ThresholdIsOnKineticPlusSpringEnergy) {
   s.block<Gravity>().acceleration = Eigen::Vector3d(0, -10, 0);
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
-  const ElasticModel model(s);
+  const Model model(s);
   ASSERT_DOUBLE_EQ(model.energy_scale(), 10.0);
   // v_n = -10 n h: kinetic 50 (n h)^2 > 1e4 first at n h = 14.2 (h = 0.1).
   const RunResult r = simulate(model, settings("explicit-euler", 0.1, 20.0));
@@ -415,7 +415,7 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
   s.particles = {{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, true},
                  {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::Zero(), 1.0, false}};
   s.block<Springs>() = {{0, 1, 100.0, 0.0, 0.0}};
-  const ElasticModel model(s);
+  const Model model(s);
   ASSERT_EQ(model.energy_scale(), 0.0);
 
   // Stable integrators: finite motion, never a divergence.
@@ -449,7 +449,7 @@ TEST(SimulationDivergence, ZeroEnergyScaleOnlyNonFiniteStateDiverges) {
 // rule (kinetic + spring > B E_s, E_s = E0 here) therefore calls it diverged
 // above w h = 2 (1 - 1/B), 0.1% below the limit for B = 1000 -- inside the
 // stability bisection's tolerance -- and a larger --blowup sees closer.
-double peak_energy_ratio(const ElasticModel& model, const RunSettings& s, RunResult& r) {
+double peak_energy_ratio(const Model& model, const RunSettings& s, RunResult& r) {
   RecordingObserver o;
   r = simulate(model, s, {&o});
   double peak = 0.0;
@@ -461,7 +461,7 @@ double peak_energy_ratio(const ElasticModel& model, const RunSettings& s, RunRes
 }
 
 TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalfWh) {
-  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const Model model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   RunResult r;
   for (const double wh : {1.9, 1.99, 1.997}) {
@@ -484,7 +484,7 @@ TEST(SimulationDivergence, SymplecticEulerNearItsLimitPeaksAtOneOverOneMinusHalf
 // diverges at t = 0 (it used to complete, with inf energies in every row).
 TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
   Scene s = linear_oscillator(100.0, 1.0, 1e200);  // k x^2 / 2 = 5e401
-  const ElasticModel model(s);
+  const Model model(s);
   ASSERT_FALSE(std::isfinite(model.energies(model.initial_positions(), model.initial_velocities()).total()));
   const RunResult r = simulate(model, settings("rk4", 0.1, 1.0));
   EXPECT_EQ(r.status, RunStatus::kDiverged);
@@ -497,7 +497,7 @@ TEST(SimulationDivergence, NonFiniteInitialEnergyIsADivergenceAtTimeZero) {
 // A stop request ends a run at its next step, as an exception the
 // experiment runner turns into "not done".
 TEST(SimulationStop, StopRequestThrowsAtTheNextStep) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   std::atomic<bool> stop{true};
   RunSettings s = settings("rk4", 0.01, 1.0);
   s.options.stop = &stop;
@@ -536,7 +536,7 @@ void expect_limit(const StabilityResult& r, double limit, double rel_tol) {
 }
 
 TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
-  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const Model model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   for (const char* integrator : {"symplectic-euler", "verlet"}) {
     SCOPED_TRACE(integrator);
@@ -550,7 +550,7 @@ TEST(SimulationStability, SymplecticMethodsStopAtTwoOverOmega) {
 // Just past its limit RK4 amplifies by only |R(i w h)| - 1 ~ 2.5 (w h - 2
 // sqrt 2) per step, so a long run (~3500 steps) is needed to see it.
 TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
-  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const Model model(linear_oscillator(100.0, 1.0, 0.1));
   const double w = 10.0;
   const StabilitySettings s = stability_settings("rk4", 1e4 / w);
   const StabilityResult r = find_max_stable_dt(model, s);
@@ -561,7 +561,7 @@ TEST(SimulationStability, Rk4StopsAtTwoRootTwoOverOmega) {
 // doubles can meet (1e-16, or 0 + the smallest positive) it stops when the
 // bracket's ends are neighbours, after about 60 runs.
 TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
-  const ElasticModel model(linear_oscillator(100.0, 1.0, 0.1));
+  const Model model(linear_oscillator(100.0, 1.0, 0.1));
   for (const double rel_tol : {1e-16, 4.9e-324}) {
     SCOPED_TRACE(rel_tol);
     StabilitySettings s = stability_settings("symplectic-euler", 10.0);
@@ -576,7 +576,7 @@ TEST(SimulationStability, BisectionEndsWhateverTheTolerance) {
 
 // A range with no valid grid is refused before the first run.
 TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   StabilitySettings s = stability_settings("rk4", 1000.0);
   s.dt_min = 1e-12;
   try {
@@ -588,7 +588,7 @@ TEST(SimulationStability, ImpossibleRangeIsRefusedBeforeAnyRun) {
 }
 
 TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   const StabilityResult r = find_max_stable_dt(model, stability_settings("implicit-euler", 10.0));
   EXPECT_EQ(r.max_stable_dt, 1.0);
   EXPECT_EQ(r.runs, 1);
@@ -601,7 +601,7 @@ TEST(SimulationStability, UnconditionallyStableGivesDtMax) {
 // (T = 20 s: at least the 20 periods of w = 10 every trial runs, so no
 // trial is extended past T.)
 TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   const StabilitySettings s = stability_settings("explicit-euler", 20.0);
   const StabilityResult r = find_max_stable_dt(model, s);
   ASSERT_GT(r.lo, 0.0);
@@ -618,7 +618,7 @@ TEST(SimulationStability, ExplicitEulerFiniteTimeLimitIsConsistent) {
 }
 
 TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   StabilitySettings s = stability_settings("explicit-euler", 10.0);
   s.dt_min = 0.1;
   const StabilityResult r = find_max_stable_dt(model, s);
@@ -627,7 +627,7 @@ TEST(SimulationStability, EvenDtMinDivergingGivesZero) {
 }
 
 TEST(SimulationStability, BadRangeThrows) {
-  const ElasticModel model(linear_oscillator());
+  const Model model(linear_oscillator());
   StabilitySettings s = stability_settings("rk4", 1.0);
   s.dt_min = 0.0;
   EXPECT_THROW(find_max_stable_dt(model, s), std::invalid_argument);

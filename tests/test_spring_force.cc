@@ -1,13 +1,13 @@
 // The spring force term's fast loop (blocks of springs, a SIMD kernel for
 // k (1 - L/l), forces summed per particle) against hooke_force, the plain
-// formula F_i = -k (l - L) u one spring at a time (models/spring_force.h).
+// formula F_i = -k (l - L) u one spring at a time (models/springs/spring_force.h).
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "models/elastic_model.h"
-#include "models/spring_force.h"
-#include "models/springs.h"
+#include "models/model/model.h"
+#include "models/springs/spring_force.h"
+#include "models/springs/springs.h"
 
 namespace springlab {
 namespace {
@@ -42,7 +42,7 @@ Scene disjoint_springs(int dim, unsigned seed) {
 }
 
 // The forces on every particle, in scene order, from the model.
-Eigen::MatrixXd model_forces(const ElasticModel& model) {
+Eigen::MatrixXd model_forces(const Model& model) {
   Vector f;
   model.force(0.0, model.initial_positions(), model.initial_velocities(), f);
   // No fixed particle: the unknowns are the particles in scene order, which
@@ -67,7 +67,7 @@ Eigen::MatrixXd reference_forces(const Scene& s) {
 TEST(SpringForce, FastLoopEqualsHookesLawBitForBit) {
   for (int dim : {2, 3}) {
     const Scene s = disjoint_springs(dim, 17u + static_cast<unsigned>(dim));
-    const ElasticModel model(s);
+    const Model model(s);
     const Eigen::MatrixXd x = model.scene_positions(model.initial_positions());
     for (std::size_t p = 0; p < s.particles.size(); ++p) {
       for (int r = 0; r < dim; ++r) {
@@ -111,7 +111,7 @@ TEST(SpringForce, SharedParticlesAgreeToRounding) {
       if (a + 1 < n && b + 1 < n) s.block<Springs>().push_back({i, i + n + 1, 1000.0, 0.1414, 0.0});
     }
   }
-  const ElasticModel model(s);
+  const Model model(s);
   const Eigen::MatrixXd fast = model_forces(model);
   const Eigen::MatrixXd reference = reference_forces(s);
   const double scale = reference.cwiseAbs().maxCoeff();

@@ -23,10 +23,10 @@
 #include <complex>
 #include <numbers>
 
-#include "experiments/simulation.h"
-#include "experiments/stability.h"
-#include "integrators/registry.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "experiments/analysis/stability.h"
+#include "integrators/registry/registry.h"
+#include "models/model/model.h"
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
@@ -142,7 +142,7 @@ TEST_P(DeclaredStabilityWithR, StabilityFunctionHasTheDeclaredRegion) {
 
 TEST_P(DeclaredStabilityOnTheAxis, UndampedStiffOscillatorAtWh100) {
   const IntegratorInfo i = info();
-  const ElasticModel model(oscillator(100.0, 1.0));
+  const Model model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(100.0 / 10.0, 1000.0));
   if (stable_on_imaginary_axis(i)) {
     EXPECT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -153,7 +153,7 @@ TEST_P(DeclaredStabilityOnTheAxis, UndampedStiffOscillatorAtWh100) {
 }
 
 TEST_P(DeclaredLStability, LStableMethodsDampAStiffModeInOneStep) {
-  const ElasticModel model(oscillator(100.0, 1.0));
+  const Model model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(100.0 / 10.0, 10.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_LT(r.energy_final, 1e-2 * r.energy_initial);  // implicit Euler: 1 / (1 + 100^2)
@@ -161,7 +161,7 @@ TEST_P(DeclaredLStability, LStableMethodsDampAStiffModeInOneStep) {
 
 TEST_P(DeclaredStepLimit, ConditionalLimitHoldsJustBelowAndFailsJustAbove) {
   const IntegratorInfo i = info();
-  const ElasticModel model(oscillator(100.0, 1.0));
+  const Model model(oscillator(100.0, 1.0));
   const double w = 10.0;
   for (double factor : {0.99, 1.01}) {
     const double dt = factor * i.stability_limit / w;
@@ -201,7 +201,7 @@ TEST_P(DeclaredStepLimit, EnergySwingsUpToTheDeclaredExcursion) {
       Scene scene = oscillator(k, 1.0, 0.0, amplitude);
       scene.particles[1].x = Eigen::Vector3d(amplitude * std::cos(phase), 0, 0);
       scene.particles[1].v = Eigen::Vector3d(-amplitude * w * std::sin(phase), 0, 0);
-      const ElasticModel model(scene);
+      const Model model(scene);
       PeakEnergy energy(k);
       const RunResult r = simulate(model, settings(wh / w, 400 * wh / w), {&energy});
       ASSERT_EQ(r.status, RunStatus::kCompleted) << "w h = " << wh << ": " << r.failure;
@@ -219,7 +219,7 @@ TEST_P(DeclaredStepLimit, EnergySwingsUpToTheDeclaredExcursion) {
 // ((1 + w h/2) / (1 - w h/2): 19 x at w h = 1.8) for a blow-up: it read 0.90.
 TEST_P(DeclaredStepLimit, StabilitySearchFindsTheDeclaredLimit) {
   const IntegratorInfo i = info();
-  const ElasticModel model(oscillator(100.0, 1.0));
+  const Model model(oscillator(100.0, 1.0));
   StabilitySettings s;
   s.run.integrator = i.name;
   s.run.t_end = 10.0;
@@ -244,7 +244,7 @@ TEST_P(DeclaredStepLimit, StabilitySearchFindsTheDeclaredLimit) {
 // Explicit Euler has no stable step without damping: it blows up, and the
 // run says when.
 TEST_P(DeclaredNoStableStep, NoStableStepWithoutDampingDivergesAsAResult) {
-  const ElasticModel model(oscillator(100.0, 1.0));
+  const Model model(oscillator(100.0, 1.0));
   const RunResult r = simulate(model, settings(0.05, 100.0));
   ASSERT_EQ(r.status, RunStatus::kDiverged);
   // Energy grows by (1 + w^2 h^2) = 1.25 per step; 1000x the scale takes
@@ -259,7 +259,7 @@ TEST_P(DeclaredNoStableStep, NoStableStepWithoutDampingDivergesAsAResult) {
 // half-kick treats the drag implicitly: it survives this decay).
 TEST_P(DeclaredStabilityFixedStepDecay, FixedStepThroughAStiffDecayAtHLambda100) {
   const IntegratorInfo i = info();
-  const ElasticModel model(overdamped_stiff_spring());
+  const Model model(overdamped_stiff_spring());
   const double h = 100.0 / kFastRate;
   const RunResult r = simulate(model, settings(h, 1.0));
   if (i.jacobian_free && i.stability_note.find("drag and wind (") != std::string::npos) {
@@ -286,7 +286,7 @@ TEST_P(DeclaredStabilityFixedStepDecay, FixedStepThroughAStiffDecayAtHLambda100)
 
 TEST_P(DeclaredStabilityAdaptiveDecay, AdaptiveStepsThroughAStiffDecay) {
   const IntegratorInfo i = info();
-  const ElasticModel model(overdamped_stiff_spring());
+  const Model model(overdamped_stiff_spring());
   const double t_end = 20.0;
   RunSettings s = settings(1.0, t_end);
   s.options.rtol = 1e-5;

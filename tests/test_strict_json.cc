@@ -1,4 +1,4 @@
-// The strict JSON reader (models/strict_json.h) shared by scene files and
+// The strict JSON reader (models/core/strict_json.h) shared by scene files and
 // experiment definitions: it reads what nlohmann's parser reads, refuses a
 // duplicate key naming the object, and enforces the optional caps with the
 // path of the value that goes over them.
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "models/strict_json.h"
+#include "models/core/strict_json.h"
 
 namespace springlab {
 namespace {

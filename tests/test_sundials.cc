@@ -10,11 +10,11 @@
 #include <set>
 #include <thread>
 
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "integrators/sundials_integrator.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "integrators/sundials/sundials_integrator.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
@@ -38,7 +38,7 @@ Scene small_cloth() { return make_builtin_scene("cloth", {{"n", "4"}, {"wind", "
 
 // The reference: rk4 at a step far below its stability limit and error scale.
 Vector reference_positions(const Scene& scene, double t_end, double dt) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings s;
   s.integrator = "rk4";
   s.dt = dt;
@@ -60,7 +60,7 @@ TEST_P(AdaptiveIntegrator, ErrorFallsWithTolerance) {
   for (const Case& c : {Case{testing::swinging_spring(), 1.0, 1e-5},
                         Case{small_cloth(), 0.5, 2e-6}}) {
     const Vector reference = reference_positions(c.scene, c.t_end, c.reference_dt);
-    const ElasticModel model(c.scene);
+    const Model model(c.scene);
     double error[2];
     int k = 0;
     for (double rtol : {1e-4, 1e-8}) {
@@ -75,7 +75,7 @@ TEST_P(AdaptiveIntegrator, ErrorFallsWithTolerance) {
 
 // A run that cannot finish (--max-steps too small) is a result naming the call.
 TEST_P(AdaptiveIntegrator, TooMuchWorkIsReportedAsAResult) {
-  const ElasticModel model(small_cloth());
+  const Model model(small_cloth());
   RunSettings s = adaptive(GetParam(), 1e-8, 1.0, 2.0);
   s.options.max_steps = 10;
   const RunResult r = simulate(model, s);
@@ -89,7 +89,7 @@ TEST_P(AdaptiveIntegrator, TooMuchWorkIsReportedAsAResult) {
 }
 
 TEST_P(AdaptiveIntegrator, StabilityLimitDetectionIsCvodeBdfOnly) {
-  const ElasticModel model(testing::swinging_spring());
+  const Model model(testing::swinging_spring());
   RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 1.0);
   s.options.stald = true;
   const RunResult r = simulate(model, s);
@@ -108,7 +108,7 @@ TEST_P(AdaptiveIntegrator, StabilityLimitDetectionIsCvodeBdfOnly) {
 // evaluations per Jacobian are the nonlinear iterations it serves (a few
 // hundred at most), far below the 2n a difference-quotient Jacobian costs.
 TEST_P(AdaptiveImplicitIntegrator, AnalyticJacobianCostsNoForceEvaluations) {
-  const ElasticModel model(make_builtin_scene("chain", {{"n", "600"}, {"horizontal", "1"}}));
+  const Model model(make_builtin_scene("chain", {{"n", "600"}, {"horizontal", "1"}}));
   const double unknowns = 2.0 * static_cast<double>(model.dofs());  // 2396
   RunSettings s = adaptive(GetParam(), 1e-6, 0.05, 0.1);
   s.options.linear_solver = "klu";
@@ -123,7 +123,7 @@ TEST_P(AdaptiveImplicitIntegrator, AnalyticJacobianCostsNoForceEvaluations) {
 // --dq-jacobian: SUNDIALS differences the right-hand side instead, paying
 // at least one evaluation per unknown per Jacobian, for the same answer.
 TEST_P(AdaptiveImplicitIntegrator, DifferenceQuotientJacobianGivesTheSameAnswer) {
-  const ElasticModel model(small_cloth());
+  const Model model(small_cloth());
   const double unknowns = 2.0 * static_cast<double>(model.dofs());
   RunSettings s = adaptive(GetParam(), 1e-8, 0.05, 0.3);
   s.options.linear_solver = "dense";
@@ -141,7 +141,7 @@ TEST_P(AdaptiveImplicitIntegrator, DifferenceQuotientJacobianGivesTheSameAnswer)
 }
 
 TEST_P(AdaptiveImplicitIntegrator, LinearSolversAgree) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "6"}, {"drag", "0.01"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "6"}, {"drag", "0.01"}}));
   Vector first;
   for (const char* solver : {"dense", "klu", "gmres"}) {
     RunSettings s = adaptive(GetParam(), 1e-8, 0.05, 0.15);
@@ -157,7 +157,7 @@ TEST_P(AdaptiveImplicitIntegrator, LinearSolversAgree) {
 }
 
 TEST_P(AdaptiveImplicitIntegrator, KluRefusesDifferenceQuotients) {
-  const ElasticModel model(testing::swinging_spring());
+  const Model model(testing::swinging_spring());
   RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 1.0);
   s.options.linear_solver = "klu";
   s.options.dq_jacobian = true;
@@ -182,7 +182,7 @@ TEST_P(AdaptiveIntegrator, MaxOrderIsCheckedAgainstTheMethod) {
       {"arkode-dirk", {2, 3, 4, 5}},         {"arkode-imex", {3, 4, 5}}};
   ASSERT_TRUE(orders.count(GetParam())) << "a new adaptive method: add its orders here";
   const auto integrator = make_integrator(GetParam());
-  const ElasticModel model(testing::swinging_spring());
+  const Model model(testing::swinging_spring());
   std::set<int> accepted;
   for (int q = 1; q <= 14; ++q) {
     IntegratorOptions o;
@@ -236,7 +236,7 @@ TEST(SundialsWorkLimit, ScalesWithTheSystem) {
 // A stiff cloth asked for one output at t = 1000 s: explicit arkode-erk
 // needs ~10^6 steps; it stops at the scaled limit with what to try.
 TEST(SundialsWorkLimit, HopelessRunFailsAtTheScaledLimit) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "8"}, {"k", "1e5"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "8"}, {"k", "1e5"}}));
   const double unknowns = 2.0 * static_cast<double>(model.dofs());
   const long limit = static_cast<long>(kStepBudget / unknowns);
   RunSettings s = adaptive("arkode-erk", 1e-6, 1000.0, 1000.0);
@@ -285,7 +285,7 @@ TEST(SundialsOptions, DenseSizeCapAndDifferenceQuotientsWithAuto) {
 // second, through the right-hand side (ODE packages) or residual (IDA).
 TEST(SundialsStop, StopRequestEndsALongIntervalAtOnce) {
   // w = 1000 rad/s for 10^4 s: ~10^6 periods to resolve.
-  const ElasticModel model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
+  const Model model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
   for (const char* name : {"arkode-erk", "ida"}) {
     SCOPED_TRACE(name);
     std::atomic<bool> stop{false};
@@ -310,7 +310,7 @@ TEST(SundialsStop, StopRequestEndsALongIntervalAtOnce) {
 // steps allowed, CVODE's Adams method on a 1000 rad/s oscillator gets to
 // t ~ 1e-3, and that is the failure time the result (and every table) gives.
 TEST(SundialsFailure, FailureTimeIsWhereTheSolverStopped) {
-  const ElasticModel model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
+  const Model model(make_builtin_scene("oscillator", {{"k", "1e6"}}));
   for (const char* name : {"cvode-adams", "arkode-erk", "cvode-bdf"}) {
     SCOPED_TRACE(name);
     RunSettings s = adaptive(name, 1e-8, 1.0, 2.0);
@@ -334,7 +334,7 @@ SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(AdaptiveImplicitIntegrator, is_adap
 // IDA on the residual form) and a tiny-step RK4 agree on the chain.
 TEST(Sundials, IdaCvodeBdfAndRk4AgreeOnTheChain) {
   const Scene chain = make_builtin_scene("chain", {{"n", "8"}, {"horizontal", "1"}});
-  const ElasticModel model(chain);
+  const Model model(chain);
   const Vector reference = reference_positions(chain, 0.5, 1e-5);
   for (const char* name : {"cvode-bdf", "ida"}) {
     const RunResult r = simulate(model, adaptive(name, 1e-10, 0.05, 0.5));

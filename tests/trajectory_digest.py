@@ -7,7 +7,8 @@ short t_end, and a few variants: barrier contact, drag and wind, large steps
 (indefinite Newton matrices), the damped scene file of the spec) with `springlab run ... --energy F
 --trajectory G --json`, and records, per (integrator, case), the SHA-256 of
 the energy CSV, the trajectory CSV and the JSON summary (its `wall_seconds`
-removed: the only field that is not a result). A pairing the method refuses
+removed: the only field that is not a result; `verdict`, which `failure`
+says in words, and an empty `warnings` list removed too). A pairing the method refuses
 before its first step (exit 1, one line on stderr) is recorded as refused,
 with the digest of that line.
 
@@ -91,6 +92,13 @@ def run_one(exe, label, integrator, options, case):
             return label, name, "refused", digest.hexdigest()[:16]
         summary = json.loads(done.stdout)
         summary.pop("wall_seconds", None)
+        # The verdict's data (issue 46) says again what `failure` says in
+        # words; an empty warning list is no news. Dropped, so that digests
+        # recorded before they existed still compare: a run with warnings
+        # differs.
+        summary.pop("verdict", None)
+        if summary.get("warnings") == []:
+            summary.pop("warnings")
         digest.update(json.dumps(summary, sort_keys=True).encode())
         for path in (energy, trajectory):
             with open(path, "rb") as f:

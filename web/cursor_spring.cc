@@ -3,7 +3,7 @@
 
 namespace springlab {
 
-CursorSpring::CursorSpring(const ElasticModel& model, double w_max)
+CursorSpring::CursorSpring(const Model& model, double w_max)
     : model_(model), dim_(model.dimension()) {
   // The lightest free particle's mass: the stiffest the spring gets.
   double m = model.mass().size() > 0 ? model.mass().minCoeff() : 1.0;

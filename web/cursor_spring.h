@@ -16,7 +16,7 @@
 
 #include <Eigen/Core>
 
-#include "models/elastic_model.h"
+#include "models/model/model.h"
 
 namespace springlab {
 
@@ -24,7 +24,7 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
  public:
   // w_max: the model's highest angular frequency (modal_analysis.h); 0
   // when unknown (k_c is then 100 m_p, a 10 rad/s spring).
-  CursorSpring(const ElasticModel& model, double w_max);
+  CursorSpring(const Model& model, double w_max);
 
   // Pulls scene particle `particle` toward `cursor` (scene coordinates);
   // false, and nothing pulled, when the particle is fixed or out of range.
@@ -80,13 +80,13 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   // FastSolverViews: the model's, with the spring among the external forces.
   bool projective_form(std::vector<DistanceConstraint>& constraints,
                        std::vector<ProjectiveElement>& elements,
-                       std::string& why) const override {
+                       Refusal& why) const override {
     return model_.projective_form(constraints, elements, why);
   }
   bool position_based_form(std::vector<DistanceConstraint>& constraints,
                            std::vector<ProjectiveElement>& elements,
                            std::vector<std::unique_ptr<PositionProjection>>& projections,
-                           std::string& why) const override {
+                           Refusal& why) const override {
     return model_.position_based_form(constraints, elements, projections, why);
   }
   bool laplacian_form(std::vector<DistanceConstraint>& constraints,
@@ -106,7 +106,7 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   // full diagonal; a fluid's pattern changes, so they are looked up in it).
   void add_stiffness(SparseMatrix* dfdx) const;
 
-  const ElasticModel& model_;
+  const Model& model_;
   double k_ = 0.0;
   int dim_ = 3;
   int unknown_ = -1;  // first unknown of the pulled particle; -1: none

@@ -16,15 +16,15 @@
 #include <stdexcept>
 #include <string>
 
-#include "experiments/body_output.h"
-#include "experiments/simulation.h"
-#include "integrators/registry.h"
-#include "models/builtin_scenes.h"
-#include "models/contact.h"
-#include "models/fem.h"
-#include "models/fluids.h"
-#include "models/gravity.h"
-#include "models/springs.h"
+#include "experiments/io/body_output.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/contact/contact.h"
+#include "models/fem/fem.h"
+#include "models/fluids/fluids.h"
+#include "models/springs/gravity.h"
+#include "models/springs/springs.h"
 #include "web/lab_panel.h"
 
 namespace springlab {
@@ -84,7 +84,7 @@ Json integrator_json(const Integrator& method) {
               {"options", method.options_read()}};
 }
 
-Json positions_json(const ElasticModel& model, const Vector& x) {
+Json positions_json(const Model& model, const Vector& x) {
   const Eigen::MatrixXd rows = model.scene_positions(x);
   Json out = Json::array();
   for (Eigen::Index s = 0; s < rows.rows(); ++s) {
@@ -165,7 +165,9 @@ EMSCRIPTEN_KEEPALIVE const char* lab_list() {
   for (const BuiltinScene& s : builtin_scenes()) {
     Json parameters = Json::array();
     for (const SceneParameter& p : s.parameters) {
-      parameters.push_back({{"name", p.name}, {"default", p.default_value}, {"meaning", p.meaning}});
+      Json parameter = {{"name", p.name}, {"default", p.default_value}, {"meaning", p.meaning}};
+      if (!p.choices.empty()) parameter["choices"] = p.choices;  // the default: their index
+      parameters.push_back(parameter);
     }
     scenes.push_back({{"name", s.name}, {"description", s.description}, {"parameters", parameters}});
   }
@@ -183,7 +185,7 @@ EMSCRIPTEN_KEEPALIVE const char* lab_list() {
 EMSCRIPTEN_KEEPALIVE const char* lab_run(const char* request_text) {
   try {
     const Json request = Json::parse(request_text);
-    const ElasticModel model(
+    const Model model(
         make_builtin_scene(request.at("scene").get<std::string>(), scene_params(request)));
     RunSettings settings;
     settings.integrator = request.at("integrator").get<std::string>();
@@ -236,7 +238,7 @@ EMSCRIPTEN_KEEPALIVE const char* lab_panel_new(const char* request_text) {
     settings.options = integrator_options(request);
     if (request.contains("w_max")) settings.w_max = request.at("w_max").get<double>();
     auto panel = std::make_unique<LabPanel>(settings);
-    const ElasticModel& model = panel->model();
+    const Model& model = panel->model();
     Json fixed = Json::array();
     for (std::size_t p = 0; p < model.scene().particles.size(); ++p) {
       if (model.scene().particles[p].fixed) fixed.push_back(p);

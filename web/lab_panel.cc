@@ -2,11 +2,11 @@
 
 #include <cmath>
 
-#include "experiments/vtk_bodies.h"
-#include "integrators/registry.h"
-#include "models/bodies.h"
-#include "models/builtin_scenes.h"
-#include "models/modal_analysis.h"
+#include "experiments/io/vtk_bodies.h"
+#include "integrators/registry/registry.h"
+#include "models/bodies/bodies.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/modal_analysis.h"
 
 namespace springlab {
 
@@ -15,7 +15,7 @@ constexpr Eigen::Index kPageDenseUnknowns = 600;
 }  // namespace
 
 LabPanel::LabPanel(const PanelSettings& settings) {
-  model_ = std::make_unique<ElasticModel>(make_builtin_scene(settings.scene, settings.params));
+  model_ = std::make_unique<Model>(make_builtin_scene(settings.scene, settings.params));
   points_ = model_->particle_count();
   if (!model_->scene().get<Bodies>().empty()) {
     bodies_ = std::make_unique<VtkBodies>(model_->scene(), model_->free_particle_count());
@@ -33,10 +33,11 @@ LabPanel::LabPanel(const PanelSettings& settings) {
   }
   const StepResult start = integrator_->initialize(
       *cursor_, 0.0, model_->initial_positions(), model_->initial_velocities(), settings.options);
-  if (!start.ok) throw RunRefused(start.message);
+  if (!start.ok) throw RunRefused(start.message, start.remedy);
   energies_.emplace(model_->energies(model_->initial_positions(), model_->initial_velocities()));
   check_ = std::make_unique<DivergenceCheck>(*model_, settings.blowup * model_->energy_scale(),
-                                             *energies_);
+                                             *energies_, integrator_->overshoot_steps());
+  blowup_ = settings.blowup;
   store_good_state();
 }
 
@@ -79,7 +80,7 @@ long LabPanel::step(long steps, double dt) {
     dt_ = dt;
   }
   long taken = 0;
-  // The loop of simulate() (experiments/simulation.cc), one step at a time.
+  // The loop of simulate() (experiments/driver/simulation.cc), one step at a time.
   for (; taken < steps; ++taken) {
     const double t = t_base_ + static_cast<double>(k_ + 1) * dt_;
     const StepResult step = integrator_->advance_to(t);
@@ -89,9 +90,12 @@ long LabPanel::step(long steps, double dt) {
       diverged_at_ = t;
       break;
     }
-    if (check_->diverged(integrator_->x(), integrator_->v())) {
+    if (const auto verdict = check_->judge(integrator_->x(), integrator_->v(), t)) {
       status_ = RunStatus::kDiverged;
       diverged_at_ = t;
+      failure_ = verdict_text(*verdict, *model_,
+                              {integrator_->name(), blowup_, integrator_->overshoot_steps()},
+                              integrator_->x(), integrator_->v());
       break;
     }
     ++k_;

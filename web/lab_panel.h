@@ -1,6 +1,6 @@
 // One panel of the lab page (docs/browser-lab.md): a built-in scene under one
 // integrator, stepped live. The objects are `springlab run`'s (the scene's
-// ElasticModel, the registry's integrator, the divergence rule's
+// Model, the registry's integrator, the divergence rule's
 // DivergenceCheck); what differs is that the page decides how many steps
 // each frame takes, may change dt between two steps, and may pull a
 // particle with the mouse (cursor_spring.h). Step k ends at
@@ -14,15 +14,15 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/divergence_check.h"
-#include "experiments/simulation.h"
-#include "integrators/integrator.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/divergence_check.h"
+#include "experiments/driver/simulation.h"
+#include "integrators/core/integrator.h"
+#include "models/model/model.h"
 #include "web/cursor_spring.h"
 
 namespace springlab {
 
-class VtkBodies;  // experiments/vtk_bodies.h (not included: its scene_io.h's Json
+class VtkBodies;  // experiments/io/vtk_bodies.h (not included: its scene_io.h's Json
                   // and bodies.h's Triangle would meet lab_api.cc's)
 
 struct PanelSettings {
@@ -66,7 +66,7 @@ class LabPanel {
   // The bodies' surface triangles, numbered as points() (3 per triangle).
   std::vector<int> body_faces() const;
 
-  const ElasticModel& model() const { return *model_; }
+  const Model& model() const { return *model_; }
   const Integrator& integrator() const { return *integrator_; }
   // The scene's highest angular frequency at its initial state [rad/s].
   double w_max() const { return w_max_; }
@@ -75,13 +75,14 @@ class LabPanel {
  private:
   void store_good_state();
 
-  std::unique_ptr<ElasticModel> model_;
+  std::unique_ptr<Model> model_;
   std::unique_ptr<VtkBodies> bodies_;  // null: the scene has no rigid bodies
   int points_ = 0;
   double w_max_ = 0.0;
   std::unique_ptr<CursorSpring> cursor_;
   std::unique_ptr<Integrator> integrator_;
   std::unique_ptr<DivergenceCheck> check_;
+  double blowup_ = 1000.0;
   RunStatus status_ = RunStatus::kCompleted;
   std::optional<double> diverged_at_;
   std::string failure_;

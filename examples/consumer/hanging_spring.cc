@@ -5,14 +5,14 @@
 #include <cmath>
 #include <cstdio>
 
-#include "experiments/simulation.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 
 int main() {
   using namespace springlab;
   const Scene scene = make_builtin_scene("spring", {{"k", "100"}, {"mass", "1"}});
-  const ElasticModel model(scene);
+  const Model model(scene);
   RunSettings settings;
   settings.integrator = "implicit-euler";
   settings.dt = 0.01;

@@ -4,7 +4,7 @@
 // lecture's reason for corotated models). Square F only: refused for
 // membranes (docs/physics.md "Finite elements"). Sifakis and Barbic, "FEM simulation of 3D
 // deformable solids", SIGGRAPH course 2012, §3.
-#include "models/materials/tet_kernel.h"
+#include "models/materials/kernels/tet_kernel.h"
 
 namespace springlab {
 namespace {

@@ -84,7 +84,7 @@ struct MaterialModel : MaterialFacts {
 };
 
 // The registered models, in registry order; nullptr for an unknown name.
-const std::vector<const MaterialModel*>& material_models();
+std::vector<const MaterialModel*> material_models();
 const MaterialModel* find_material_model(std::string_view name);
 // "linear, corotated, ..." for messages.
 std::string material_model_names();

@@ -1,35 +1,28 @@
-// The registered material models (material.h). Adding one: its file (a
+// The registered material models (material.h), in the one registration
+// idiom of springlab (models/core/registry.h). Adding one: its file (a
 // class with SPRINGLAB_MATERIAL(Class, name) at its end, tet_kernel.h) and
-// one line X(name) in this table.
+// one line X(MaterialModel, name_material) in this table.
 
 #include "models/materials/material.h"
-#include "models/materials/tangent3.h"
+#include "models/core/registry.h"
+#include "models/materials/kernels/tangent3.h"
 
 namespace springlab {
 
-#define SPRINGLAB_MATERIALS(X) \
-  X(linear)                    \
-  X(corotated)                 \
-  X(stvk)                      \
-  X(neo_hookean)               \
-  X(stable_neo_hookean)
+#define SPRINGLAB_MATERIALS(X)                    \
+  X(MaterialModel, linear_material)               \
+  X(MaterialModel, corotated_material)            \
+  X(MaterialModel, stvk_material)                 \
+  X(MaterialModel, neo_hookean_material)          \
+  X(MaterialModel, stable_neo_hookean_material)
 
-// NAME_material(), each in NAME.cc.
-#define SPRINGLAB_DECLARE_MATERIAL(NAME) const MaterialModel& NAME##_material();
-SPRINGLAB_MATERIALS(SPRINGLAB_DECLARE_MATERIAL)
+// NAME_material(), each in NAME.cc (SPRINGLAB_MATERIAL, tet_kernel.h).
+SPRINGLAB_REGISTRY(MaterialModel, SPRINGLAB_MATERIALS, material_registry)
 
-const std::vector<const MaterialModel*>& material_models() {
-#define SPRINGLAB_MATERIAL_ENTRY(NAME) &NAME##_material(),
-  static const std::vector<const MaterialModel*> models = {
-      SPRINGLAB_MATERIALS(SPRINGLAB_MATERIAL_ENTRY)};
-  return models;
-}
+std::vector<const MaterialModel*> material_models() { return material_registry().entries(); }
 
 const MaterialModel* find_material_model(std::string_view name) {
-  for (const MaterialModel* m : material_models()) {
-    if (m->name == name) return m;
-  }
-  return nullptr;
+  return material_registry().find(name);
 }
 
 std::string material_model_names() {

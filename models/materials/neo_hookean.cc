@@ -10,7 +10,7 @@
 #include <cmath>
 #include <limits>
 
-#include "models/materials/tet_kernel.h"
+#include "models/materials/kernels/tet_kernel.h"
 
 namespace springlab {
 namespace {

@@ -6,7 +6,7 @@
 // Defined for every F, inverted ones included (no logarithm): the energy
 // pushes an inverted element back instead of ending the run. The constant
 // makes Psi(I) = 0 and alpha makes P(I) = 0.
-#include "models/materials/tet_kernel.h"
+#include "models/materials/kernels/tet_kernel.h"
 
 namespace springlab {
 namespace {

@@ -3,7 +3,7 @@
 // (S the second Piola-Kirchhoff stress). Rotation invariant, but it softens
 // under compression and has no resistance to inversion. Sifakis and Barbic
 // 2012, §3.
-#include "models/materials/tet_kernel.h"
+#include "models/materials/kernels/tet_kernel.h"
 
 namespace springlab {
 namespace {

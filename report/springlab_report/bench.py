@@ -289,7 +289,7 @@ def _force_table(bench):
                        fmt(j["cpu_time"] * 1e6, 4) if j else "–",
                        fmt(j["counters"].get("ns_per_spring"), 3) if j else "–", note))
     return ("<h3>Force evaluation</h3>\n<p>One evaluation of all forces "
-            "(<code>ElasticModel::force</code>), and force plus both Jacobians on the "
+            "(<code>Model::force</code>), and force plus both Jacobians on the "
             "model's fixed pattern (what an implicit method assembles per Newton iteration).</p>\n"
             "<table><tr><th>scene</th><th>n</th><th>springs</th><th>unknowns</th>"
             "<th>force [µs]</th><th>force ns / spring</th><th>unknowns / s</th>"

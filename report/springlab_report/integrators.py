@@ -18,6 +18,11 @@ FAMILY_TITLES = {"explicit": "explicit", "symplectic": "symplectic", "implicit":
 _FALLBACK_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
                      "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#000000", "#393b79"]
 _FALLBACK_MARKERS = ["o", "s", "^", "D", "v", "P", "X", "<", ">", "h", "p", "*"]
+# Colours for the methods an experiment brought (plug-ins, Python classes):
+# none is a built-in's (the style table of experiments/cli/integrator_table.cc).
+_OWN_COLOURS = ["#e6550d", "#3182bd", "#31a354", "#756bb1", "#d6616b", "#636363", "#fdae6b",
+                "#9ecae1"]
+_OWN_MARKERS = ["$a$", "$b$", "$c$", "$d$", "$e$", "$f$", "$g$", "$k$"]
 # Colours for a second variant of one integrator in a figure (dark, so they
 # read apart from the integrators' own colours).
 _VARIANT_COLOURS = ["#000000", "#8c564b", "#1f77b4", "#ff7f0e", "#2ca02c", "#17becf",
@@ -51,6 +56,26 @@ class Integrators:
             self.entries[name] = {"name": name, "missing": True}
             if adaptive is not None:
                 self.entries[name]["adaptive"] = bool(adaptive)
+
+    def learn_entry(self, entry):
+        """A method an experiment brought (a plug-in's, a Python class's):
+        the facts its settings file lists under "own_integrators", in the
+        form of integrators.json's entries but without a colour. It gets a
+        colour and marker no listed method has, so it reads apart from the
+        built-in it lies on (in the order the experiments list them)."""
+        name = entry.get("name") if isinstance(entry, dict) else None
+        if not isinstance(name, str) or (name in self.entries
+                                          and not self.entries[name].get("missing")):
+            return
+        used = {e.get("colour") for e in self.entries.values()}
+        spare = [c for c in _OWN_COLOURS if c not in used]
+        used_markers = {e.get("marker") for e in self.entries.values()}
+        spare_markers = [m for m in _OWN_MARKERS if m not in used_markers]
+        self.entries[name] = dict(entry, own=True)
+        if spare:
+            self.entries[name]["colour"] = spare[0]
+        if spare_markers:
+            self.entries[name]["marker"] = spare_markers[0]
 
     def missing(self):
         return sorted(n for n, e in self.entries.items() if e.get("missing"))

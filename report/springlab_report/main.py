@@ -22,9 +22,14 @@ LAB_FILE = "lab.html"  # the lab page's name next to index.html
 
 def collect_names(experiments, integrators):
     """Every integrator the data names; methods integrators.json does not
-    list are learned from the tables (their `adaptive` column where there is one)."""
+    list are learned from the settings' "own_integrators" (a plug-in's or a
+    Python class's facts) or else from the tables (their `adaptive` column
+    where there is one)."""
     names = set()
     for e in experiments:
+        # Methods the experiment brought (plug-ins, Python classes): their facts.
+        for entry in e.settings.get("own_integrators", []) or []:
+            integrators.learn_entry(entry)
         for t in e.tables.values():
             if not t.has("integrator"):
                 continue

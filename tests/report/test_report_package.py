@@ -193,6 +193,43 @@ class EnergySentences(unittest.TestCase):
         self.assertEqual(first, second)
 
 
+class OwnMethods(unittest.TestCase):
+    """A method an experiment brought (a plug-in's, a Python class's) is
+    listed in its settings' "own_integrators": drawn in its family beside
+    the built-ins, in a colour and marker no built-in has."""
+
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_learned_from_the_settings(self):
+        t = [0.1 * k for k in range(101)]
+        swing = [1 + 0.2 * math.sin(3 * x) for x in t]
+        energy_data(self.s, {"symplectic-euler": (t, swing), "my-euler": (t, list(swing))})
+        _, page = render(self.s)
+        self.assertIn("does not list my-euler", page)  # no facts: a palette colour, a note
+        settings = json.loads((self.s.dir / "energy.json").read_text())
+        settings["own_integrators"] = [{"name": "my-euler", "family": "symplectic", "order": 1,
+                                        "adaptive": False, "symplectic": True,
+                                        "stability": {"kind": "conditional", "limit_wh": 2.0}}]
+        self.s.json("energy.json", settings)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        self.assertNotIn("does not list my-euler", page)
+        integrators = Integrators.load(self.s.dir / "integrators.json")
+        experiments, _ = report_main.load_experiments(self.s.dir, KINDS)
+        report_main.collect_names(experiments, integrators)
+        self.assertEqual(integrators.family("my-euler"), "symplectic")
+        self.assertEqual(integrators.sort(["my-euler", "implicit-euler", "explicit-euler"]),
+                         ["explicit-euler", "my-euler", "implicit-euler"])
+        builtin = {e["colour"] for e in INTEGRATORS["integrators"]}
+        self.assertNotIn(integrators.colour("my-euler"), builtin)
+        self.assertNotIn(integrators.marker("my-euler"),
+                         {e["marker"] for e in INTEGRATORS["integrators"]})
+
+
 def motion_data(scratch):
     """A motion experiment: two particles joined by a spring; implicit Euler
     runs 3 frames, explicit Euler diverges after 1 good frame and records one
@@ -1165,9 +1202,11 @@ class Registry(unittest.TestCase):
             self.assertTrue(module.TITLE and module.ABOUT)
             self.assertTrue(callable(module.render))
         # Every kind the program has is one this report draws.
-        kinds = set(re.findall(r'\{"([a-z-]+)", &make_', (Path(__file__).resolve().parents[2]
-                                                          / "experiments"
-                                                          / "experiment_registry.cc").read_text()))
+        kinds = set()
+        for source in (Path(__file__).resolve().parents[2] / "experiments" / "kinds").glob(
+                "*_experiment.cc"):
+            kinds.update(re.findall(r'ExperimentKind kind\{"([a-z-]+)", &make_',
+                                    source.read_text()))
         self.assertEqual(kinds, set(KINDS))
 
 

@@ -7,9 +7,9 @@
 
 #include <cstdio>
 
-#include "experiments/simulation.h"
-#include "models/builtin_scenes.h"
-#include "models/elastic_model.h"
+#include "experiments/driver/simulation.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
 
 namespace springlab {
 namespace {
@@ -35,7 +35,7 @@ class MemorySampler final : public Observer {
 };
 
 void soak(const Scene& scene, const RunSettings& settings, long steps, long allowed_growth_kb) {
-  const ElasticModel model(scene);
+  const Model model(scene);
   MemorySampler sampler(settings.t_end / 10);
   const RunResult r = simulate(model, settings, {&sampler});
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
@@ -73,7 +73,7 @@ TEST(Soak, ImplicitEulerTenThousandStepsOnA32x32Cloth) {
 // particle): 2 s without divergence, kinetic + spring energy below 25 E_s
 // (measured peak 190 J, 13.7 E_s, as a plain XPBD in the file's order).
 TEST(Soak, XpbdTenSubstepsOfOneIterationOnA128x128Cloth) {
-  const ElasticModel model(make_builtin_scene("cloth", {{"n", "128"}}));
+  const Model model(make_builtin_scene("cloth", {{"n", "128"}}));
   RunSettings s;
   s.integrator = "xpbd";
   s.dt = 1.0 / 60.0;

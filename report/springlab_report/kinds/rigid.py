@@ -1,5 +1,5 @@
 """rigid: the tumbling box, an affine body, under many integrators against the
-exact torque-free rigid body (experiments/rigid_reference.h), and the affine
+exact torque-free rigid body (experiments/analysis/rigid_reference.h), and the affine
 body's convergence to the rigid one as the rigidity kappa grows. Every
 sentence under the figure is computed from the tables."""
 

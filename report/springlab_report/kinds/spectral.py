@@ -3,7 +3,7 @@ Element Method", 1987, ch. 9; Chung and Hulbert 1993, figs. 1-3): for each
 fixed-step method, the spectral radius of its amplification matrix, its
 algorithmic damping ratio and its relative period error against w h on the
 undamped oscillator x'' = -w^2 x, as the C++ side measured them from the
-method's own steps (experiments/spectral.h). Beside them, the theory of the
+method's own steps (experiments/analysis/spectral.h). Beside them, the theory of the
 Newmark family and the alpha methods, computed here from their closed-form
 amplification matrix, so the figure checks the measurement and the
 implementation at once."""

@@ -1,3 +1,0 @@
-#include "experiments/cli.h"
-
-int main(int argc, char** argv) { return springlab::run_cli(argc, argv); }

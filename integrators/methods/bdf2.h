@@ -1,0 +1,43 @@
+// bdf2 — the two-step backward differentiation formula as cloth codes use
+// it (Choi and Ko, "Stable but responsive cloth", SIGGRAPH 2002), applied to
+// both halves of the state:
+//
+//   x_{n+1} = x_n + c0 (x_n - x_{n-1}) + b h v_{n+1}
+//   v_{n+1} = v_n + c0 (v_n - v_{n-1}) + b h M^-1 F(t_{n+1}, x_{n+1}, v_{n+1})
+//
+// with the variable-step coefficients of the ratio w = h_n / h_{n-1}:
+// c0 = w^2 / (1 + 2 w), b = (1 + w) / (1 + 2 w) (w = 1: the familiar
+// x_{n+1} = 4/3 x_n - 1/3 x_{n-1} + 2/3 h v_{n+1}). The first step is one
+// implicit Euler step. Each step is the velocity-implicit system of
+// velocity_step.h with weight b, inertial centre
+// v_n + c0 (v_n - v_{n-1}) and offset c0 (x_n - x_{n-1}): where the forces
+// derive from potentials, the minimum of an incremental potential, solved by
+// the same Newton as implicit Euler (--newton-tol, --max-newton).
+//
+// Order 2. L-stable (A-stable, and the roots of its characteristic
+// polynomial go to 0 as w h -> infinity), with less damping of the low
+// modes than implicit Euler at the same step.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "integrators/newton/velocity_implicit_method.h"
+
+namespace springlab {
+
+class Bdf2 final : public VelocityImplicitMethod {
+ public:
+  Bdf2();
+
+ protected:
+  StepResult do_initialize() override;
+  StepResult do_step(double h) override;
+
+ private:
+  bool have_previous_ = false;
+  double h_previous_ = 0.0;
+  Vector x_previous_, v_previous_, v_c_, x_o_, v_new_;
+};
+
+}  // namespace springlab

@@ -1,0 +1,100 @@
+// The base of the hand-written implicit methods (implicit-euler,
+// implicit-midpoint, discrete-gradient, linear-implicit-euler, the Newmark
+// family, bdf2, tr-bdf2): each step solves the equations of a
+// velocity-implicit step (velocity_step.h) for the new velocity by Newton
+// (newton_loop.h), given its pieces:
+//
+//   the problem        VelocityStep: r(v), J(v), the incremental potential
+//   the linear solver  NewtonLinearSolver: CG with a kept Cholesky factor,
+//                      MINRES, LDL^T, LU
+//   the line search    LineSearch: Armijo on the potential or ||r||, the
+//                      barrier's step cap, negative curvature
+//   the policy         NewtonPolicy: exact / definite matrices and the
+//                      fallbacks (DiscreteGradientPhases for Gonzalez's
+//                      method)
+//
+// and, for the step as a whole, two more strategies:
+//   - quasi-Newton (--solver quasi-newton, quasi_newton.h): L-BFGS on the
+//     same incremental potential first; Newton where it stalls or where its
+//     answer is no minimizer (below);
+//   - the definite fallback: a step whose Newton fails (--max-newton
+//     iterations, or a search that cannot descend) is solved again from its
+//     start by projected Newton (every update from the definite matrix, a
+//     descent direction of the incremental potential with a search that
+//     cannot fail but to round-off). It converges linearly where Newton
+//     with the exact matrix alternates with it and stalls near a buckling
+//     state (cloth 96 at 1/60, t = 0.167: 200 iterations of long exact
+//     updates cut to 1/64 between definite ones), at more iterations per
+//     step than the exact matrix takes where it works, so it is the second
+//     attempt, not the first.
+//
+// Where the step minimizes an incremental potential, an answer that lies
+// above the potential of the step's start states (for backward Euler also
+// above the start's energy) by more than the tolerance resolves is no
+// solution: L-BFGS's is then not taken; Newton's is solved again from the
+// kept state (x_n), and the step fails if that answer is refused too
+// (incremental_potential_check.h).
+//
+// The plain textbook version of implicit-euler's step, which the tests
+// compare this one with, is reference_backward_euler.h.
+#pragma once
+
+#include <string>
+
+#include "integrators/newton/incremental_potential_check.h"
+#include "integrators/core/integrator.h"
+#include "integrators/newton/newton_loop.h"
+#include "integrators/newton/quasi_newton.h"
+#include "integrators/newton/velocity_step.h"
+
+namespace springlab {
+
+class VelocityImplicitMethod : public Integrator {
+ protected:
+  using Integrator::Integrator;
+
+  // A new run (maybe of another system): forget the symbolic analyses and
+  // the kept factorization.
+  StepResult do_initialize() override;
+
+  // Solves the step of size h from (t_, x_, v_) for v; on success `v` holds
+  // the solution. Counts force and Jacobian evaluations, factorizations,
+  // linear solves and their iterations, Newton iterations. `quasi_newton`:
+  // L-BFGS first (prepare_quasi_newton() must have succeeded), Newton where
+  // it stalls.
+  StepResult solve_velocity(double h, const VelocityImplicitScheme& scheme, Vector& v,
+                            bool quasi_newton = false);
+  // Builds L-BFGS's initial Hessian; false when the system's stiff forces
+  // are not distance constraints (finite elements).
+  bool prepare_quasi_newton() { return lbfgs_.prepare(system()); }
+
+  // One linear solve of a linearized step (linear-implicit-euler): with
+  // K = dF/dx and D = dF/dv at (t, x, v) -- or their definite parts --
+  //   (M - h c D - h^2 b K) dv = h (f + h K v).
+  // False (with `error`) when the matrix is singular or dv not finite.
+  bool solve_linearized(double t, const Vector& x, const Vector& v, const Vector& f, double h,
+                        double b, double c, bool definite, Vector& dv, std::string& error);
+
+ private:
+  // Newton on the step begun in step_, with the given matrices.
+  // From `start` (nullptr: v_n).
+  StepResult newton(NewtonPolicy::Matrices matrices, const Vector* start, Vector& v);
+  // newton(), failed where its answer raises the step's incremental
+  // potential (incremental_potential_check.h): `refused` then holds why.
+  StepResult checked_newton(NewtonPolicy::Matrices matrices, const Vector* start, Vector& v,
+                            std::string& refused);
+  // L-BFGS's answer, taken unless it raises the potential (see the .cc).
+  StepResult quasi_newton(Vector& v, std::string& rejected);
+
+  CountedModel model_;
+  NewtonMatrix matrix_;
+  NewtonLinearSolver linear_;
+  LineSearch search_;
+  VelocityStep step_;
+  NewtonLoop newton_;
+  Lbfgs lbfgs_;
+  IncrementalPotentialCheck check_;
+  Vector rhs_, r_end_;
+};
+
+}  // namespace springlab

@@ -1,0 +1,151 @@
+// The equations of a velocity-implicit step, the problem the implicit
+// one-step and multistep methods give Newton (newton_loop.h).
+//
+// The step solves for the new velocity v (half the unknowns of the full
+// state: positions follow from v)
+//
+//   r(v) = M (v - v_c) - h w F(t*, x*(v), v*(v)) = 0,
+//   x*(v) = x_n + x_o + h (a v_n + b v),   v*(v) = (1 - c) v_n + c v,
+//
+// with Jacobian J = dr/dv = M - h w c dF/dv - h^2 w b dF/dx (sparse, on the
+// model's pattern: newton_matrix.h). Backward Euler is (a, b, c) = (0, 1, 1)
+// at t* = t_n + h, w = 1, v_c = v_n, x_o = 0; the implicit midpoint rule is
+// (1/4, 1/4, 1/2) at t* = t_n + h/2; the discrete gradient adds Gonzalez's
+// correction to the midpoint rule (discrete_gradient.h). The second-order
+// and multistep methods (newmark_family.h, bdf2.h, tr_bdf2.h) set a force
+// weight w, an inertial centre v_c and a position offset x_o fixed within
+// the step (their predictors: a_n, x_{n-1}, a stage's state).
+//
+// When every force derives from potentials (MechanicalSystem::
+// derives_from_potentials: springs, gravity, elements; drag and wind
+// through a dissipation potential W of v), r is the gradient of the step's
+// incremental potential
+//
+//   Phi(v) = |v - v_c|^2_M / 2 + (w / b) V(x*(v)) + (h w / c) W(t*, v*(v)),
+//
+// and J is its Hessian: the step is the variational form of implicit Euler
+// (Kane et al. 2000, Gast et al. 2015), and Newton minimizes Phi. Without
+// such a potential (spring damping depends on x and v together) r is a
+// plain residual and J is not symmetric.
+#pragma once
+
+#include "integrators/newton/newton_matrix.h"
+#include "integrators/newton/newton_problem.h"
+
+namespace springlab {
+
+struct VelocityImplicitScheme {
+  double t_eval_offset;  // t* = t_n + t_eval_offset * h
+  double a, b, c;        // see the header comment
+  // Gonzalez's discrete gradient of V in place of grad V(x*) (needs the
+  // midpoint's (a, b, c) = (1/4, 1/4, 1/2), t* = t_n + h/2).
+  bool discrete_gradient = false;
+  // With it, the forces' own exact discrete gradients where they have one
+  // (ForceTerm::has_discrete_gradient: the rigidity); false: Gonzalez's
+  // for every force.
+  bool own_discrete_gradients = true;
+  // Whether a step whose Newton fails may be solved by the definite
+  // ("projected") Newton (velocity_implicit_method.h). The discrete
+  // gradient with forces' own discrete gradients turns it off: its definite
+  // Newton never leaves the frozen potential (newton_policy.h), whose
+  // solution is Gonzalez's generic discrete gradient, not the step's.
+  bool definite_fallback = true;
+  // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
+  // are evaluated at the end (implicit Euler), 2 at the midpoint.
+  double end = 1.0;
+  double weight = 1.0;               // w
+  const Vector* inertia = nullptr;   // v_c; nullptr: v_n
+  const Vector* x_offset = nullptr;  // x_o; nullptr: zero
+};
+
+class VelocityStep final : public NewtonProblem {
+ public:
+  // The model of the run and the matrix the step assembles its J with.
+  void bind(const CountedModel& model, NewtonMatrix& matrix);
+  // The step of size h from (t_n, x_n, v_n) (kept by reference).
+  void begin(double t, const Vector& x, const Vector& v, double h,
+             const VelocityImplicitScheme& scheme);
+  const VelocityImplicitScheme& scheme() const { return s_; }
+  double t() const { return t_; }  // t_n
+  double h() const { return h_; }
+  const Vector& x() const { return *x_; }  // x_n
+  const MechanicalSystem& system() const { return model_->system(); }
+
+  const Vector& start() const override { return *v_; }
+  // (||x_n||_inf + ||x_o||_inf) / (h w |b|): the stage moves by h w b per
+  // unit of v (its positions' round-off, newton_problem.h).
+  double position_resolution() const override;
+  // The v that keeps the stage at x_n, a v_n + b v = 0: a state the last
+  // step accepted (where v_n leaves the states with an energy).
+  bool fallback_start(Vector& v) const override;
+  void residual(const Vector& v, Vector& r) override;
+  bool has_potential() const override;
+  double potential(const Vector& v, double& magnitude) override;
+  void matrix(const Vector& v, bool definite, NewtonLinearSolver& linear) override;
+  RankOne rank_one() const override;
+  bool has_forbidden_states() const override;
+  // The fraction of dv at which the first gap of the stage -- or, for the
+  // midpoint methods, of the step's end -- would close
+  // (MechanicalSystem::admissible_fraction).
+  double admissible_fraction(const Vector& v, const Vector& dv) override;
+  // Where some states have no energy, a trial whose step would end in one
+  // is refused even when the forces' state (the midpoint) is allowed.
+  bool allowed() override;
+
+  // Sets the stage x*(v), v*(v) (potential() then refers to it).
+  void stage(const Vector& v);
+  // The scale of the round-off of Phi's stored term at the stage (after
+  // stage() or residual()): (w / |b|) sum_parts |F_part(x*)| . |x*|, the
+  // stiff and the non-stiff forces apart (MechanicalSystem's ForcePart).
+  // For a force that is linear in x (gravity) it is the sum of its
+  // potential's terms' magnitudes, which cancel in the sum where the
+  // positions straddle the origin (a beam centred on y = 0: terms of
+  // +-25 J summing to -0.5 J); for any other, V's sensitivity to the
+  // rounding of x* (|dV| <= |F| . |dx|). Two force evaluations.
+  double stored_magnitude();
+
+  // The discrete gradient's correction coefficient (DiscreteGradientPhases,
+  // newton_policy.h): frozen (Phi then includes c |D|^2, r its gradient) or
+  // not, and its value.
+  void freeze(bool frozen) { frozen_ = frozen; }
+  bool frozen() const { return frozen_; }
+  void set_frozen_coefficient(double c) { frozen_c_ = c; }
+  // At the start of an iteration on the frozen potential: the coefficient
+  // at the last residual()'s v, and r and Phi with it. At the first
+  // iteration off it: r of the step at that v (where some forces have
+  // their own discrete gradient, which the frozen potential leaves out).
+  void update_frozen(Vector& r, double& phi);
+  // r at v with the coefficient of v, then frozen at that value.
+  void refreeze_at(const Vector& v, Vector& r);
+
+ private:
+  const CountedModel* model_ = nullptr;
+  NewtonMatrix* matrix_ = nullptr;
+  double t_ = 0.0, h_ = 0.0;
+  const Vector* x_ = nullptr;  // x_n
+  const Vector* v_ = nullptr;  // v_n
+  VelocityImplicitScheme s_{};
+  Vector xs_, vs_, f_, f_part_;
+  Vector x_end_;           // a trial's step end (allowed)
+  Vector x_cap_, dx_cap_;  // the step cap's state and step (admissible_fraction)
+  // The discrete gradient's: D = y - x_n, y = x_n + D, the correction's
+  // coefficient c (0: left out), F at y, the rank-one term's vector z.
+  Vector delta_, y_, f_end_, z_;
+  double correction_ = 0.0;
+  // F with the own discrete gradients in place of those forces' midpoint
+  // values (MechanicalSystem::add_own_discrete_gradient_difference), when
+  // the last residual() used them (own_).
+  Vector f_own_;
+  bool own_ = false;
+  // Gonzalez's coefficient at the last stage, with the force f (F, or F
+  // with the own discrete gradients); 0 below round-off.
+  double coefficient(double t, const Vector& f) const;
+  bool rank_one_ = false;  // the last matrix() has the term h c D's derivative
+  // On the potential path the coefficient is frozen for each iteration
+  // (r is then the gradient of the midpoint's potential + c |D|^2).
+  bool frozen_ = false;
+  double frozen_c_ = 0.0;
+  double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
+};
+
+}  // namespace springlab

@@ -1,0 +1,102 @@
+#include "models/fluids/sph_particles.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "models/core/scene.h"
+
+namespace springlab {
+
+SphParticles::SphParticles(const Fluid& fluid, std::vector<int> index, std::vector<double> mass,
+                           int dim)
+    : index_(std::move(index)),
+      mass_(std::move(mass)),
+      dim_(dim),
+      kernel_(kSmoothingPerSpacing * fluid.spacing, dim),
+      eos_{fluid.density, fluid.speed_of_sound} {}
+
+void SphParticles::update(const double* x) {
+  const std::size_t n = index_.size(), d = static_cast<std::size_t>(dim_);
+  bool same = valid_ && x_.size() == n * d;
+  x_.resize(n * d);
+  for (std::size_t a = 0; a < n; ++a) {
+    const double* p = x + static_cast<std::size_t>(index_[a]) * d;
+    for (std::size_t r = 0; r < d; ++r) {
+      // (Bitwise: a NaN position is never "the same".)
+      same = same && x_[a * d + r] == p[r];
+      x_[a * d + r] = p[r];
+    }
+  }
+  if (same) return;
+  valid_ = true;
+  grid_.build(x_.data(), static_cast<int>(n), dim_, kernel_.support());
+  const auto& pairs = grid_.pairs();
+  separation_.resize(pairs.size() * d);
+  distance_.resize(pairs.size());
+  density_.resize(n);
+  const double w0 = kernel_.value(0.0);
+  for (std::size_t a = 0; a < n; ++a) density_[a] = mass_[a] * w0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const std::size_t a = static_cast<std::size_t>(pairs[k].first);
+    const std::size_t b = static_cast<std::size_t>(pairs[k].second);
+    double r2 = 0.0;
+    for (std::size_t r = 0; r < d; ++r) {
+      const double s = x_[a * d + r] - x_[b * d + r];
+      separation_[k * d + r] = s;
+      r2 += s * s;
+    }
+    distance_[k] = std::sqrt(r2);
+    const double w = kernel_.value(distance_[k]);
+    density_[a] += mass_[b] * w;
+    density_[b] += mass_[a] * w;
+  }
+}
+
+SphParticles make_sph_particles(const Scene& scene, const Fluid& fluid,
+                                const std::vector<int>& internal_of_scene) {
+  std::vector<int> index;
+  std::vector<double> mass;
+  for (int s = fluid.first; s < fluid.first + fluid.count; ++s) {
+    index.push_back(internal_of_scene[static_cast<std::size_t>(s)]);
+    mass.push_back(scene.particles[static_cast<std::size_t>(s)].mass);
+  }
+  return SphParticles(fluid, std::move(index), std::move(mass), scene.dimension);
+}
+
+double lattice_mass(double rho0, double spacing, int dimension) {
+  const CubicSpline w(kSmoothingPerSpacing * spacing, dimension);
+  double sum = 0.0;
+  const int reach = 3;  // 3 l > the support 2.6 l
+  for (int i = -reach; i <= reach; ++i) {
+    for (int j = -reach; j <= reach; ++j) {
+      for (int k = dimension == 3 ? -reach : 0; k <= (dimension == 3 ? reach : 0); ++k) {
+        sum += w.value(spacing * std::sqrt(double(i * i + j * j + k * k)));
+      }
+    }
+  }
+  return rho0 / sum;
+}
+
+std::shared_ptr<SphParticles> shared_sph_particles(const Scene& scene, std::size_t k,
+                                                   const ParticleOrder& order) {
+  const Fluids& fluids = scene.get<Fluids>();
+  if (order.sph.size() != fluids.size()) order.sph.resize(fluids.size());
+  if (!order.sph[k]) {
+    order.sph[k] = std::make_shared<SphParticles>(
+        make_sph_particles(scene, fluids[k], order.internal_of_scene));
+  }
+  return order.sph[k];
+}
+
+FluidFields fluid_fields(const Scene& scene, const Fluid& fluid, const double* x) {
+  std::vector<int> identity(scene.particles.size());
+  for (std::size_t s = 0; s < identity.size(); ++s) identity[s] = static_cast<int>(s);
+  SphParticles particles = make_sph_particles(scene, fluid, identity);
+  particles.update(x);
+  FluidFields out;
+  out.density = particles.density();
+  for (double rho : out.density) out.pressure.push_back(particles.eos().pressure(rho));
+  return out;
+}
+
+}  // namespace springlab

@@ -1,0 +1,347 @@
+// Hooke springs (docs/physics.md "The physics"), the course's F^int:
+//   d = x_i - x_j, l = |d|, u = d / l
+//   F_i = -k (l - L) u,  F_j = -F_i,  V = k (l - L)^2 / 2
+// Stiffness block (dF_i/dx_i = -K, dF_i/dx_j = +K):
+//   K = k [ u u^T + (1 - L/l) (I - u u^T) ]
+// K is indefinite when the spring is compressed (l < L): the transverse term
+// is negative, which is why implicit methods cannot assume a definite matrix.
+// A zero-rest-length spring is linear: F_i = -k d, K = k I.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#include "models/core/element_kind.h"
+#include "models/springs/spring_force.h"
+#include "models/springs/springs.h"
+
+namespace springlab {
+
+Eigen::Vector3d hooke_force(const Eigen::Vector3d& x_i, const Eigen::Vector3d& x_j, double k,
+                            double rest, int dim) {
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  double l2 = 0.0;
+  for (int r = 0; r < dim; ++r) {
+    d[r] = x_i[r] - x_j[r];
+    l2 += d[r] * d[r];
+  }
+  if (l2 == 0.0) return Eigen::Vector3d::Zero();
+  const double l = std::sqrt(l2);
+  const double k_stretch_over_l = k * (1.0 - rest / l);  // k (l - L) / l
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();
+  for (int r = 0; r < dim; ++r) f[r] = -(k_stretch_over_l * d[r]);
+  return f;
+}
+
+namespace {
+
+struct SpringData {
+  int a, b;  // internal particle indices
+  double k, rest;
+  int index;  // its place among the scene's springs (the file's order)
+};
+
+// Springs per block of the force loop: its scratch (d, l^2, scale) stays in
+// L1 and the block's square roots and divisions run as one vector loop.
+constexpr int kBlock = 64;
+
+// Orders the springs for the force loop: each spring's lower-numbered end
+// first, sorted by (a, b). Then the springs of one particle a are
+// consecutive, so its force is summed in registers and stored once, and the
+// loop sweeps x and f once from front to back instead of once per family of
+// springs the scene lists (on a 128 x 128 cloth that is 6 sweeps of 400 KB
+// each). Swapping a spring's ends changes nothing: d and F_a change sign.
+std::vector<SpringData> sorted_for_locality(std::vector<SpringData> springs) {
+  for (SpringData& s : springs) {
+    if (s.b < s.a) std::swap(s.a, s.b);
+  }
+  std::stable_sort(springs.begin(), springs.end(), [](const SpringData& p, const SpringData& q) {
+    return p.a != q.a ? p.a < q.a : p.b < q.b;
+  });
+  return springs;
+}
+
+// scale[j] = k[j] (1 - rest[j] / sqrt(l2[j])) for j < m: the square roots and
+// divisions that bound the cost of a force evaluation (hooke_force, above,
+// is the same formula for one spring, written plainly). Every variant below
+// rounds each lane exactly as this scalar formula does (IEEE sqrt, div, sub,
+// mul; no fused multiply-add), so forces are the same bit for bit whichever
+// variant the CPU runs.
+using ScaleKernel = void (*)(const double* k, const double* rest, const double* l2,
+                             double* scale, int m);
+
+void spring_scales_portable(const double* k, const double* rest, const double* l2,
+                            double* scale, int m) {
+  // Eigen packets: as many lanes as the compiler's target ISA has.
+  using Map = Eigen::Map<const Eigen::ArrayXd>;
+  Eigen::Map<Eigen::ArrayXd>(scale, m) = Map(k, m) * (1.0 - Map(rest, m) / Map(l2, m).sqrt());
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// A default x86-64 build targets SSE2, two lanes per sqrt/div instruction.
+// Where the CPU has AVX (4 lanes) or AVX-512 (8), the divider finishes a block
+// in about half or a quarter of the time (measured on the bench machine, a
+// Zen 4: 3.6, 1.9 and 0.9 ns per spring), so pick the variant at run time.
+__attribute__((target("avx"))) void spring_scales_avx(const double* k, const double* rest,
+                                                      const double* l2, double* scale, int m) {
+  const __m256d one = _mm256_set1_pd(1.0);
+  int j = 0;
+  for (; j + 4 <= m; j += 4) {
+    const __m256d l = _mm256_sqrt_pd(_mm256_loadu_pd(l2 + j));
+    const __m256d ratio = _mm256_div_pd(_mm256_loadu_pd(rest + j), l);
+    _mm256_storeu_pd(scale + j, _mm256_mul_pd(_mm256_loadu_pd(k + j), _mm256_sub_pd(one, ratio)));
+  }
+  for (; j < m; ++j) scale[j] = k[j] * (1.0 - rest[j] / std::sqrt(l2[j]));
+}
+
+__attribute__((target("avx512f"))) void spring_scales_avx512(const double* k, const double* rest,
+                                                             const double* l2, double* scale,
+                                                             int m) {
+  const __m512d one = _mm512_set1_pd(1.0);
+  int j = 0;
+  for (; j + 8 <= m; j += 8) {
+    // The zero-masking form with every lane selected is _mm512_sqrt_pd; the
+    // plain one trips GCC 12's -Wmaybe-uninitialized inside its own header.
+    const __m512d l = _mm512_maskz_sqrt_pd(0xFF, _mm512_loadu_pd(l2 + j));
+    const __m512d ratio = _mm512_div_pd(_mm512_loadu_pd(rest + j), l);
+    _mm512_storeu_pd(scale + j, _mm512_mul_pd(_mm512_loadu_pd(k + j), _mm512_sub_pd(one, ratio)));
+  }
+  for (; j < m; ++j) scale[j] = k[j] * (1.0 - rest[j] / std::sqrt(l2[j]));
+}
+#endif
+
+ScaleKernel pick_scale_kernel() {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f")) return spring_scales_avx512;
+  if (__builtin_cpu_supports("avx")) return spring_scales_avx;
+#endif
+  return spring_scales_portable;
+}
+
+class SpringForce final : public ForceTerm {
+ public:
+  SpringForce(std::vector<SpringData> springs, int dim, int free_particles)
+      : springs_(sorted_for_locality(std::move(springs))), dim_(dim), free_(free_particles) {
+    // Structure of arrays for the force loop: the stiffness/rest-length
+    // stage reads k and L contiguously, which lets it run in SIMD; the ends
+    // are stored as offsets a * dim into x and f.
+    ends_.reserve(springs_.size());
+    k_.reserve(springs_.size());
+    rest_.reserve(springs_.size());
+    for (const SpringData& s : springs_) {
+      ends_.push_back({s.a * dim, s.b * dim});
+      k_.push_back(s.k);
+      rest_.push_back(s.rest);
+    }
+    in_scene_order_.resize(springs_.size());
+    for (std::size_t j = 0; j < springs_.size(); ++j) in_scene_order_[j] = j;
+    std::sort(in_scene_order_.begin(), in_scene_order_.end(), [&](std::size_t p, std::size_t q) {
+      return springs_[p].index < springs_[q].index;
+    });
+  }
+
+  std::string_view name() const override { return "spring"; }
+  bool conservative() const override { return true; }
+
+  // Each spring is the constraint |x_a - x_b| = L of stiffness k.
+  // In the scene's order, not the force loop's: XPBD projects them one
+  // after another in this order (a Gauss-Seidel pass), and sorted by
+  // particle that pass diverges where the file's order does not (issue 37:
+  // cloth 128 at 10 substeps x 1 iteration, t = 0.2 s).
+  bool distance_constraints(std::vector<DistanceConstraint>& out) const override {
+    for (const std::size_t j : in_scene_order_) {
+      const SpringData& s = springs_[j];
+      out.push_back({.a = s.a, .b = s.b, .stiffness = s.k, .length = s.rest});
+    }
+    return true;
+  }
+
+  void add_force(const Configuration& c, double* f) const override {
+    if (dim_ == 2) add_force_d<2>(c, f); else add_force_d<3>(c, f);
+  }
+
+  double potential_energy(const Configuration& c) const override {
+    return dim_ == 2 ? potential_energy_d<2>(c) : potential_energy_d<3>(c);
+  }
+
+  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
+    for (const SpringData& s : springs_) declare_pair_blocks(builder, s.a, s.b, free_);
+  }
+
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    slots_.clear();
+    slots_.reserve(springs_.size());
+    for (const SpringData& s : springs_) {
+      slots_.push_back(find_pair_slots(pattern, dim_, s.a, s.b, free_));
+    }
+  }
+
+  void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
+    if (dfdx == nullptr) return;
+    if (dim_ == 2) add_stiffness_d<2, false>(c, dfdx); else add_stiffness_d<3, false>(c, dfdx);
+  }
+
+  // K = k u u^T + k (1 - L/l) (I - u u^T) is indefinite when the spring is
+  // compressed (l < L): the transverse term is clamped at 0, which leaves
+  // the positive semidefinite K = k u u^T.
+  void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
+    if (dim_ == 2) add_stiffness_d<2, true>(c, dfdx); else add_stiffness_d<3, true>(c, dfdx);
+  }
+
+ private:
+  // The springs first .. first + m - 1 (j from 0): d_j = x_a - x_b and
+  // l2_j = |d_j|^2.
+  template <int D>
+  void gather(const Configuration& c, int first, int m, double (&d)[D][kBlock],
+              double* l2) const {
+    const auto* ends = ends_.data() + first;
+    for (int j = 0; j < m; ++j) {
+      const double* xa = c.x + ends[j].a;
+      const double* xb = c.x + ends[j].b;
+      double sum = 0.0;
+      for (int r = 0; r < D; ++r) {
+        d[r][j] = xa[r] - xb[r];
+        sum += d[r][j] * d[r][j];
+      }
+      l2[j] = sum;
+    }
+  }
+
+  // The cost of a force evaluation is the square root and the division per
+  // spring (the divider is the bottleneck) and the loads and stores of f,
+  // so each block of springs runs in three loops: gather d = x_a - x_b, then
+  // compute every scale = k (1 - L/l) of the block in one vector loop (Eigen
+  // packets: several springs per sqrt/div instruction, each lane rounded
+  // exactly as the scalar formula), then scatter +-scale d into f. The
+  // scatter stays sequential because neighbouring springs share particles;
+  // F_a is summed in registers over the run of springs that share a.
+  template <int D>
+  void add_force_d(const Configuration& c, double* f) const {
+    alignas(64) double d[D][kBlock];
+    alignas(64) double l2[kBlock];
+    alignas(64) double scale[kBlock];
+    const int count = static_cast<int>(ends_.size());
+    for (int first = 0; first < count; first += kBlock) {
+      const int m = std::min(kBlock, count - first);
+      const Ends* ends = ends_.data() + first;
+      gather<D>(c, first, m, d, l2);
+      // F_i = -k (l - L) d / l = -k (1 - L/l) d; with L = 0 exactly -k d.
+      // A spring of zero length (d = 0) gets scale 0 below, not 0 * inf.
+      scale_kernel_(k_.data() + first, rest_.data() + first, l2, scale, m);
+      int a = ends[0].a;
+      double fa[D] = {};
+      for (int j = 0; j < m; ++j) {
+        if (ends[j].a != a) {
+          for (int r = 0; r < D; ++r) {
+            f[a + r] += fa[r];
+            fa[r] = 0.0;
+          }
+          a = ends[j].a;
+        }
+        const double s = l2[j] > 0.0 ? scale[j] : 0.0;
+        double* fb = f + ends[j].b;
+        for (int r = 0; r < D; ++r) {
+          fa[r] -= s * d[r][j];
+          fb[r] += s * d[r][j];
+        }
+      }
+      for (int r = 0; r < D; ++r) f[a + r] += fa[r];
+    }
+  }
+
+  // V = sum_j k_j / 2 (l_j - L_j)^2 in the force loop's blocks: gather l^2,
+  // then the square roots of a block in one vector expression (Eigen
+  // packets). Implicit methods' line searches evaluate it at every trial.
+  template <int D>
+  double potential_energy_d(const Configuration& c) const {
+    alignas(64) double l2[kBlock];
+    double energy = 0.0;
+    const int count = static_cast<int>(ends_.size());
+    alignas(64) double d[D][kBlock];
+    for (int first = 0; first < count; first += kBlock) {
+      const int m = std::min(kBlock, count - first);
+      gather<D>(c, first, m, d, l2);
+      using Map = Eigen::Map<const Eigen::ArrayXd>;
+      energy += 0.5 * (Map(k_.data() + first, m) *
+                       (Map(l2, m).sqrt() - Map(rest_.data() + first, m)).square())
+                          .sum();
+    }
+    return energy;
+  }
+
+  template <int D, bool kDefinite>
+  void add_stiffness_d(const Configuration& c, double* values) const {
+    for (std::size_t n = 0; n < springs_.size(); ++n) {
+      const SpringData& s = springs_[n];
+      double K[D][D];
+      spring_stiffness<D, kDefinite>(c.x + s.a * D, c.x + s.b * D, s.k, s.rest, K);
+      add_pair_blocks<D>(values, slots_[n], K, -1.0);  // dF_a/dx_a = -K
+    }
+  }
+
+  template <int D, bool kDefinite>
+  static void spring_stiffness(const double* xa, const double* xb, double k, double rest,
+                               double (&K)[D][D]) {
+    double d[D];
+    double l2 = 0.0;
+    for (int r = 0; r < D; ++r) {
+      d[r] = xa[r] - xb[r];
+      l2 += d[r] * d[r];
+    }
+    const double l = std::sqrt(l2);
+    if (rest == 0.0 || l == 0.0) {
+      // Linear spring (or a degenerate one with no direction): K = k I when
+      // L = 0; a positive-rest spring at zero length has no defined K, use 0.
+      const double diag = rest == 0.0 ? k : 0.0;
+      for (int r = 0; r < D; ++r)
+        for (int q = 0; q < D; ++q) K[r][q] = r == q ? diag : 0.0;
+      return;
+    }
+    double transverse = k * (1.0 - rest / l);
+    if (kDefinite && transverse < 0.0) transverse = 0.0;
+    const double axial_minus_transverse = k - transverse;  // k L / l
+    for (int r = 0; r < D; ++r) {
+      for (int q = 0; q < D; ++q) {
+        const double uu = d[r] * d[q] / l2;
+        K[r][q] = axial_minus_transverse * uu + (r == q ? transverse : 0.0);
+      }
+    }
+  }
+
+  struct Ends {
+    int a, b;  // offsets a * dim, b * dim of the two ends in x and f
+  };
+
+  std::vector<SpringData> springs_;
+  std::vector<std::size_t> in_scene_order_;  // springs_ positions in the scene's order
+  std::vector<Ends> ends_;           // force loop: the same springs as arrays
+  std::vector<double> k_, rest_;
+  ScaleKernel scale_kernel_ = pick_scale_kernel();
+  std::vector<PairSlots> slots_;
+  int dim_;
+  int free_;
+};
+
+}  // namespace
+
+std::unique_ptr<ForceTerm> make_spring_force(const Scene& scene, const ParticleOrder& order) {
+  std::vector<SpringData> springs;
+  const Springs& scene_springs = scene.get<Springs>();
+  springs.reserve(scene_springs.size());
+  for (std::size_t j = 0; j < scene_springs.size(); ++j) {
+    const Spring& s = scene_springs[j];
+    if (s.k == 0.0) continue;  // a pure damper: spring_damping_force.cc
+    springs.push_back({order.internal_of_scene[s.i], order.internal_of_scene[s.j], s.k, s.rest,
+                       static_cast<int>(j)});
+  }
+  if (springs.empty()) return nullptr;
+  return std::make_unique<SpringForce>(std::move(springs), order.dim, order.free_particles);
+}
+
+}  // namespace springlab
