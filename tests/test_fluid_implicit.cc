@@ -13,6 +13,7 @@
 #include "experiments/driver/simulation.h"
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
+#include "models/core/verdict.h"
 #include "models/fluids/fluid_pressure_hessian.h"
 #include "models/fluids/fluids.h"
 #include "models/fluids/sph_particles.h"
@@ -192,10 +193,11 @@ RunResult watched_run(const Model& model, const std::string& integrator, double 
 // below the floor or beyond the walls by more than a spacing) and, as they
 // damp, never raise the energy above its start. (They failed at the first
 // step before the viscosity was lagged: docs/physics.md "Implicit steps on
-// a fluid".) Implicit midpoint completes the steps, but its step's end,
-// x_n+1 = 2 x_mid - x_n, is where no force was evaluated: at 1/60 s
-// particles overshoot through the floor (the report's player says so); at
-// 1/120 s it keeps the water in the box.
+// a fluid".) Implicit midpoint's step's end, x_n+1 = 2 x_mid - x_n, is
+// where no force was evaluated: at 1/60 s particles overshoot through the
+// floor until the fluid's verdict (models/fluids/fluid_verdict.cc: a water
+// particle outside the walls' box by more than the fluid's size) ends the
+// run as diverged; at 1/120 s it completes and keeps the water in the box.
 TEST(FluidFrameSteps, ImplicitMethodsCompleteTheDamBreakAtOneSixtieth) {
   const Scene scene = make_builtin_scene("dam-break", {{"spacing", "0.02"}});
   const Model model(scene);
@@ -216,8 +218,10 @@ TEST(FluidFrameSteps, ImplicitMethodsCompleteTheDamBreakAtOneSixtieth) {
     EXPECT_LE(highest, w.energy.front() * (1.0 + 1e-9)) << name;
   }
   Watched frame, half;
-  ASSERT_EQ(watched_run(model, "implicit-midpoint", kFrame, 2.0, frame).status,
-            RunStatus::kCompleted);
+  const RunResult midpoint = watched_run(model, "implicit-midpoint", kFrame, 2.0, frame);
+  ASSERT_EQ(midpoint.status, RunStatus::kDiverged) << "implicit-midpoint at 1/60 s";
+  ASSERT_TRUE(midpoint.verdict.has_value());
+  EXPECT_EQ(midpoint.verdict->rule, VerdictRule::kFluidOutside) << midpoint.failure;
   EXPECT_FALSE(in_box(frame)) << "implicit-midpoint at 1/60 s kept the water in the box";
   ASSERT_EQ(watched_run(model, "implicit-midpoint", kFrame / 2.0, 2.0, half).status,
             RunStatus::kCompleted);
@@ -262,8 +266,9 @@ double fitted_period(const std::vector<double>& t, const std::vector<double>& c,
 // theory (fitted to the water's horizontal centre of mass over 2.1 periods);
 // implicit midpoint does not: at this step it pumps energy into the fast
 // acoustic modes and the sloshing is lost (the total energy grows several
-// times over: a nonlinear instability of the midpoint rule at large steps
-// on a stiff oscillatory system, Ascher and Reich 1999), while the discrete
+// times over, until a particle thrown out of the box ends the run by the
+// fluid's verdict: a nonlinear instability of the midpoint rule at large
+// steps on a stiff oscillatory system, Ascher and Reich 1999), while the discrete
 // gradient, which conserves energy by construction, keeps it below its start.
 TEST(FluidFrameSteps, SloshingPeriodAtOneSixtieth) {
   const double width = 0.4, depth = 0.2, g = 9.81, k = std::numbers::pi / width;
@@ -282,8 +287,10 @@ TEST(FluidFrameSteps, SloshingPeriodAtOneSixtieth) {
     EXPECT_NEAR(measured / period, 1.0, 0.05) << name;
   }
   Watched midpoint, gradient;
-  ASSERT_EQ(watched_run(model, "implicit-midpoint", kFrame, 1.6, midpoint).status,
-            RunStatus::kCompleted);
+  const RunResult pumped = watched_run(model, "implicit-midpoint", kFrame, 1.6, midpoint);
+  ASSERT_EQ(pumped.status, RunStatus::kDiverged) << "implicit-midpoint at 1/60 s";
+  ASSERT_TRUE(pumped.verdict.has_value());
+  EXPECT_EQ(pumped.verdict->rule, VerdictRule::kFluidOutside) << pumped.failure;
   ASSERT_EQ(watched_run(model, "discrete-gradient", kFrame, 1.6, gradient).status,
             RunStatus::kCompleted);
   std::cout << "energy at 1/60 s: implicit-midpoint " << midpoint.energy.front() << " -> "
