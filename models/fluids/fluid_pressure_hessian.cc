@@ -114,7 +114,10 @@ void add_pressure_stiffness(const SphParticles& fluid, int free_particles,
   }
   const int* outer = pattern.outerIndexPtr();
   const int* inner = pattern.innerIndexPtr();
-  s.rank.assign(static_cast<std::size_t>(free_particles), -1);
+  // Indexed by the pattern's block rows: every free particle's, and beyond
+  // them other unknowns' (a body's), which a fluid particle's column can
+  // hold where another term couples them.
+  s.rank.assign(static_cast<std::size_t>((pattern.rows() + D - 1) / D), -1);
   auto slot = [&](int row_particle) {
     const int r = s.rank[static_cast<std::size_t>(row_particle)];
     if (r < 0) throw std::logic_error("fluid: a Jacobian block is not in the pattern");
