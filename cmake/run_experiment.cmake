@@ -9,8 +9,10 @@
 # PLUGIN_PATH, and one with "python" runs through the Python module
 # (springlab.experiment) instead of the command line.
 # Results are current when OUT/<name>.stamp, written after the run succeeded,
-# holds the SHA-256 of the definition, of every scene (or data) file it names and of
-# the springlab executable, exactly as they are now, and the settings file
+# holds the SHA-256 of the definition, of every file it names (each string of
+# the definition that is the path of a file next to it, whatever its
+# extension: a scene file, a data file) and of the springlab executable,
+# exactly as they are now, and the settings file
 # OUT/<name>.json and every table it lists are there. Anything else reruns
 # the experiment (delete the stamp to force it). The stamp holds hashes only,
 # no time: the same inputs give the same stamp.
@@ -35,12 +37,18 @@ endif()
 file(SHA256 "${DEFINITION}" hash)
 set(stamp_text "definition ${hash}\n")
 get_filename_component(definition_dir "${DEFINITION}" DIRECTORY)
-string(REGEX MATCHALL "\"[^\"]+\\.(json|csv|py)\"" named "${text}")
+# Every string: a scene named "drop.scene" is a file as much as "drop.json"
+# (issue 46: its changes were reported as unchanged results).
+string(REGEX MATCHALL "\"[^\"]+\"" named "${text}")
 list(REMOVE_DUPLICATES named)
 foreach(quoted IN LISTS named)
   string(REGEX REPLACE "^\"(.*)\"$" "\\1" scene "${quoted}")
-  if(EXISTS "${definition_dir}/${scene}" AND NOT IS_DIRECTORY "${definition_dir}/${scene}")
-    file(SHA256 "${definition_dir}/${scene}" hash)
+  set(path "${definition_dir}/${scene}")  # springlab reads it relative to the definition
+  if(IS_ABSOLUTE "${scene}")
+    set(path "${scene}")
+  endif()
+  if(EXISTS "${path}" AND NOT IS_DIRECTORY "${path}")
+    file(SHA256 "${path}" hash)
     string(APPEND stamp_text "scene ${scene} ${hash}\n")
   endif()
 endforeach()

@@ -15,6 +15,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <sched.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -23,13 +25,17 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "experiments/io/body_output.h"
 #include "experiments/analysis/claims.h"
 #include "experiments/cli/cli.h"
 #include "experiments/kinds/experiment_runner.h"
 #include "experiments/cli/integrator_table.h"
+#include "experiments/driver/memory_check.h"
 #include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
 #include "models/model/model.h"
 #include "models/core/element_kind.h"
 #include "models/core/scene.h"
@@ -52,6 +58,14 @@ std::string to_json_text(const py::object& value) {
   return py::module_::import("json").attr("dumps")(value).cast<std::string>();
 }
 
+// The CPUs this process may run on, at least 1 (as `experiment --jobs`).
+int usable_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (::sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
 // A keyword argument's value as typed on the command line.
 std::string option_text(const py::handle& value) {
   if (py::isinstance<py::float_>(value)) {
@@ -60,22 +74,39 @@ std::string option_text(const py::handle& value) {
   return py::str(value).cast<std::string>();
 }
 
-// The state at each output time, and the energies there.
+// The state at each output time, and the energies there; for a scene with
+// rigid bodies, each body's p and A (bodies.h) too.
 class Recorder final : public Observer {
  public:
-  explicit Recorder(const Model& model) : model_(model) {}
+  explicit Recorder(const Model& model)
+      : model_(model), layout_(body_layout(model.scene(), model.free_particle_count())) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     t_.push_back(t);
     x_.push_back(model_.scene_positions(x));
     v_.push_back(model_.scene_velocities(v));
     e_.push_back(model_.energies(x, v).values());
+    if (layout_.bodies.empty()) return;
+    Eigen::MatrixXd p(static_cast<Eigen::Index>(layout_.bodies.size()), 3);
+    Eigen::MatrixXd A(static_cast<Eigen::Index>(layout_.bodies.size()), 9);
+    for (std::size_t b = 0; b < layout_.bodies.size(); ++b) {
+      const BodyState s = body_state(layout_.bodies[b], layout_.first[b], x.data(), v.data());
+      const auto row = static_cast<Eigen::Index>(b);
+      p.row(row) = s.p.transpose();
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) A(row, 3 * i + j) = s.A(i, j);
+      }
+    }
+    body_p_.push_back(std::move(p));
+    body_A_.push_back(std::move(A));
   }
+  std::size_t bodies() const { return layout_.bodies.size(); }
   std::vector<double> t_;
-  std::vector<Eigen::MatrixXd> x_, v_;
+  std::vector<Eigen::MatrixXd> x_, v_, body_p_, body_A_;
   std::vector<std::vector<double>> e_;
 
  private:
   const Model& model_;
+  BodyLayout layout_;
 };
 
 py::array_t<double> stack(const std::vector<Eigen::MatrixXd>& frames, Eigen::Index rows,
@@ -135,6 +166,15 @@ py::dict run_result(const Model& model, const RunResult& r, const Recorder& rec)
   out["t_final"] = r.t_final;
   out["energy_scale"] = model.energy_scale();
   out["wall_seconds"] = r.wall_seconds;
+  if (rec.bodies() > 0) {
+    // As `run --json`'s "bodies" (the last good state), and p and A at each
+    // output time: body_p (frames, bodies, 3), body_A (frames, bodies, 3, 3).
+    out["bodies"] = from_json_text(bodies_json(model, r.x_final, r.v_final).dump());
+    const auto b = static_cast<Eigen::Index>(rec.bodies());
+    out["body_p"] = stack(rec.body_p_, b, 3);
+    out["body_A"] = stack(rec.body_A_, b, 9).attr("reshape")(
+        py::make_tuple(rec.body_A_.size(), rec.bodies(), 3, 3));
+  }
   return out;
 }
 
@@ -249,6 +289,7 @@ PYBIND11_MODULE(springlab, m) {
             typed.emplace_back(option, option_text(value));
           }
         }
+        check_scene_memory(scene, "scene '" + scene.name + "'");  // before the model
         const Model model(scene);
         std::vector<std::string> notes;
         const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
@@ -257,11 +298,18 @@ PYBIND11_MODULE(springlab, m) {
         }
         const TimeGrid grid = make_time_grid(dt, t_end);
         const double frames = 1.0 + std::floor(static_cast<double>(grid.steps) / every) + 1.0;
-        if (frames * static_cast<double>(scene.particles.size()) > kMaxOutputRows) {
+        // A row per particle and per body at each kept time, and at least
+        // one (its time and energies): a bodies-only scene is capped too
+        // (issue 46.10: MemoryError at dt 1e-6, t_end 30).
+        const std::size_t bodies = scene.get<Bodies>().size();
+        const double rows_per_frame =
+            std::max(1.0, static_cast<double>(scene.particles.size() + bodies));
+        if (frames * rows_per_frame > kMaxOutputRows) {
+          std::string what = std::to_string(scene.particles.size()) + " particles";
+          if (bodies > 0) what += " and " + std::to_string(bodies) + (bodies == 1 ? " body" : " bodies");
           throw std::runtime_error("every: the run would keep " +
                                    std::to_string(static_cast<long long>(frames)) + " states of " +
-                                   std::to_string(scene.particles.size()) +
-                                   " particles, over the cap of 10000000 rows: keep every K-th step with every=K");
+                                   what + ", over the cap of 10000000 rows: keep every K-th step with every=K");
         }
         Recorder recorder(model);
         std::atomic<bool> stop{false};
@@ -287,7 +335,9 @@ PYBIND11_MODULE(springlab, m) {
       "statistics every integrator reports), status, diverged, diverged_at, failure, verdict\n"
       "(the rule that ended a diverged run: rule, value, bound, where), warnings (one line\n"
       "each, as `run --json`), t_final,\n"
-      "energy_scale, wall_seconds. A divergence or a solver failure is a result, not an error;\n"
+      "energy_scale, wall_seconds; with rigid bodies also bodies (as run --json's, at the last\n"
+      "good state), body_p (frames, bodies, 3) and body_A (frames, bodies, 3, 3). A divergence\n"
+      "or a solver failure is a result, not an error;\n"
       "a pairing the method refuses before its first step raises springlab.Error.");
 
   m.def("integrators", [] { return from_json_text(integrator_table_json()["integrators"].dump()); },
@@ -338,15 +388,47 @@ PYBIND11_MODULE(springlab, m) {
         } else {
           definition = py::str(source).cast<std::string>();
         }
+        if (jobs < 1) {
+          throw std::runtime_error("jobs: must be at least 1 (got " + std::to_string(jobs) + ")");
+        }
+        // More threads than CPUs gain nothing (as `experiment --jobs`).
+        const int cpus = usable_cpus();
+        if (jobs > cpus) {
+          const std::string note = "jobs=" + std::to_string(jobs) + " capped at " +
+                                   std::to_string(cpus) + ", the CPUs this process may use";
+          PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1);
+          jobs = cpus;
+        }
         ExperimentRunOptions options;
         options.out_dir = out;
         options.jobs = jobs;
         options.progress = false;
+        // Ctrl-C, as for run(): the experiment goes on a thread of its own
+        // while this one asks Python for signals every kSignalCheck; a
+        // signal stops it as the command line's first SIGINT does (no task
+        // starts, running ones stop at their next step, the finished ones
+        // are written whole and marked incomplete) and raises the handler's
+        // KeyboardInterrupt (issue 46.9: it ran on to the end, 22 s).
+        constexpr auto kSignalCheck = std::chrono::milliseconds(20);
+        std::atomic<bool> stop{false};
+        options.cancel = &stop;
         ExperimentRunSummary summary;
+        bool interrupted = false;
         {
           py::gil_scoped_release release;
-          summary = run_experiment(definition, options);
+          std::future<ExperimentRunSummary> running = std::async(
+              std::launch::async, [&] { return run_experiment(definition, options); });
+          while (running.wait_for(kSignalCheck) != std::future_status::ready) {
+            py::gil_scoped_acquire acquire;
+            if (PyErr_CheckSignals() != 0) {
+              interrupted = true;
+              stop = true;
+              break;
+            }
+          }
+          summary = running.get();  // rethrows the experiment's exception
         }
+        if (interrupted) throw py::error_already_set();  // the handler's exception, still set
         if (springlab::python::restore_step_error()) PyErr_Clear();  // failures are in the tables
         py::dict result;
         result["tasks_total"] = summary.tasks_total;
@@ -359,7 +441,10 @@ PYBIND11_MODULE(springlab, m) {
       "format) into the folder `out`, as `springlab experiment` does; its tables are CSV files\n"
       "there. integrators=[...] replaces the definition's list: names and your own methods\n"
       "(springlab.Integrator instances) side by side. A definition's \"python\": [files] registers\n"
-      "the springlab.Integrator classes those files define. Returns {tasks_total, tasks_done, out}.");
+      "the springlab.Integrator classes those files define. jobs: tasks run at once (at least 1;\n"
+      "capped at the CPUs, with a warning). Ctrl-C stops it as the command line's does (the\n"
+      "finished tasks written, marked incomplete) and raises KeyboardInterrupt. Returns\n"
+      "{tasks_total, tasks_done, out}.");
 
   springlab::python::bind_python_methods(m);
 

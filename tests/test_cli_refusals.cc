@@ -76,14 +76,18 @@ INSTANTIATE_TEST_SUITE_P(
         // CLI11's own errors, in springlab's words.
         Refusal{"NotANumber", {"run", "oscillator", "--integrator", "rk4", "--dt", "abc", "--t-end", "1"},
                 "--dt: 'abc' is not a number"},
-        Refusal{"NoCommand", {}, "a command is required: run, stability, scene, list or experiment (springlab --help)"},
+        Refusal{"NoCommand", {}, "a command is required: run, stability, scene, list, experiment or check (springlab --help)"},
         Refusal{"UnknownCommand", {"simulate"},
-                "unknown command 'simulate' (commands: run, stability, scene, list, experiment; springlab --help)"},
+                "unknown command 'simulate' (commands: run, stability, scene, list, experiment, check; springlab --help)"},
         Refusal{"UnknownOption", {"run", "oscillator", "--bogus"},
                 "unknown option --bogus (springlab run --help lists the options)"},
         Refusal{"UnknownOptionWithValue", run_args("rk4", {"--tend=3"}),
                 "unknown option --tend (springlab run --help lists the options)"},
         Refusal{"OptionTwice", run_args("rk4", {"--dt", "0.2"}), "--dt: given more than once"},
+        Refusal{"OptionTwiceOnceWithEquals", run_args("rk4", {"--t-end=2"}),
+                "--t-end: given more than once"},
+        Refusal{"NotAWholeNumber", run_args("rk4", {"--every", "1.5"}),
+                "--every: '1.5' is not a whole number"},
         Refusal{"MissingRequired", {"run", "oscillator", "--integrator", "rk4", "--t-end", "1"},
                 "--dt is required (springlab run --help)"},
         Refusal{"ExtraArgument", run_args("rk4", {"extra"}),
@@ -137,6 +141,39 @@ INSTANTIATE_TEST_SUITE_P(
         Refusal{"MergeZero", {"experiment", "x.json", "--out", "out", "--merge", "0"}, "--merge: must be >= 1"},
         Refusal{"MergeWithShard", {"experiment", "x.json", "--out", "out", "--merge", "2", "--shard", "1/2"},
                 "--merge and --shard: merge the shards in a run of its own, without --shard"}),
+    [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
+
+// Issue 46: NaN was the method's default in disguise; a value out of range
+// is printed as given (not rounded into the range); two outputs at one new
+// path are refused before the run (it used to run, publish e2.csv, then
+// fail); a NUL byte is refused where it is read (/dev/zero: at once, not
+// after the 512 MiB cap).
+INSTANTIATE_TEST_SUITE_P(
+    Issue46, CliRefusal,
+    ::testing::Values(
+        Refusal{"BetaNan", run_args("newmark", {"--beta", "nan"}),
+                "--beta: must be a finite number (got nan)"},
+        Refusal{"GammaInfinite", run_args("newmark", {"--gamma", "inf"}),
+                "--gamma: must be a finite number (got inf)"},
+        Refusal{"AlphaNan", run_args("hht-alpha", {"--alpha", "nan"}),
+                "--alpha: must be a finite number (got nan)"},
+        Refusal{"RhoInfNan", run_args("generalized-alpha", {"--rho-inf", "nan"}),
+                "--rho-inf: must be a finite number (got nan)"},
+        Refusal{"BetaAsGiven", run_args("newmark", {"--beta", "0.5000001"}),
+                "--beta: must be in [0, 0.5], got 0.5000001"},
+        Refusal{"RhoInfAsGiven", run_args("generalized-alpha", {"--rho-inf", "1.0000001"}),
+                "--rho-inf: must be in [0, 1] (the spectral radius at infinity), got 1.0000001"},
+        Refusal{"EnergyAndVtkAtOneNewPath",
+                {"run", "oscillator", "--integrator", "rk4", "--dt", "0.1", "--t-end", "1",
+                 "--energy", "e2.csv", "--vtk", "e2.csv"},
+                "--energy e2.csv and --vtk e2.csv name the same path"},
+        Refusal{"TrajectoryAndVtkAtOneNewPath",
+                {"run", "oscillator", "--integrator", "rk4", "--dt", "0.1", "--t-end", "1",
+                 "--trajectory", "t.csv", "--vtk", "./t.csv"},
+                "--trajectory t.csv and --vtk ./t.csv name the same path"},
+        Refusal{"NulAtTheFirstByte", run_args("rk4", {}, "/dev/zero"),
+                "/dev/zero: malformed JSON: a NUL byte at line 1, column 1 (JSON text cannot hold "
+                "one)"}),
     [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
 
 // Options a method does not read are named on stderr, and the run goes on.

@@ -151,4 +151,51 @@ TEST(Interrupt, SignalStopsALongTaskWithinASecond) {
   fs::remove_all(dir);
 }
 
+// Issue 46.8: the rigid experiment's reference runs inside an observer of
+// the run it is compared with, and one output step of dt = 1 s at
+// reference_step 2e-9 is 5e8 of its steps: the stop request is read inside
+// the reference too, so SIGTERM ends the sweep within a second.
+TEST(Interrupt, SignalStopsTheRigidReferenceWithinASecond) {
+  const fs::path dir = fs::temp_directory_path() / ("springlab-interrupt-rigid-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path definition = dir / "rigid.json";
+  std::ofstream(definition) << R"({"experiment": "rigid", "name": "rigid", "scene": "tumbling-box",
+      "integrators": ["symplectic-euler"], "dt": 1, "t_end": 2, "reference_step": 2e-9})";
+  const fs::path out = dir / "out";
+  std::vector<std::string> args = {SPRINGLAB_EXE, "experiment", definition.string(), "--out",
+                                   out.string(), "--no-progress"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const DefaultSignals defaults;
+  ASSERT_EQ(posix_spawn(&pid, SPRINGLAB_EXE, nullptr, &defaults.attr, argv.data(), environ), 0);
+  const auto started = std::chrono::steady_clock::now();
+  auto temporaries = [&] {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(out, ec)) {
+      if (entry.path().string().find("springlab-tmp") != std::string::npos) return true;
+    }
+    return false;
+  };
+  while (!temporaries() && std::chrono::steady_clock::now() - started < std::chrono::seconds(30)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // inside the reference's step
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  const auto signalled = std::chrono::steady_clock::now();
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_LT(seconds, 1.0);
+  nlohmann::json settings;
+  std::ifstream(out / "rigid.json") >> settings;
+  EXPECT_EQ(settings["complete"], false);
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -5,11 +5,14 @@
 // so far and the seconds left at that pace; cleared at the end. Run under a
 // pseudo-terminal, as a user's shell runs it.
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <pty.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -23,7 +26,8 @@ namespace fs = std::filesystem;
 
 // Runs argv on a new pseudo-terminal (stdin, stdout and stderr); returns
 // what it printed there and its exit status in `status`.
-std::string run_on_terminal(std::vector<std::string> args, int& status) {
+// With `seconds` > 0, SIGINT is sent that long after the start.
+std::string run_on_terminal(std::vector<std::string> args, int& status, double seconds = 0.0) {
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -35,8 +39,21 @@ std::string run_on_terminal(std::vector<std::string> args, int& status) {
   }
   std::string out;
   if (pid < 0) return out;
+  const auto start = std::chrono::steady_clock::now();
+  bool interrupted = false;
   char buffer[4096];
   for (;;) {
+    if (seconds > 0.0 && !interrupted) {
+      // Wait for output up to the deadline, then interrupt.
+      const double left =
+          seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      pollfd ready{.fd = master, .events = POLLIN, .revents = 0};
+      if (left <= 0.0 || ::poll(&ready, 1, static_cast<int>(1000.0 * left) + 1) == 0) {
+        ::kill(pid, SIGINT);
+        interrupted = true;
+        continue;
+      }
+    }
     const ssize_t n = ::read(master, buffer, sizeof buffer);
     if (n > 0) {
       out.append(buffer, static_cast<std::size_t>(n));
@@ -88,6 +105,26 @@ TEST(ProgressLine, SaysTheTimeLeftOfASlowRunAndIsClearedAtTheEnd) {
   // The line is cleared before the run's summary is printed.
   EXPECT_EQ(out.compare(end_of_last, 4, "\r\033[K"), 0) << out.substr(end_of_last, 40);
   EXPECT_NE(out.find("status completed", end_of_last), std::string::npos) << out;
+}
+
+// The stability search's line (issue 46.14): an adaptive method's trial
+// can spend minutes inside one output interval (arkode-dirk on two hinged
+// boxes: each interval of 1 s took 7 s, and the search's first trial, at
+// --dt-max, runs 100 of them), so the line is redrawn every second, not
+// only at output times. At --dt-max 50 the first interval takes minutes:
+// within 3 s the line says so, at t = 0, with the seconds spent.
+TEST(StabilityProgress, ShowsATrialThatIsStillInItsFirstInterval) {
+  int status = -1;
+  const std::string out = run_on_terminal(
+      {SPRINGLAB_EXE, "stability", "box-chain", "-p", "n=2", "--integrator", "arkode-dirk",
+       "--t-end", "0.5", "--dt-max", "50"},
+      status, 3.0);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << out;
+  // [stability arkode-dirk] run 1: dt 50, t = 0 of 5000 s, 2 s
+  const std::regex line(R"(\[stability arkode-dirk\] run 1: dt 50, t = 0 of 5000 s, ([0-9]+) s)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, line)) << "no progress line in: " << out;
+  EXPECT_GE(std::stoi(m[1]), 1) << "nothing in the first second";
 }
 
 }  // namespace

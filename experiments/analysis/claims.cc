@@ -85,22 +85,36 @@ struct Oscillator {
     return std::max((x - xe).lpNorm<Eigen::Infinity>(), (v - ve).lpNorm<Eigen::Infinity>());
   }
 };
-constexpr const char* kOscillator = "oscillator -p k=1 -p mass=1 -p amplitude=1";
+// A built-in scene and its parameters, as a claim's runs use it and as the
+// command that reproduces the claim names it.
+struct CheckScene {
+  std::string name;
+  std::vector<std::pair<std::string, std::string>> parameters;
+
+  // "oscillator -p k=1 ...", for the command line.
+  std::string command_text() const {
+    std::string out = name;
+    for (const auto& [key, value] : parameters) out += " -p " + key + "=" + value;
+    return out;
+  }
+  // springlab.load_scene("oscillator", k=1, ...), for Python.
+  std::string python_text() const {
+    std::string out = "springlab.load_scene(\"" + name + "\"";
+    for (const auto& [key, value] : parameters) out += ", " + key + "=" + value;
+    return out + ")";
+  }
+};
+const CheckScene kOscillator{"oscillator", {{"k", "1"}, {"mass", "1"}, {"amplitude", "1"}}};
 
 // The run that shows a claim's numbers, on the oscillator: a command line,
 // or for a method written in Python the same run from Python.
 std::string run_command(const CheckSubject& s, double dt, double t_end, const std::string& extra,
-                        const std::string& scene = kOscillator) {
+                        const CheckScene& scene = kOscillator) {
   if (!s.python_call.empty()) {
-    std::string py_scene = "springlab.load_scene(\"" + scene.substr(0, scene.find(' ')) + "\"";
-    for (std::size_t at = scene.find(" -p "); at != std::string::npos; at = scene.find(" -p ", at + 1)) {
-      const std::size_t end = scene.find(' ', at + 4);
-      py_scene += ", " + scene.substr(at + 4, end == std::string::npos ? std::string::npos : end - at - 4);
-    }
-    return "springlab.run(" + py_scene + "), " + s.python_call + ", dt=" + exact_text(dt) +
-           ", t_end=" + exact_text(t_end) + ")";
+    return "springlab.run(" + scene.python_text() + ", " + s.python_call + ", dt=" +
+           exact_text(dt) + ", t_end=" + exact_text(t_end) + ")";
   }
-  return "springlab run " + scene + " " + s.method_arguments + " --dt " + exact_text(dt) +
+  return "springlab run " + scene.command_text() + " " + s.method_arguments + " --dt " + exact_text(dt) +
          " --t-end " + exact_text(t_end) + extra;
 }
 
@@ -184,7 +198,7 @@ StabilitySettings oscillator_search(const std::string& method, double dt_min, do
 std::string stability_command(const CheckSubject& s, const StabilitySettings& settings,
                               const std::string& keyword) {
   if (!s.python_call.empty()) return check_command(s, "", keyword);
-  return std::string("springlab stability ") + kOscillator + " " + s.method_arguments +
+  return "springlab stability " + kOscillator.command_text() + " " + s.method_arguments +
          " --t-end " + exact_text(settings.run.t_end) + " --blowup " +
          exact_text(settings.run.blowup) + " --dt-min " + exact_text(settings.dt_min) +
          " --dt-max " + exact_text(settings.dt_max);
@@ -506,7 +520,8 @@ ClaimResult check_deterministic(const CheckSubject& s) {
                              : std::numeric_limits<double>::quiet_NaN();
       differs += std::string(differs.empty() ? "" : "; ") + scene_name + ": final positions differ by " + text(gap);
       out.run = run_command(s, dt, steps * dt, " --json   (twice)",
-                            std::string(scene_name) == "cloth" ? "cloth -p n=6" : kOscillator);
+                            std::string(scene_name) == "cloth" ? CheckScene{"cloth", {{"n", "6"}}}
+                                                               : kOscillator);
     }
   }
   out.measured = out.passed ? "two runs each of cloth (n = 6, 20 steps) and the oscillator (50 "

@@ -51,17 +51,21 @@ void RigidReference::step(double h) {
   t_ += h;
 }
 
-void RigidReference::advance_to(double t) {
+bool RigidReference::advance_to(double t, const std::atomic<bool>* stop) {
   if (!(t >= t_)) throw std::invalid_argument("RigidReference: cannot go back in time");
   const double span = t - t_;
-  if (span == 0.0) return;
+  if (span == 0.0) return true;
   const long n = static_cast<long>(std::ceil(span / max_step_));
   const double start = t_;
   for (long k = 1; k <= n; ++k) {
+    if (stop != nullptr && k % kStopCheckSteps == 0 && stop->load(std::memory_order_relaxed)) {
+      return false;  // t_ is where it stopped
+    }
     const double next = k == n ? t : start + span * static_cast<double>(k) / static_cast<double>(n);
     step(next - t_);
   }
   t_ = t;
+  return true;
 }
 
 std::vector<double> reversal_intervals(const std::vector<double>& reversals) {

@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <atomic>
 #include <vector>
 
 namespace springlab {
@@ -37,8 +38,11 @@ class RigidReference {
                  double max_step, int middle);
 
   // Integrates forward to time t (>= time()), in equal steps of at most
-  // max_step that end exactly at t.
-  void advance_to(double t);
+  // max_step that end exactly at t. With `stop` set, it reads it every
+  // kStopCheckSteps steps and returns false, short of t, once it is true
+  // (a Ctrl-C in a sweep: at reference_step 1e-12 one call was 1e10 steps).
+  bool advance_to(double t, const std::atomic<bool>* stop = nullptr);
+  static constexpr long kStopCheckSteps = 4096;
 
   double time() const { return t_; }
   const Eigen::Vector3d& omega() const { return w_; }  // body frame

@@ -10,15 +10,18 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -31,6 +34,8 @@
 #include "experiments/kinds/experiment_runner.h"
 #include "experiments/cli/check_command.h"
 #include "experiments/cli/integrator_table.h"
+#include "experiments/cli/parse_errors.h"
+#include "experiments/driver/memory_check.h"
 #include "experiments/io/output_files.h"
 #include "experiments/io/vtk_series.h"
 #include "experiments/io/signals.h"
@@ -99,10 +104,11 @@ std::string builtin_list() {
   return names;
 }
 
+// The shortest text that reads back as the value: a refusal prints it as
+// given (--t-end 1e-7, --dt-min 0.30000000000000004).
 std::string number_text(double value) {
-  std::ostringstream s;
-  s << value;
-  return s.str();
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
 }
 
 // Notes for the user on stderr, one line each.
@@ -245,6 +251,9 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
 // meets the check at run time only if it falls back to Newton.
 std::unique_ptr<Integrator> prepare_or_refuse(const Model& model, const RunSettings& run,
                                               const std::string& scene_arg) {
+  // The Jacobian pattern, before the method builds it (memory_check.h).
+  check_jacobian_memory(model, run.integrator,
+                        scene_arg.empty() ? "the scene" : printable(scene_arg));
   std::unique_ptr<Integrator> integrator = prepare_or_refuse_pairing(model, run, scene_arg);
   if (dynamic_cast<const VelocityImplicitMethod*>(integrator.get()) != nullptr &&
       run.options.solver != Solver::kQuasiNewton) {
@@ -336,9 +345,19 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  if (!energy_path.empty() && !trajectory_path.empty() && same_file(energy_path, trajectory_path)) {
-    throw UsageError("--energy " + printable(energy_path) + " and --trajectory " +
-                     printable(trajectory_path) + " name the same file");
+  // Two outputs at one path: refused before the run (issue 46.11: --energy
+  // and --vtk at one new path ran the whole run, then failed).
+  const std::pair<const char*, const std::string*> outputs[] = {
+      {"--energy", &energy_path}, {"--trajectory", &trajectory_path}, {"--vtk", &vtk_dir}};
+  for (std::size_t a = 0; a < 3; ++a) {
+    for (std::size_t b = a + 1; b < 3; ++b) {
+      const std::string &pa = *outputs[a].second, &pb = *outputs[b].second;
+      if (!pa.empty() && !pb.empty() && same_file(pa, pb)) {
+        throw UsageError(std::string(outputs[a].first) + " " + printable(pa) + " and " +
+                         outputs[b].first + " " + printable(pb) + " name the same " +
+                         (b == 2 ? "path" : "file"));
+      }
+    }
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
   TimeGrid grid;
@@ -377,6 +396,7 @@ int command_run(CommonOptions& common, const std::string& energy_path,
                std::to_string(scene.particles.size()) + " points x " +
                    std::to_string(static_cast<long long>(times)) + " frames");
   }
+  check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
   print_notes(common.check_against_method(model));
@@ -481,23 +501,46 @@ int command_run(CommonOptions& common, const std::string& energy_path,
 
 // The stability search's progress on a terminal: one line on stderr,
 // overwritten in place (nothing in the first second), naming the trial, its
-// step, the bracket so far and how far the trial has run.
+// step, the bracket so far, how far the trial has run and, once it has run
+// a while, how long it will take. A thread redraws it every second too: an
+// adaptive method's output interval can take many seconds (issue 46.14:
+// arkode-dirk on box-chain n=2, 7 s for each of a trial's 100 intervals, and
+// minutes without a line).
 class StabilityProgress final : public Observer {
  public:
   explicit StabilityProgress(std::string integrator)
-      : integrator_(std::move(integrator)), start_(Clock::now()), last_(start_) {}
+      : integrator_(std::move(integrator)), start_(Clock::now()), last_(start_),
+        ticker_([this] { tick(); }) {}
   ~StabilityProgress() override {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    ticker_.join();
     if (shown_) std::fprintf(stderr, "\r\033[K");
   }
   void trial(const StabilityTrial& t) {
+    std::lock_guard<std::mutex> lock(mutex_);
     trial_ = t;
-    show(0.0, true);
+    t_ = 0.0;
+    trial_start_ = Clock::now();
+    show(true);
   }
-  void observe(double t, const Vector&, const Vector&) override { show(t, false); }
+  void observe(double t, const Vector&, const Vector&) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    t_ = t;
+    show(false);
+  }
 
  private:
   using Clock = std::chrono::steady_clock;
-  void show(double t, bool force) {
+  void tick() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!wake_.wait_for(lock, std::chrono::seconds(1), [this] { return done_; })) show(true);
+  }
+  // (mutex_ held)
+  void show(bool force) {
     const auto now = Clock::now();
     if (now - start_ < std::chrono::seconds(1)) return;
     if (!force && now - last_ < std::chrono::milliseconds(200)) return;
@@ -508,14 +551,23 @@ class StabilityProgress final : public Observer {
       std::snprintf(bracket, sizeof bracket, ", bracket [%.4g, %.4g]", trial_.lo, trial_.hi);
     }
     std::fprintf(stderr, "\r\033[K[stability %s] run %d: dt %.4g%s, t = %.4g of %.4g s, %.0f s",
-                 integrator_.c_str(), trial_.run, trial_.dt, bracket, t, trial_.t_end,
+                 integrator_.c_str(), trial_.run, trial_.dt, bracket, t_, trial_.t_end,
                  std::chrono::duration<double>(now - start_).count());
+    // The trial's time left at its pace so far (as run's progress line).
+    const double spent = std::chrono::duration<double>(now - trial_start_).count();
+    if (t_ > 0.0 && spent >= 1.0) {
+      std::fprintf(stderr, ", this run about %.0f s more", spent * (trial_.t_end - t_) / t_);
+    }
     std::fflush(stderr);
   }
   std::string integrator_;
   StabilityTrial trial_;
-  Clock::time_point start_, last_;
-  bool shown_ = false;
+  double t_ = 0.0;
+  Clock::time_point start_, last_, trial_start_ = start_;
+  bool shown_ = false, done_ = false;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::thread ticker_;  // last: started once the rest is set
 };
 
 int command_stability(CommonOptions& common, StabilitySettings& s) {
@@ -534,6 +586,7 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     }
   }
   const Scene scene = resolve_scene(common.scene, common.parameters);
+  check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
   print_notes(common.check_against_method(model));
@@ -688,72 +741,6 @@ int usable_cpus() {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-// An option on the command line that the chosen command does not have
-// (CLI11 would first complain about a missing required option instead).
-std::string unknown_option(const CLI::App& app, int argc, char** argv) {
-  const CLI::App* command = &app;
-  for (int k = 1; k < argc; ++k) {
-    const std::string arg = argv[k];
-    if (command == &app && !arg.empty() && arg[0] != '-') {
-      for (const CLI::App* sub : app.get_subcommands({})) {
-        if (sub->get_name() == arg) command = sub;
-      }
-      continue;
-    }
-    if (arg.size() < 2 || arg[0] != '-' || arg == "--" || std::isdigit(static_cast<unsigned char>(arg[1])) ||
-        arg[1] == '.') {
-      continue;  // a value, a negative number, or "-" (stdin)
-    }
-    const std::string name = arg.substr(0, arg.find('='));
-    if (command->get_option_no_throw(name) == nullptr && app.get_option_no_throw(name) == nullptr) {
-      return name;
-    }
-  }
-  return "";
-}
-
-// CLI11's parse errors as one line, in springlab's words.
-std::string parse_error_line(const CLI::ParseError& e, const CLI::App& app, int argc, char** argv) {
-  std::string what = e.what();
-  std::replace(what.begin(), what.end(), '\n', ' ');
-  const std::vector<const CLI::App*> chosen = app.get_subcommands({});
-  std::string help = "springlab --help";
-  for (const CLI::App* sub : chosen) {
-    if (sub->parsed()) help = "springlab " + sub->get_name() + " --help";
-  }
-  if (const std::string name = unknown_option(app, argc, argv); !name.empty()) {
-    return "unknown option " + printable(name) + " (" + help + " lists the options)";
-  }
-  // "--dt: At Most 1 required but received 2"
-  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr &&
-      what.find("At Most 1 required") != std::string::npos) {
-    return what.substr(0, what.find(':')) + ": given more than once";
-  }
-  // "Could not convert: --dt = abc"
-  if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr &&
-      what.rfind("Could not convert: ", 0) == 0) {
-    const std::string rest = what.substr(19);
-    const auto eq = rest.find(" = ");
-    if (eq != std::string::npos) {
-      return rest.substr(0, eq) + ": '" + printable(rest.substr(eq + 3)) + "' is not a number";
-    }
-  }
-  if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
-    const auto colon = what.find(": ");
-    return "unexpected argument" +
-           (colon == std::string::npos ? std::string() : " " + printable(what.substr(colon + 2))) +
-           " (" + help + " lists the arguments)";
-  }
-  if (what == "A subcommand is required" && argc > 1 && argv[1][0] != '-') {
-    return "unknown command '" + printable(argv[1]) +
-           "' (commands: run, stability, scene, list, experiment; springlab --help)";
-  }
-  if (what == "A subcommand is required") {
-    return "a command is required: run, stability, scene, list or experiment (springlab --help)";
-  }
-  return printable(what) + " (" + help + ")";
-}
-
 }  // namespace
 
 Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>& parameters) {
@@ -801,11 +788,7 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
   try {
     app.parse(static_cast<int>(argv.size()), argv.data());
   } catch (const CLI::ParseError& e) {
-    std::string line = parse_error_line(e, app, static_cast<int>(argv.size()), argv.data());
-    if (const auto at = line.find("(springlab --help"); at != std::string::npos) {
-      line.replace(at, 17, "(springlab run --help");
-    }
-    throw UsageError(line);
+    throw UsageError(parse_error_line(e, app, static_cast<int>(argv.size()), argv.data(), "run"));
   }
   common.validate();
   require_positive("--dt", common.run.dt);

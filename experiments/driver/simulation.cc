@@ -23,6 +23,8 @@ thread_local const std::atomic<bool>* thread_stop = nullptr;
 StopScope::StopScope(const std::atomic<bool>* stop) : previous_(thread_stop) { thread_stop = stop; }
 StopScope::~StopScope() { thread_stop = previous_; }
 
+const std::atomic<bool>* thread_stop_request() { return thread_stop; }
+
 const char* to_string(RunStatus status) {
   switch (status) {
     case RunStatus::kCompleted: return "completed";

@@ -138,6 +138,11 @@ class StopScope {
   const std::atomic<bool>* previous_;
 };
 
+// The stop request simulate() honours on this thread (StopScope's), or
+// nullptr: for long work between a run's steps, such as the rigid
+// experiment's reference, which an observer advances (issue 46.8).
+const std::atomic<bool>* thread_stop_request();
+
 const char* to_string(RunStatus status);
 
 }  // namespace springlab

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "experiments/driver/memory_check.h"
 #include "experiments/io/output_files.h"
 #include "integrators/registry/registry.h"
 #include "models/scenes/builtin_scenes.h"
@@ -146,12 +147,23 @@ Scene definition_scene(const DefinitionObject& o,
     }
   }
   parameters.insert(parameters.end(), overrides.begin(), overrides.end());
-  if (is_builtin_scene(name)) {
+  // A scene whose model would not fit is refused at load (memory_check.h).
+  auto fitting = [&](Scene scene, const char* key) {
     try {
-      return make_builtin_scene(name, parameters);
+      check_scene_memory(scene, "scene '" + printable(name) + "'");
+    } catch (const MemoryRefused& e) {
+      o.fail(key, e.what());
+    }
+    return scene;
+  };
+  if (is_builtin_scene(name)) {
+    Scene scene;
+    try {
+      scene = make_builtin_scene(name, parameters);
     } catch (const SceneError& e) {
       o.fail("parameters", e.what());
     }
+    return fitting(std::move(scene), "parameters");
   }
   if (!parameters.empty()) o.fail("parameters", "apply to built-in scenes only");
   const std::filesystem::path base = std::filesystem::path(o.file()).parent_path();
@@ -161,11 +173,13 @@ Scene definition_scene(const DefinitionObject& o,
     o.fail("scene", std::string("'").append(printable(name)).append(
                         "' is neither a built-in scene nor a file next to the definition"));
   }
+  Scene scene;
   try {
-    return load_scene_file(path.string());
+    scene = load_scene_file(path.string());
   } catch (const SceneError& e) {
     o.fail("scene", e.what());  // the definition's file and key, then the scene's
   }
+  return fitting(std::move(scene), "scene");
 }
 
 std::string definition_integrator(const DefinitionObject& o, const char* key) {

@@ -316,6 +316,21 @@ class FluidExperiment final : public Experiment {
       }
       limit_integrators_ = definition_integrators(l, "integrators", "");
       limit_t_end_ = l.positive("t_end");
+      // Each search runs to t_end at its smallest step, dt_min = 1e-3 h / c
+      // (run_limit): over the cap of steps per run, it is refused now,
+      // naming the key, not after the main runs (issue 46.12).
+      for (std::size_t k = 0; k < limit_scenes_.size(); ++k) {
+        const Fluid& fluid = limit_scenes_[k].get<Fluids>().front();
+        const double dt_min = 1e-3 * kSmoothingPerSpacing * fluid.spacing / fluid.speed_of_sound;
+        const double steps = limit_t_end_ / dt_min;
+        if (!(steps <= 1e9)) {
+          l.fail("t_end", format_number(limit_t_end_) + " s would take " + format_count(steps) +
+                              " steps at the searches' smallest step dt_min = 1e-3 h / c = " +
+                              format_number(dt_min) + " s (sound " + format_number(sound_[k]) +
+                              ": c = " + format_number(fluid.speed_of_sound) +
+                              " m/s), over the cap of 1e9 per run");
+        }
+      }
       limit_rel_tol_ = l.positive("rel_tol", 1e-2);
       limit_blowup_ = l.positive("blowup", 1000.0);
       limit_dt_max_factor_ = l.positive("dt_max_factor", 10.0);

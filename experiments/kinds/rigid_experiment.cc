@@ -89,7 +89,9 @@ class RigidWatch final : public Observer {
   }
 
   void observe(double t, const Vector& x, const Vector& v) override {
-    reference_.advance_to(t);
+    // The sweep's stop request reaches the reference too (it can take far
+    // more steps than the run it watches).
+    if (!reference_.advance_to(t, thread_stop_request())) throw StopRequested();
     const BodyState s = state(x, v);
     model_.energies(x, v, energies_);
     const double E = energies_.total();
@@ -126,7 +128,9 @@ class RigidWatch final : public Observer {
 
   // The reference to t_end (its reversals over the whole run).
   const RigidReference& reference_to(double t) {
-    reference_.advance_to(std::max(t, reference_.time()));
+    if (!reference_.advance_to(std::max(t, reference_.time()), thread_stop_request())) {
+      throw StopRequested();
+    }
     return reference_;
   }
 
@@ -179,6 +183,7 @@ class RigidExperiment final : public Experiment {
     check_time_grid(d, "dt", dt_, t_end_);
     reference_step_ = d.positive("reference_step", 1e-5);
     if (reference_step_ > dt_) d.fail("reference_step", "must not exceed dt");
+    check_reference_steps(d, t_end_, "t_end");
     scene_ = definition_scene(d);
     const auto& bodies = scene_.get<Bodies>();
     if (bodies.empty() || bodies.front().fixed) {
@@ -195,10 +200,18 @@ class RigidExperiment final : public Experiment {
       kappa_t_end_ = d.positive("kappa_t_end", t_end_);
       check_time_grid(d, "kappa_dt", kappa_dt_, kappa_t_end_);
       if (reference_step_ > kappa_dt_) d.fail("reference_step", "must not exceed kappa_dt");
+      check_reference_steps(d, kappa_t_end_, "kappa_t_end");
       if (d.has("limit_integrators")) {
         limit_integrators_ = definition_integrators(d, "limit_integrators", "");
       }
       limit_periods_ = d.positive("limit_periods", 100.0);
+      // A search runs limit_periods periods of the rigidity mode at its
+      // smallest step 1e-2 / w: 200 pi steps a period (run_limit).
+      if (!(limit_periods_ * 200.0 * std::numbers::pi <= 1e9)) {
+        d.fail("limit_periods", "a search's run at its smallest step (1e-2 / w) would take " +
+                                    format_count(limit_periods_ * 200.0 * std::numbers::pi) +
+                                    " steps (200 pi a period), over the cap of 1e9 per run");
+      }
       limit_rel_tol_ = d.positive("limit_rel_tol", 1e-2);
     }
     const double steps = static_cast<double>(make_time_grid(dt_, t_end_).steps);
@@ -329,6 +342,17 @@ class RigidExperiment final : public Experiment {
       row.add_empty();
     }
     out.rows[3].push_back(row.add(outcome).str());
+  }
+
+  // The reference's steps to `t_end` (each run's watch advances its own
+  // reference that far): over the cap of steps per run, refused at load.
+  void check_reference_steps(const DefinitionObject& d, double t_end, const char* over) const {
+    const double steps = t_end / reference_step_;
+    if (!(steps <= 1e9)) {
+      d.fail("reference_step", format_number(reference_step_) + " s would take the reference " +
+                                   format_count(steps) + " steps to " + over + " = " +
+                                   format_number(t_end) + " s, over the cap of 1e9 per run");
+    }
   }
 
   IntegratorOptions options_;

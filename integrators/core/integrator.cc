@@ -59,6 +59,10 @@ std::string stability_text(const IntegratorInfo& info) {
 
 std::string Integrator::check_options(const IntegratorOptions&, Eigen::Index) const { return {}; }
 
+bool Integrator::assembles_jacobians(const MechanicalSystem&) const {
+  return info_.implicit && !info_.jacobian_free;
+}
+
 std::vector<std::string> Integrator::options_read() const {
   if (info_.iterates_to_tolerance) return {"newton-tol", "max-newton"};
   return {};

@@ -164,6 +164,11 @@ class Integrator {
   // The command-line options (without "--") this method reads, so a caller
   // can say which of the given ones it ignores.
   virtual std::vector<std::string> options_read() const;
+  // Whether a run on `system` assembles its Jacobians, and so makes the
+  // model build its pattern (Model builds it only when asked): the
+  // memory estimate counts the pattern only then (issue 46.5). By default
+  // the implicit methods that are not Jacobian-free.
+  virtual bool assembles_jacobians(const MechanicalSystem& system) const;
   // The substeps one step takes with these options, for a method that reads
   // --substeps (`run --json` reports it); 1 for the others.
   virtual int substeps(const IntegratorOptions&) const { return 1; }

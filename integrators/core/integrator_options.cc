@@ -1,6 +1,7 @@
 #include "integrators/core/integrator_options.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -9,11 +10,12 @@ namespace {
 
 using Range = OptionSpec::Range;
 
-// The shortest text that reads back to the value ("1e-06", "0.5").
+// The shortest text that reads back to the value ("1e-06", "0.5"): a
+// refusal prints the value as given (--beta 0.5000001, not 0.5).
 std::string number_text(double value) {
-  std::ostringstream s;
-  s << value;
-  return s.str();
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  return std::string(text, end);
 }
 
 std::string choices_text(const OptionSpec& spec) {
@@ -165,6 +167,12 @@ std::string check_option_range(const OptionSpec& spec, const IntegratorOptions& 
       if (!(value >= 0.0 && value < 1.0)) return "must be in [0, 1) (0: off)";
       break;
     case Range::kAny:
+      // (Unset is NaN, the method's default: a given NaN or infinity is no
+      // value, not a request for the default.)
+      if (given && !integral && !std::isfinite(value)) {
+        return "must be a finite number (got " + number_text(value) + ")";
+      }
+      break;
     case Range::kChoice:
       break;
   }

@@ -72,6 +72,10 @@ class ProjectiveDynamics final : public FastSolver {
   std::vector<std::string> options_read() const override {
     return {"iterations", "chebyshev"};
   }
+  // It reads dF/dv once where the damping is diagonal (read_linear_damping).
+  bool assembles_jacobians(const MechanicalSystem& system) const override {
+    return system.velocity_dependence() == VelocityDependence::kDiagonal;
+  }
   static constexpr int kDefaultIterations = 10;
 
   // A distance constraint as the local step reads it, in 24 bytes: b < 0

@@ -1,12 +1,21 @@
 #include "integrators/methods/generalized_alpha.h"
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
+#include <string>
 
 #include "integrators/core/integrator_entry.h"
 
 namespace springlab {
 namespace {
+
+// The shortest decimal that reads back as `value`: a refusal prints the
+// value as given (--beta 0.5000001, not the rounded 0.5).
+std::string given_text(double value) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
 
 constexpr double kDefaultAlpha = -0.1;
 constexpr double kDefaultRhoInf = 0.5;
@@ -32,7 +41,8 @@ NewmarkParameters HhtAlpha::parameters(const IntegratorOptions& o) const {
 std::string HhtAlpha::check_options(const IntegratorOptions& o, Eigen::Index) const {
   if (std::isnan(o.alpha) || (o.alpha >= -1.0 / 3.0 && o.alpha <= 0.0)) return {};
   std::ostringstream why;
-  why << "--alpha: must be in [-1/3, 0] (Hilber, Hughes and Taylor's range), got " << o.alpha;
+  why << "--alpha: must be in [-1/3, 0] (Hilber, Hughes and Taylor's range), got "
+      << given_text(o.alpha);
   return why.str();
 }
 
@@ -55,7 +65,8 @@ NewmarkParameters GeneralizedAlpha::parameters(const IntegratorOptions& o) const
 std::string GeneralizedAlpha::check_options(const IntegratorOptions& o, Eigen::Index) const {
   if (std::isnan(o.rho_inf) || (o.rho_inf >= 0.0 && o.rho_inf <= 1.0)) return {};
   std::ostringstream why;
-  why << "--rho-inf: must be in [0, 1] (the spectral radius at infinity), got " << o.rho_inf;
+  why << "--rho-inf: must be in [0, 1] (the spectral radius at infinity), got "
+      << given_text(o.rho_inf);
   return why.str();
 }
 

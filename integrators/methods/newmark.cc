@@ -1,21 +1,31 @@
 #include "integrators/methods/newmark.h"
 
+#include <charconv>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <sstream>
+#include <string>
 
 #include "integrators/core/integrator_entry.h"
 
 namespace springlab {
 namespace {
 
+// The shortest decimal that reads back as `value`: a refusal prints the
+// value as given (--beta 0.5000001, not the rounded 0.5).
+std::string given_text(double value) {
+  char text[32];
+  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
+
 // The trapezoidal rule's R(z) on y' = lambda y: average acceleration is the
 // trapezoidal rule applied to (x, v)' = (v, M^-1 F).
 std::complex<double> trapezoidal(std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }
 
-// Stable for w h <= 1 / sqrt(gamma/2 - beta) (gamma = 1/2, Hughes 9.1.2).
-double newmark_limit(double beta) { return 1.0 / std::sqrt(0.25 - beta); }
+// Stable for w h <= 1 / sqrt(gamma/2 - beta) on the undamped oscillator
+// (Hughes 9.1.2: Omega_crit at xi = 0), when 2 beta < gamma.
+double newmark_limit(double beta, double gamma = 0.5) { return 1.0 / std::sqrt(gamma / 2.0 - beta); }
 
 // With gamma = 1/2 the method conserves (v^2 + w^2 x^2 (1 + (beta - 1/4) (w h)^2))/2
 // on the undamped oscillator (Hughes 9.1.2), so E swings up to
@@ -66,9 +76,9 @@ std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) con
   std::ostringstream why;
   if (!(p.gamma >= 0.5 && p.gamma <= 1.0)) {
     why << "--gamma: must be in [0.5, 1] (below 1/2 the method amplifies every mode), got "
-        << p.gamma;
+        << given_text(p.gamma);
   } else if (!(p.beta >= 0.0 && p.beta <= 0.5)) {
-    why << "--beta: must be in [0, 0.5], got " << p.beta;
+    why << "--beta: must be in [0, 0.5], got " << given_text(p.beta);
   }
   return why.str();
 }

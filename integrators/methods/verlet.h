@@ -29,6 +29,10 @@ namespace springlab {
 class VelocityVerlet : public Integrator {
  public:
   VelocityVerlet();
+  // Its closing half-kick's matrix, where the forces depend on v.
+  bool assembles_jacobians(const MechanicalSystem& system) const override {
+    return system.velocity_dependence() != VelocityDependence::kNone;
+  }
 
  protected:
   // For the compositions of Verlet steps (yoshida.h).

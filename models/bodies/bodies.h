@@ -27,6 +27,11 @@ inline constexpr double kDefaultRigidity = 1e6;  // kappa [Pa]
 inline constexpr int kDefaultCylinderSegments = 32;
 inline constexpr std::size_t kMaxSceneBodies = 10'000;
 inline constexpr std::size_t kMaxBodyVertices = 1'000'000;
+// The surface vertices of all a scene's bodies together (a cylinder has
+// 2 segments + 2): each is held by several of the model's terms (issue
+// 46.7: 100 cylinders of 100000 segments, a 10 KB file, took 2 GB).
+inline constexpr std::size_t kMaxSceneBodyVertices = 1'000'000;
+
 
 // One entry of "bodies", as the file gives it.
 struct Body {
@@ -57,6 +62,10 @@ struct Body {
   double friction = 0.0;
 };
 using Bodies = std::vector<Body>;
+
+// The surface vertices of one body: a box's 8, a cylinder's 2 segments + 2,
+// a mesh's own.
+std::size_t body_surface_vertices(const Body& body);
 
 // The surface of a body (its mesh, or its shape's), in the file's frame.
 void body_surface(const Body& body, std::vector<Eigen::Vector3d>& vertices,

@@ -198,12 +198,15 @@ void add_random_body_pair(Scene& scene, std::mt19937& rng, RandomStates states) 
   two.position = vertex - b.A0 * Y;
 }
 
+void body_body_contact_memory(const Scene& scene, MemoryEstimate& out);  // body_pair_memory.cc
+
 const ElementKind& body_body_contact_kind() {
   static const ElementKind kind = {
       .name = "body-body-contact",
       .refers_to_particles = true,
       .make = make_body_body_contact,
       .energy = {.name = "contact", .counts_with_spring = true, .present = has_body_contacts},
+      .memory = body_body_contact_memory,  // body_pair_memory.cc
       .add_random = add_random_body_pair,
   };
   return kind;

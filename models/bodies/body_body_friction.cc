@@ -229,11 +229,14 @@ void add_random_body_friction_pair(Scene& scene, std::mt19937& rng, RandomStates
 
 }  // namespace
 
+void body_body_friction_memory(const Scene& scene, MemoryEstimate& out);  // body_pair_memory.cc
+
 const ElementKind& body_body_friction_kind() {
   static const ElementKind kind = {
       .name = "body-body-friction",
       .refers_to_particles = true,
       .make = make_body_body_friction,
+      .memory = body_body_friction_memory,  // body_pair_memory.cc
       .add_random = add_random_body_friction_pair,
   };
   return kind;

@@ -29,6 +29,7 @@
 
 #include "models/core/energies.h"
 #include "models/core/force_term.h"
+#include "models/core/memory_estimate.h"
 #include "models/core/scene.h"
 #include "models/core/scene_io.h"
 #include "models/core/verdict.h"
@@ -111,6 +112,11 @@ struct ElementKind {
   // That rule in one sentence, "<matter>: <when it has diverged>", for
   // `springlab list` and the docs (beside the rule's code and bounds).
   std::string_view divergence_sentence = {};
+
+  // Adds the kind's parts of the model's memory (memory_estimate.h), from
+  // the scene alone: the bytes its term will hold and the Jacobian blocks it
+  // will declare, named in the scene's words. nullptr: nothing that counts.
+  void (*memory)(const Scene& scene, MemoryEstimate& out) = nullptr;
 
   // Appends the cells of the kind's elements, in file order. nullptr: the
   // kind joins no particles (gravity) or draws none of its own (spring

@@ -3,7 +3,9 @@
 namespace springlab {
 
 void FluidPattern::follow(const std::vector<std::shared_ptr<SphParticles>>& fluids,
-                          const double* x_all) {
+                          const double* x_all) const {
+  found_ = true;
+  pending_ = {};
   pairs_.assign(fluids.size(), NeighbourGrid());
   found_at_.assign(fluids.size(), {});
   for (std::size_t f = 0; f < fluids.size(); ++f) {
@@ -21,6 +23,7 @@ void FluidPattern::follow(const std::vector<std::shared_ptr<SphParticles>>& flui
 
 bool FluidPattern::holds(const std::vector<std::shared_ptr<SphParticles>>& fluids,
                          const double* x_all) const {
+  if (!found_) return false;
   for (std::size_t f = 0; f < fluids.size(); ++f) {
     const SphParticles& fluid = *fluids[f];
     const double limit = 0.5 * kSkin * fluid.kernel().support();
@@ -39,6 +42,10 @@ bool FluidPattern::holds(const std::vector<std::shared_ptr<SphParticles>>& fluid
 
 void FluidPattern::declare(const std::vector<std::shared_ptr<SphParticles>>& fluids,
                            JacobianPatternBuilder& builder, int free_particles) const {
+  if (!found_) {
+    const std::vector<double> x_all = std::move(pending_);
+    follow(fluids, x_all.data());
+  }
   for (std::size_t f = 0; f < fluids.size(); ++f) {
     const SphParticles& fluid = *fluids[f];
     for (const auto& [a, b] : pairs_[f].pairs()) {

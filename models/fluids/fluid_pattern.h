@@ -27,23 +27,33 @@ class FluidPattern {
   // The skin s, in kernel supports.
   static constexpr double kSkin = 0.25;
 
-  FluidPattern(double reach, int dim) : reach_(reach), dim_(dim) {}
+  // The pairs are found around x_all (every particle, the model's internal
+  // order) when first declared: a method that never assembles a Jacobian
+  // (the model builds its pattern only when asked) does not pay for them
+  // (issue 46.6: a 2-D fluid's pressure pairs, within 2.25 supports, are
+  // about 100 a particle, most of the 23 KB a particle an explicit run of
+  // the tank took).
+  FluidPattern(double reach, int dim, std::vector<double> x_all)
+      : reach_(reach), dim_(dim), pending_(std::move(x_all)) {}
 
   // Finds the declared pairs of each fluid around positions x_all (every
   // particle, the model's internal order).
-  void follow(const std::vector<std::shared_ptr<SphParticles>>& fluids, const double* x_all);
+  void follow(const std::vector<std::shared_ptr<SphParticles>>& fluids, const double* x_all) const;
   // True while no particle has moved more than s/2 supports from where the
-  // pairs were found.
+  // pairs were found (false before they are).
   bool holds(const std::vector<std::shared_ptr<SphParticles>>& fluids, const double* x_all) const;
-  // The pairs' blocks (free particles only).
+  // The pairs' blocks (free particles only), found first where not yet.
   void declare(const std::vector<std::shared_ptr<SphParticles>>& fluids,
                JacobianPatternBuilder& builder, int free_particles) const;
 
  private:
   double reach_;
   int dim_;
-  std::vector<NeighbourGrid> pairs_;            // per fluid
-  std::vector<std::vector<double>> found_at_;  // per fluid, local order
+  // Found on first use (a cache of the positions they were found at).
+  mutable bool found_ = false;
+  mutable std::vector<double> pending_;                // where to find them first
+  mutable std::vector<NeighbourGrid> pairs_;            // per fluid
+  mutable std::vector<std::vector<double>> found_at_;  // per fluid, local order
 };
 
 // Every particle's initial position in the model's internal order (fixed

@@ -53,10 +53,8 @@ class FluidPressureForce final : public ForceTerm {
       : fluids_(std::move(fluids)),
         dim_(dim),
         free_(free_particles),
-        pattern_(2.0, dim),
-        x_all0_(std::move(x_all)) {
-    pattern_.follow(fluids_, x_all0_.data());
-  }
+        pattern_(2.0, dim, x_all),
+        x_all0_(std::move(x_all)) {}
 
   // xpbd: the density constraints of position-based fluids
   // (fluid_density_projection.cc) instead of the pressure force.

@@ -52,16 +52,13 @@ constexpr double kEta2 = 0.01;         // eta^2 / h^2
 class FluidViscosityForce final : public ForceTerm {
  public:
   FluidViscosityForce(std::vector<std::shared_ptr<SphParticles>> fluids, std::vector<double> nu,
-                      int dim, int free_particles, const double* x_all,
-                      std::size_t x_all_size)
+                      int dim, int free_particles, std::vector<double> x_all)
       : fluids_(std::move(fluids)),
         nu_(std::move(nu)),
         dim_(dim),
         free_(free_particles),
-        pattern_(1.0, dim),
-        x_size_(x_all_size) {
-    pattern_.follow(fluids_, x_all);
-  }
+        pattern_(1.0, dim, x_all),
+        x_size_(x_all.size()) {}
 
   std::string_view name() const override { return "fluid-viscosity"; }
   bool conservative() const override { return false; }
@@ -256,9 +253,9 @@ std::unique_ptr<ForceTerm> make_fluid_viscosity_force(const Scene& scene,
     nu.push_back((*fluids)[k].viscosity);
   }
   if (particles.empty()) return nullptr;
-  const std::vector<double> x = internal_positions(scene, order);
   return std::make_unique<FluidViscosityForce>(std::move(particles), std::move(nu), order.dim,
-                                               order.free_particles, x.data(), x.size());
+                                               order.free_particles,
+                                               internal_positions(scene, order));
 }
 
 const ElementKind& fluid_kind();               // fluid_kind.cc

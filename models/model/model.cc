@@ -96,7 +96,6 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
     }
   }
 
-  build_pattern();
   for (const auto& term : terms_) {
     pattern_varies_ = pattern_varies_ || term->pattern_varies();
     symmetric_ = symmetric_ && term->symmetric_jacobians();
@@ -198,6 +197,7 @@ void Model::build_pattern() const {
   outer[n] = at;
   std::fill(pattern_.valuePtr(), pattern_.valuePtr() + pattern_.nonZeros(), 0.0);
   for (const auto& term : terms_) term->bind_jacobian(pattern_);
+  pattern_built_ = true;
 }
 
 Configuration Model::stored_configuration(double t) const {
@@ -300,6 +300,7 @@ double Model::velocity_potential(double t, const Vector& v) const {
 void Model::assemble_jacobians(ForcePart part, bool definite, double t, const Vector& x,
                                          const Vector& v, SparseMatrix* dfdx,
                                          SparseMatrix* dfdv) const {
+  ensure_pattern();
   const Configuration c = configure(t, x, v);
   if (pattern_varies_) {
     // A term whose couplings moved past its declared blocks declares anew
@@ -407,6 +408,7 @@ void Model::add_own_discrete_gradient_jacobian_difference(double t, const Vector
                                                                  SparseMatrix& out) const {
   // -dF_k/dx(x_m) (exact or definite), then -2 dg_k/dy(x, y), of the terms
   // with their own discrete gradient, on out's pattern (the model's).
+  ensure_pattern();
   const Eigen::Index n = dofs();
   own_values_.setZero(out.nonZeros());
   x_all_.head(n) = x_m;

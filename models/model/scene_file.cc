@@ -8,6 +8,7 @@
 #include "models/model/scene_file.h"
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -228,7 +229,15 @@ Scene load_scene_file(const std::string& path, const std::string& source) {
   char chunk[1 << 16];
   while (in && text.size() <= kMaxSceneFileBytes) {
     in.read(chunk, sizeof chunk);
-    text.append(chunk, static_cast<std::size_t>(in.gcount()));
+    const std::size_t got = static_cast<std::size_t>(in.gcount());
+    text.append(chunk, got);
+    // A NUL byte is refused where it is read (`run /dev/zero`: in the first
+    // chunk, not after the 512 MiB cap).
+    if (std::memchr(chunk, '\0', got) != nullptr) {
+      if (const std::optional<std::string> problem = json_text_problem(text)) {
+        throw SceneError(name + ": " + *problem);
+      }
+    }
   }
   if (in.bad()) throw SceneError(name + ": cannot open file");
   if (text.size() > kMaxSceneFileBytes) {

@@ -330,6 +330,25 @@ class SpringForce final : public ForceTerm {
 
 }  // namespace
 
+// The kind's part of the model's memory (memory_estimate.h): per spring two
+// copies of the scene's Spring (the caller's scene and the model's), the
+// term's sorted copy and its arrays (128 bytes: 126 fitted to the chain and
+// the cloth, docs/reliability.md); once the pattern is built, its four
+// slots and two off-diagonal blocks.
+void spring_memory(const Scene& scene, MemoryEstimate& out) {
+  const std::size_t n = scene.get<Springs>().size();
+  if (n == 0) return;
+  const double springs = static_cast<double>(n);
+  MemoryPart part;
+  part.what = std::to_string(n) + " springs";
+  part.bytes = springs * static_cast<double>(2 * sizeof(Spring) + sizeof(SpringData) +
+                                             sizeof(std::size_t) + 2 * sizeof(int) /* Ends */ +
+                                             2 * sizeof(double));
+  part.pattern_blocks = part.distinct_blocks = 2.0 * springs;
+  part.slot_bytes = springs * static_cast<double>(sizeof(PairSlots));
+  out.parts.push_back(std::move(part));
+}
+
 std::unique_ptr<ForceTerm> make_spring_force(const Scene& scene, const ParticleOrder& order) {
   std::vector<SpringData> springs;
   const Springs& scene_springs = scene.get<Springs>();

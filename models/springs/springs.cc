@@ -16,6 +16,7 @@ namespace springlab {
 
 // Hooke's law, in spring_force.cc.
 std::unique_ptr<ForceTerm> make_spring_force(const Scene&, const ParticleOrder&);
+void spring_memory(const Scene& scene, MemoryEstimate& out);  // spring_force.cc
 
 namespace {
 
@@ -252,6 +253,7 @@ const ElementKind& spring_kind() {
       .write = write_springs,
       .make = make_spring_force,
       .energy = {.name = "spring", .always = true, .counts_with_spring = true},
+      .memory = spring_memory,
       .cells = spring_cells,
       .add_random = add_random_springs,
   };

@@ -114,6 +114,12 @@ class Errors(unittest.TestCase):
                                *base, "ida", "--dt", "0.1", "--t-end", "1", "--max-order", "6")
         self.assert_same_error(lambda: springlab.run(scene, "implicit-euler", dt=0.1, t_end=1, newton_tol="x"),
                                *base, "implicit-euler", "--dt", "0.1", "--t-end", "1", "--newton-tol", "x")
+        # issue 46: NaN was the default in disguise; a value out of range is
+        # printed as given, not rounded into the range.
+        self.assert_same_error(lambda: springlab.run(scene, "newmark", dt=0.1, t_end=1, beta=float("nan")),
+                               *base, "newmark", "--dt", "0.1", "--t-end", "1", "--beta", "nan")
+        self.assert_same_error(lambda: springlab.run(scene, "newmark", dt=0.1, t_end=1, beta=0.5000001),
+                               *base, "newmark", "--dt", "0.1", "--t-end", "1", "--beta", "0.5000001")
 
     def test_a_refused_pairing_raises_instead_of_a_failed_result(self):
         # issue 38.6: xpbd has no form for the block's neo-Hookean material;
@@ -151,7 +157,44 @@ class Errors(unittest.TestCase):
                                "--integrator", "rk4", "--dt", "0.1", "--t-end", "1")
 
 
+class Bodies(unittest.TestCase):
+    def test_a_bodies_only_run_keeps_each_bodys_state(self):
+        # issue 46.10: nothing of the body was in the result; `run --json` has
+        # "bodies" (the last state), which the result now holds digit for
+        # digit, with p and A at every kept time.
+        scene = springlab.load_scene("tumbling-box")
+        run = springlab.run(scene, "rk4", dt=0.01, t_end=0.1)
+        frames = len(run["t"])
+        self.assertEqual(run["body_p"].shape, (frames, 1, 3))
+        self.assertEqual(run["body_A"].shape, (frames, 1, 3, 3))
+        ours = json.loads(json.dumps(run["bodies"]))
+        theirs = json.loads(cli("run", "tumbling-box", "--integrator", "rk4", "--dt", "0.01",
+                                "--t-end", "0.1", "--json").stdout)["bodies"]
+        self.assertEqual(ours, theirs)
+        np.testing.assert_array_equal(run["body_p"][-1, 0], theirs[0]["p"])
+        np.testing.assert_array_equal(run["body_A"][-1, 0], theirs[0]["A"])
+
+    def test_a_bodies_only_run_is_capped_like_any_other(self):
+        # It kept every frame uncapped (MemoryError at dt 1e-6 for 30 s).
+        scene = springlab.load_scene("tumbling-box")
+        with self.assertRaises(springlab.Error) as caught:
+            springlab.run(scene, "symplectic-euler", dt=1e-6, t_end=30)
+        self.assertTrue(str(caught.exception).startswith(
+            "every: the run would keep 30000002 states of 0 particles and 1 body, over the cap of "
+            "10000000 rows"), str(caught.exception))
+
+
 class Experiments(unittest.TestCase):
+    def test_jobs_below_one_are_refused(self):
+        definition = os.path.join(TEST_DATA, "experiments", "energy.json")
+        with tempfile.TemporaryDirectory() as tmp:
+            for jobs in (0, -5):
+                with self.assertRaises(springlab.Error) as caught:
+                    springlab.experiment(definition, tmp, jobs=jobs)
+                self.assertEqual(str(caught.exception), "jobs: must be at least 1 (got %d)" % jobs)
+            self.assertEqual(os.listdir(tmp), [])
+
+
     def test_experiment_writes_the_tables_the_command_line_writes(self):
         definition = os.path.join(TEST_DATA, "experiments", "energy.json")
         with tempfile.TemporaryDirectory() as tmp:
@@ -203,6 +246,42 @@ class Interrupt(unittest.TestCase):
                 process.kill()
                 process.wait()
         self.assertTrue(out.startswith("interrupted"), (out, err))
+        self.assertEqual(process.returncode, 0, err)
+        self.assertLess(waited, 10.0)
+
+
+    def test_ctrl_c_stops_an_experiment_with_keyboard_interrupt(self):
+        # issue 46.9: an experiment ran on to its end (22 s in the probe).
+        # One task of minutes; SIGINT once it is under way ends it within
+        # seconds, its tables written and marked incomplete.
+        script = (
+            "import json, os, sys, time, springlab\n"
+            "out = sys.argv[1]\n"
+            "definition = {'experiment': 'energy', 'name': 'long', 'integrators': ['implicit-euler'],\n"
+            "              'cases': [{'scene': 'cloth', 'parameters': {'n': 24}, 'dt': 0.001,\n"
+            "                         't_end': 30}]}\n"
+            "print('started', flush=True)\n"
+            "try:\n"
+            "    springlab.experiment(definition, out)\n"
+            "    print('completed')\n"
+            "except KeyboardInterrupt:\n"
+            "    with open(os.path.join(out, 'long.json')) as f:\n"
+            "        print('interrupted', json.load(f)['complete'], flush=True)\n")
+        with tempfile.TemporaryDirectory() as tmp:
+            process = subprocess.Popen([sys.executable, "-c", script, tmp], stdout=subprocess.PIPE,
+                                       stderr=subprocess.PIPE, text=True)
+            try:
+                self.assertEqual(process.stdout.readline().strip(), "started")
+                time.sleep(1.5)
+                sent = time.monotonic()
+                process.send_signal(signal.SIGINT)
+                out, err = process.communicate(timeout=60)
+                waited = time.monotonic() - sent
+            finally:
+                if process.poll() is None:
+                    process.kill()
+                    process.wait()
+        self.assertEqual(out.strip(), "interrupted False", (out, err))
         self.assertEqual(process.returncode, 0, err)
         self.assertLess(waited, 10.0)
 

@@ -1,22 +1,23 @@
 # cmake/run_experiment.cmake reruns an experiment exactly when its results
 # are not current: the first run runs, an unchanged second one is reused
 # (its tables untouched), and a change to the scene file the definition
-# names, to the definition, to the springlab executable (a copy with one
-# byte more) or a missing table each make it run again.
+# names (whatever its extension: drop.scene, issue 46), to the definition,
+# to the springlab executable (a copy with one byte more) or a missing table
+# each make it run again.
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
 set(out "${WORK_DIR}/data")
 set(definition "${WORK_DIR}/reuse.json")
 
 function(write_inputs mass integrators)
-  file(WRITE "${WORK_DIR}/drop.json" "{\"name\": \"drop\", \"dimension\": 2, \"gravity\": [0, -9.81],
+  file(WRITE "${WORK_DIR}/drop.scene" "{\"name\": \"drop\", \"dimension\": 2, \"gravity\": [0, -9.81],
   \"contact\": {\"model\": \"penalty\", \"stiffness\": 1e4},
   \"planes\": [{\"point\": [0, 0], \"normal\": [0, 1]}],
   \"particles\": [{\"x\": [0, 0.1], \"mass\": ${mass}}, {\"x\": [0, 0], \"fixed\": true}],
   \"springs\": []}\n")
   file(WRITE "${definition}" "{\"experiment\": \"energy\", \"name\": \"reuse\",
   \"integrators\": [${integrators}],
-  \"cases\": [{\"scene\": \"drop.json\", \"dt\": 0.01, \"t_end\": 0.1}]}\n")
+  \"cases\": [{\"scene\": \"drop.scene\", \"dt\": 0.01, \"t_end\": 0.1}]}\n")
 endfunction()
 
 # Runs the script; `expect` is "ran" or "reused".

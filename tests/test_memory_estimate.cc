@@ -1,0 +1,174 @@
+// Memory known before it is spent (issue 46.5-7): the model builds its
+// Jacobian pattern only for a method that asks for one, the kinds' estimate
+// counts what the model will make, and a scene or a pattern that would not
+// fit is refused with one line naming what weighs most -- checked under
+// `ulimit -v` (RLIMIT_AS set in the child before exec), as a user with a
+// memory limit meets it.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "experiments/driver/memory_check.h"
+#include "experiments/driver/simulation.h"
+#include "models/bodies/bodies.h"
+#include "models/bodies/body_pairs.h"
+#include "models/scenes/builtin_scenes.h"
+#include "models/model/model.h"
+#include "models/model/model_memory.h"
+#include "run_process.h"
+
+namespace springlab {
+namespace {
+
+using namespace springlab::testing;
+
+RunSettings settings(const std::string& integrator) {
+  RunSettings s;
+  s.integrator = integrator;
+  s.dt = 1e-4;
+  s.t_end = 5e-4;
+  return s;
+}
+
+// Symplectic Euler never asks for a Jacobian: the model has built no
+// pattern after its run (box-chain n = 400: 2.9 GB of pattern and 21 s
+// before, 25 MB and 1.2 s now). Implicit Euler's first step builds it.
+TEST(MemoryEstimate, OnlyAMethodThatAsksForAJacobianBuildsThePattern) {
+  for (const char* scene : {"box-chain", "tank"}) {
+    SCOPED_TRACE(scene);
+    const Model model(make_builtin_scene(scene, {}));
+    EXPECT_FALSE(model.pattern_built());
+    ASSERT_EQ(simulate(model, settings("symplectic-euler")).status, RunStatus::kCompleted);
+    EXPECT_FALSE(model.pattern_built());
+    simulate(model, settings("implicit-euler"));
+    EXPECT_TRUE(model.pattern_built());
+  }
+}
+
+// The body-body kinds count the pairs BodyPairs makes (each body against
+// each box, not two fixed ones, not two joined), 64 blocks each, without
+// making them: on the hinged chain (joints) and the pile (a fixed ground).
+TEST(MemoryEstimate, BodyPairsAreCountedAsTheModelMakesThem) {
+  for (const char* name : {"box-chain", "box-pile"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = make_builtin_scene(name, {{"n", "6"}});
+    const BodyPairs pairs(scene, body_layout(scene, 0));
+    ASSERT_GT(pairs.pairs().size(), 0u);
+    const MemoryEstimate e = estimate_model_memory(scene);
+    int terms = 0;
+    for (const MemoryPart& part : e.parts) {
+      if (part.what.find("pairs of bodies") == std::string::npos) continue;
+      ++terms;
+      EXPECT_DOUBLE_EQ(part.pattern_blocks, 64.0 * static_cast<double>(pairs.pairs().size()))
+          << part.what;
+      EXPECT_NE(part.what.find(std::to_string(pairs.pairs().size()) + " pairs of bodies"),
+                std::string::npos)
+          << part.what;
+    }
+    EXPECT_GE(terms, 1);
+  }
+}
+
+// The check's lines: the estimate, its largest part in the scene's words,
+// the limit; and nothing where the limit is ample.
+TEST(MemoryEstimate, RefusalsNameWhatWeighsMost) {
+  const Scene scene = make_builtin_scene("box-chain", {{"n", "100"}});
+  EXPECT_NO_THROW(check_scene_memory(scene, "box-chain", 1e12));
+  try {
+    check_scene_memory(scene, "box-chain", 1e5);
+    FAIL() << "not refused";
+  } catch (const MemoryRefused& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("box-chain: the model would need about ", 0), 0u) << what;
+    EXPECT_NE(what.find("for its 100 bodies ("), std::string::npos) << what;
+    EXPECT_NE(what.find("more than the 100 KB this process may use: make the scene smaller"),
+              std::string::npos)
+        << what;
+  }
+  const Model model(scene);
+  const double explicit_bytes = estimate_model_memory(scene).bytes(false);
+  // Symplectic Euler assembles nothing: no limit above the model refuses it.
+  EXPECT_NO_THROW(check_jacobian_memory(model, "symplectic-euler", "box-chain", 0.0));
+  try {
+    check_jacobian_memory(model, "implicit-euler", "box-chain", 10.0 * explicit_bytes);
+    FAIL() << "not refused";
+  } catch (const MemoryRefused& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("--integrator implicit-euler: box-chain's model and Jacobian pattern "
+                         "would need about ",
+                         0),
+              0u)
+        << what;
+    EXPECT_NE(what.find("pairs of bodies for contact)"), std::string::npos) << what;
+    EXPECT_NE(what.find("or use a method that assembles no Jacobian"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(model.pattern_built());
+}
+
+class MemoryLimitsEstimate : public ::testing::Test {
+ protected:
+  MemoryLimitsEstimate() : temp_("memory-estimate") {
+    fs::create_directories(work());
+    fs::create_directories(io());
+  }
+  fs::path work() const { return temp_.path() / "work"; }
+  fs::path io() const { return temp_.path() / "io"; }
+
+  ProcessResult run_limited(const std::vector<std::string>& args, double bytes) {
+    return run_springlab(args, work(), io(), 120.0, [bytes] {
+      setenv("OPENBLAS_NUM_THREADS", "1", 1);  // docs/reliability.md
+      rlimit limit{};
+      limit.rlim_cur = limit.rlim_max = static_cast<rlim_t>(bytes);
+      setrlimit(RLIMIT_AS, &limit);
+    });
+  }
+
+  // One "springlab: error: " line beginning with `start` and holding each
+  // of `parts`, exit 1, nothing on stdout.
+  void expect_refused(const std::vector<std::string>& args, const ProcessResult& r,
+                      const std::string& start, const std::vector<std::string>& parts) {
+    ASSERT_TRUE(r.exited) << describe(args, r);
+    EXPECT_EQ(r.status, 1) << describe(args, r);
+    EXPECT_EQ(r.out, "");
+    ASSERT_EQ(r.err.find('\n'), r.err.size() - 1) << describe(args, r);
+    EXPECT_EQ(r.err.rfind("springlab: error: " + start, 0), 0u) << r.err;
+    for (const std::string& part : parts) EXPECT_NE(r.err.find(part), std::string::npos) << r.err;
+  }
+
+  TempDir temp_;
+};
+
+// Issue 46.5 scaled down: 300 boxes with implicit Euler would build a
+// pattern of 89102 body pairs (about 1.6 GB); under a 1 GB limit it is
+// refused before the model builds it, naming the bodies and their pairs.
+// The same scene with symplectic Euler runs within the limit.
+TEST_F(MemoryLimitsEstimate, BodyPairsOverTheLimitAreRefusedWhereAJacobianIsAssembled) {
+  std::vector<std::string> args = {"run", "box-chain", "-p", "n=300", "--integrator",
+                                   "implicit-euler", "--dt", "1e-5", "--t-end", "1e-5"};
+  expect_refused(args, run_limited(args, 1e9),
+                 "--integrator implicit-euler: box-chain's model and Jacobian pattern would need "
+                 "about ",
+                 {"of it for its 300 bodies (89102 pairs of bodies for contact)",
+                  "this process may use: make the scene smaller, or use a method that assembles no "
+                  "Jacobian"});
+  args[5] = "symplectic-euler";
+  const ProcessResult r = run_limited(args, 1e9);
+  ASSERT_TRUE(r.exited) << describe(args, r);
+  EXPECT_EQ(r.status, 0) << describe(args, r);
+  EXPECT_NE(r.out.find("status completed"), std::string::npos) << describe(args, r);
+}
+
+// Issue 46.6 scaled down: a tank whose model alone would not fit is refused
+// before the model is built, naming its fluid particles.
+TEST_F(MemoryLimitsEstimate, AFluidOverTheLimitIsRefusedBeforeItsModel) {
+  const std::vector<std::string> args = {"run", "tank", "-p", "spacing=0.0004", "--integrator",
+                                         "symplectic-euler", "--dt", "1e-5", "--t-end", "1e-5"};
+  expect_refused(args, run_limited(args, 6e8), "tank: the model would need about ",
+                 {"fluid particles, more than the ", "this process may use: make the scene smaller"});
+}
+
+}  // namespace
+}  // namespace springlab
