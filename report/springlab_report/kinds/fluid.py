@@ -4,6 +4,7 @@ budget; and the explicit step limit against the speed of sound. Every
 sentence under the figure is computed from the tables."""
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -256,8 +257,9 @@ def render(exp, ctx):
 def _gauge_source(exp):
     g = exp.setting("gauges") or {}
     source = (g.get("reference") or {}).get("source") or ""
-    cut = source.find(": MARIN")
-    return (source[:cut] if cut > 0 else source[:160]) or "no reference"
+    # The citation's start, shortened at a word's end (the data file's own
+    # '#' lines say the rest).
+    return textwrap.shorten(source, width=200, placeholder=" …") or "no reference"
 
 
 def gauge_sentences(summary, exp):
