@@ -17,6 +17,14 @@ namespace springlab {
 
 namespace {
 
+// A damping rate as a student reads it: six significant digits (512, not
+// 512.000000000038, the sum's round-off).
+std::string damping_text(double c) {
+  std::ostringstream out;
+  out << std::setprecision(6) << c;
+  return out.str();
+}
+
 // Refuses, before any run, a step whose trial would have no valid grid.
 void check_grid(const char* option, double dt, double t_end, double run_time) {
   try {
@@ -240,14 +248,14 @@ TheoryLimit theoretical_max_dt(const IntegratorInfo& info, const FastestMode& mo
     const std::optional<double> h = largest_stable_step(info, lambda);
     rule << "|R(h lambda)| <= 1 for the fastest mode, lambda^2 + c lambda + w_max^2 = 0 with "
             "damping c = "
-         << format_number(c) << " 1/s";
+         << damping_text(c) << " 1/s";
     if (!h || *h <= 0.0) return {std::nullopt, "none: " + rule.str()};
     return {*h, rule.str()};
   }
   if (info.stability_limit > 0.0) {
     rule << std::setprecision(4) << info.stability_limit << " / w_max";
     if (c > 0.0) {
-      rule << " (undamped: the fastest mode's damping c = " << format_number(c)
+      rule << " (undamped: the fastest mode's damping c = " << damping_text(c)
            << " 1/s is not taken into account)";
     }
     return {info.stability_limit / w, rule.str()};

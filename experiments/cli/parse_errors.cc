@@ -21,6 +21,12 @@ std::string option_name(const std::string& arg) {
   return arg.substr(0, arg.find('='));
 }
 
+// The option `name` of the chosen command, or else of the program.
+const CLI::Option* find_option(const CLI::App& app, const CLI::App& scope, const std::string& name) {
+  const CLI::Option* option = scope.get_option_no_throw(name);
+  return option != nullptr ? option : app.get_option_no_throw(name);
+}
+
 // Argv read against the parser: the command chosen, and each option given
 // with its values.
 struct ReadArguments {
@@ -43,8 +49,7 @@ ReadArguments read_arguments(const CLI::App& app, int argc, char** argv) {
       continue;
     }
     const CLI::App& scope = read.command != nullptr ? *read.command : app;
-    const CLI::Option* option = scope.get_option_no_throw(name);
-    if (option == nullptr) option = app.get_option_no_throw(name);
+    const CLI::Option* option = find_option(app, scope, name);
     if (option == nullptr) {
       if (read.unknown.empty()) read.unknown = name;
       continue;
@@ -102,8 +107,7 @@ std::string parse_error_line(const CLI::ParseError& e, const CLI::App& app, int 
     // An option that takes one value, given twice.
     std::map<std::string, int> count;
     for (const auto& [name, values] : read.options) {
-      const CLI::Option* option = scope.get_option_no_throw(name);
-      if (option == nullptr) option = app.get_option_no_throw(name);
+      const CLI::Option* option = find_option(app, scope, name);
       if (++count[name] == 2 && option->get_expected_max() <= 1) {
         return option->get_name() + ": given more than once";
       }
@@ -112,8 +116,7 @@ std::string parse_error_line(const CLI::ParseError& e, const CLI::App& app, int 
   if (dynamic_cast<const CLI::ConversionError*>(&e) != nullptr) {
     // The first value that is not a number of its option's type.
     for (const auto& [name, values] : read.options) {
-      const CLI::Option* option = scope.get_option_no_throw(name);
-      if (option == nullptr) option = app.get_option_no_throw(name);
+      const CLI::Option* option = find_option(app, scope, name);
       const std::string type = option->get_type_name();
       const bool integer = type == "INT" || type == "UINT";
       if (!integer && type != "FLOAT") continue;

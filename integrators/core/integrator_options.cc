@@ -1,7 +1,8 @@
 #include "integrators/core/integrator_options.h"
 
+#include "models/core/decimal_text.h"
+
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -12,11 +13,7 @@ using Range = OptionSpec::Range;
 
 // The shortest text that reads back to the value ("1e-06", "0.5"): a
 // refusal prints the value as given (--beta 0.5000001, not 0.5).
-std::string number_text(double value) {
-  char text[32];
-  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
-  return std::string(text, end);
-}
+std::string number_text(double value) { return shortest_decimal(value); }
 
 std::string choices_text(const OptionSpec& spec) {
   std::string text;

@@ -6,16 +6,14 @@
 #include <string>
 
 #include "integrators/core/integrator_entry.h"
+#include "models/core/decimal_text.h"
 
 namespace springlab {
 namespace {
 
 // The shortest decimal that reads back as `value`: a refusal prints the
 // value as given (--beta 0.5000001, not the rounded 0.5).
-std::string given_text(double value) {
-  char text[32];
-  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
-}
+std::string given_text(double value) { return shortest_decimal(value); }
 
 constexpr double kDefaultAlpha = -0.1;
 constexpr double kDefaultRhoInf = 0.5;

@@ -151,6 +151,25 @@ bool has_body_contacts(const Scene& scene) {
   return any_box && body_pseudo_particles(scene) > 0;
 }
 
+// The barrier does not act between bodies yet (issue 46.13): a scene whose
+// bodies could meet is refused in one line instead of letting them pass
+// through each other silently.
+void check_no_barrier_between_bodies(const Scene& scene, const Reporter& r) {
+  const Bodies& bodies = scene.get<Bodies>();
+  if (bodies.size() < 2 || scene.get<Contact>().model != ContactModel::kBarrier) return;
+  const bool any_box = std::any_of(bodies.begin(), bodies.end(),
+                                   [](const Body& b) { return b.shape == Body::Shape::kBox; });
+  if (!any_box || body_pseudo_particles(scene) == 0) return;
+  r.fail("contact.model",
+         "\"barrier\" acts between bodies and planes only, not between the scene's " +
+             std::to_string(bodies.size()) +
+             " bodies (they would pass through each other): use \"penalty\" for bodies that "
+             "touch one another");
+}
+void read_no_barrier_between_bodies(const Json&, const Reporter& r, Scene& scene) {
+  check_no_barrier_between_bodies(scene, r);
+}
+
 std::unique_ptr<ForceTerm> make_body_body_contact(const Scene& scene, const ParticleOrder& order) {
   if (!has_body_contacts(scene)) return nullptr;
   return std::make_unique<BodyBodyContactForce>(scene, body_layout(scene, order.free_particles),
@@ -170,6 +189,9 @@ void add_random_body_pair(Scene& scene, std::mt19937& rng, RandomStates states) 
     if (scene.get<Planes>().empty()) plane_kind().add_random(scene, rng, states);
     return;
   }
+  // Bodies meet only under the penalty model (the barrier is refused
+  // between bodies: check_no_barrier_between_bodies).
+  scene.block<Contact>().model = ContactModel::kPenalty;
   const std::size_t first = scene.get<Bodies>().size();
   add_random_body_with(scene, rng, states, false);
   add_random_body_with(scene, rng, states, false);
@@ -204,6 +226,8 @@ const ElementKind& body_body_contact_kind() {
   static const ElementKind kind = {
       .name = "body-body-contact",
       .refers_to_particles = true,
+      .read = read_no_barrier_between_bodies,
+      .validate = check_no_barrier_between_bodies,
       .make = make_body_body_contact,
       .energy = {.name = "contact", .counts_with_spring = true, .present = has_body_contacts},
       .memory = body_body_contact_memory,  // body_pair_memory.cc

@@ -106,6 +106,13 @@ void check_range(const std::string& label, const ParameterSpec& spec, double val
   }
 }
 
+// "a, b, c".
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : ", ") + n;
+  return text;
+}
+
 // A choice parameter's value: one of its names, or the index of one.
 double read_choice(const std::string& label, const ParameterSpec& spec, const std::string& text) {
   const std::vector<std::string>& choices = spec.parameter.choices;
@@ -115,18 +122,13 @@ double read_choice(const std::string& label, const ParameterSpec& spec, const st
   if (index && *index == std::floor(*index) && *index >= spec.min && *index <= spec.max) {
     return *index;
   }
-  std::string names;
-  for (const std::string& c : choices) names += (names.empty() ? "" : ", ") + c;
-  throw SceneError(label + ": parameter '" + spec.parameter.name + "' must be one of " + names +
+  throw SceneError(label + ": parameter '" + spec.parameter.name + "' must be one of " +
+                   joined(choices) +
                    " or its number 0 to " + std::to_string(choices.size() - 1) + " (got '" +
                    text + "')" + did_you_mean(text, choices));
 }
 
-std::string names_of(const std::vector<ParameterSpec>& specs) {
-  std::string names;
-  for (const ParameterSpec& s : specs) names += (names.empty() ? "" : ", ") + s.parameter.name;
-  return names;
-}
+
 
 }  // namespace
 
@@ -161,7 +163,7 @@ Scene make_builtin_scene(const std::string& name,
       std::vector<std::string> names;
       for (const ParameterSpec& s : entry->specs) names.push_back(s.parameter.name);
       throw SceneError(label + ": unknown parameter '" + key + "'" + did_you_mean(key, names) +
-                       " (parameters: " + names_of(entry->specs) + ")");
+                       " (parameters: " + joined(names) + ")");
     }
     if (spec->range == Range::kChoice) {
       values[key] = read_choice(label, *spec, text);

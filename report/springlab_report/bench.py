@@ -1,6 +1,6 @@
 """Step cost: springlab_bench's Google Benchmark JSON (optional). Read from
 --bench FILE.json, or else from benchmarks.json in the data directory (where
-`cmake --build --preset bench` writes it). Families, by name (the size n is
+`cmake --workflow --preset bench` writes it). Families, by name (the size n is
 the scene's own parameter; counters carry the real size: particles, unknowns,
 springs):
   BM_Step/<integrator>/<scene>/<n>        one step (adaptive: 1/60 s)

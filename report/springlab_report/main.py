@@ -134,7 +134,7 @@ def main(argv=None):
                        attempt(errors, "benchmarks", bench_section.render, bench, ctx)))
     else:
         notes.append("Step cost: no benchmark file (%s in the data directory, or --bench "
-                     "FILE.json): skipped. `cmake --build --preset bench` makes one."
+                     "FILE.json): skipped. `cmake --workflow --preset bench` makes one."
                      % bench_section.BENCH_FILE)
     intro = ("<p>Experiment results from <code>%s/</code>, drawn by <code>report/"
              "make_report.py</code>. Each section says what theory predicts, shows the figure, "

@@ -28,7 +28,7 @@ from springlab_report.integrators import Integrators  # noqa: E402
 from springlab_report.kinds import KINDS  # noqa: E402
 from springlab_report.kinds.convergence import _coinciding  # noqa: E402
 from springlab_report.kinds.energy import classify  # noqa: E402
-from springlab_report.kinds import motion, spectral  # noqa: E402
+from springlab_report.kinds import motion, spectral, stability  # noqa: E402
 from springlab_report.page import marker_text  # noqa: E402
 
 INTEGRATORS = {"integrators": [
@@ -1121,6 +1121,77 @@ class Reading(unittest.TestCase):
         self.s.write("a.csv", "task,x\n0,1\n")
         with self.assertRaisesRegex(DataError, r"missing column 'status'"):
             read_table(self.s.dir / "a.csv").require("status")
+
+
+class StabilityGroups(unittest.TestCase):
+    """Methods whose measured limits agree within SAME_LIMIT at every point
+    share one marker; the never-diverging ones are listed once."""
+
+    def setUp(self):
+        self.s = Scratch()
+        self.s.json("integrators.json", INTEGRATORS)
+        self.integrators = Integrators.load(self.s.dir / "integrators.json")
+
+    def tearDown(self):
+        self.s.close()
+
+    def table(self, explicit_factor):
+        cols = "scene,integrator,k,w_max,t_end,max_stable_dt,bracket_lo,bracket_hi,theory_dt,ratio"
+        rows = [cols]
+        for scene in ("oscillator", "chain"):
+            for k in (1.0, 100.0):
+                w = math.sqrt(k)
+                m = 2 / w
+                rows.append("%s,symplectic-euler,%r,%r,1,%r,%r,%r,%r,1" % (scene, k, w, m, m,
+                                                                           m * 1.001, m))
+                e = m * explicit_factor
+                rows.append("%s,explicit-euler,%r,%r,1,%r,%r,%r,,"
+                            % (scene, k, w, e, e, e * 1.001))
+                rows.append("%s,implicit-euler,%r,%r,1,10,10,10,," % (scene, k, w))
+        self.s.write("stability.csv", "\n".join(rows) + "\n")
+        return stability.limits_table(FakeExp(read_table(self.s.dir / "stability.csv")))
+
+    def test_groups_follow_the_numbers(self):
+        for factor, expected in ((1.01, [["explicit-euler", "symplectic-euler"]]),
+                                 (1.05, [["explicit-euler"], ["symplectic-euler"]])):
+            st = self.table(factor)
+            nolimit = stability.no_limit_rows(st, 10.0)
+            self.assertEqual(stability.limit_series(st, nolimit, self.integrators), expected)
+            self.assertEqual(int(nolimit.sum()), 4)  # implicit-euler, 2 scenes x 2 k
+
+    def test_free_methods_named_once_or_per_panel(self):
+        same = stability.free_text({"oscillator": ["implicit-euler"],
+                                    "chain": ["implicit-euler"], "cloth": []}, 10.0)
+        self.assertEqual(same.replace("\n", " "), "No divergence up to dt_max = 10 s on "
+                                                   "oscillator and chain: implicit-euler.")
+        apart = stability.free_text({"oscillator": ["implicit-euler", "bdf2"],
+                                     "chain": ["implicit-euler"]}, None)
+        self.assertIn("Also on oscillator: bdf2.", apart)
+        self.assertEqual(stability.free_text({"a": [], "b": []}, 1.0), "")
+
+
+class FakeExp:
+    def __init__(self, table):
+        self._table = table
+
+    def table(self, suffix=""):
+        return self._table
+
+
+class RigidStrainWindows(unittest.TestCase):
+    """The strain panel draws each window's maximum: a ramp's maximum is its
+    value at the window's right end, and an empty window is left out."""
+
+    def test_window_max_of_a_ramp(self):
+        from springlab_report.kinds.rigid import window_max
+        t = np.linspace(0.0, 4.0, 401)
+        centres, top = window_max(t, 2 * t, 4)
+        np.testing.assert_allclose(centres, [0.5, 1.5, 2.5, 3.5])
+        # windows [0,1), [1,2), [2,3), [3,4]: the last sample before each edge
+        np.testing.assert_allclose(top, [1.98, 3.98, 5.98, 8.0])
+        gap = np.array([0.0, 0.1, 3.9, 4.0])
+        centres, top = window_max(gap, gap, 4)
+        np.testing.assert_allclose(centres, [0.5, 3.5])
 
 
 class Styles(unittest.TestCase):
