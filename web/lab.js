@@ -528,7 +528,7 @@
     $("reset").onclick = () => makePanels();
     $("panel-count").onchange = (ev) => {
       const n = Number(ev.target.value);
-      const more = ["xpbd", "projective-dynamics", "rk4", "verlet"];
+      const more = ["xpbd", "projective-dynamics", "vbd", "rk4", "verlet"];
       while (lab.integrators.length < n) lab.integrators.push(more[lab.integrators.length % more.length]);
       lab.integrators.length = n;
       makePanels();

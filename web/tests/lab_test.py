@@ -231,6 +231,7 @@ EQUALITY_CASES = [
     ("beam", {"nx": 8, "ny": 2}, "implicit-euler", 0.005, 0.1, {"newton_tol": 1e-12}),
     ("cloth", {"n": 8}, "xpbd", 0.01, 0.5, {}),
     ("chain", {"n": 10, "horizontal": 1}, "xpbd", 0.005, 1.0, {}),
+    ("cloth", {"n": 8}, "vbd", 0.01, 0.5, {}),
     # Rigid bodies (affine bodies): three boxes hinged by springs between
     # body points swinging down from horizontal, and a box tumbling about
     # its middle axis (their p and A compared too).
