@@ -109,8 +109,9 @@ INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin, ::testing::ValuesIn(builtin_scen
 TEST(BuiltinScenesTest, AreTheSpecsSortedByName) {
   EXPECT_EQ(names_of(builtin_scenes()),
             (std::vector<std::string>{"beam", "block", "box-chain", "box-on-slope", "box-pile",
-                                      "chain", "cloth", "dam-break", "membrane", "oscillator",
-                                      "slope", "sloshing", "spring", "tank", "tumbling-box"}));
+                                      "chain", "cloth", "dam-break", "dam-break-obstacle",
+                                      "membrane", "oscillator", "slope", "sloshing", "spring",
+                                      "tank", "tumbling-box"}));
   EXPECT_FALSE(is_builtin_scene("xyz"));
   EXPECT_FALSE(is_builtin_scene("Chain"));
 }
@@ -141,8 +142,8 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
 TEST(BuiltinScenesTest, ExactMessages) {
   EXPECT_EQ(build_error("xyz", {}),
             "unknown built-in scene 'xyz' (built-in scenes: beam, block, box-chain, box-on-slope, "
-            "box-pile, chain, cloth, dam-break, membrane, oscillator, slope, sloshing, spring, tank, "
-            "tumbling-box)");
+            "box-pile, chain, cloth, dam-break, dam-break-obstacle, membrane, oscillator, slope, "
+            "sloshing, spring, tank, tumbling-box)");
   EXPECT_EQ(build_error("chain", {{"foo", "1"}}),
             "scene 'chain': unknown parameter 'foo' (parameters: n, k, mass, length, drag, g, "
             "horizontal, stretch)");

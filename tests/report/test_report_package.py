@@ -709,18 +709,24 @@ class FluidKind(unittest.TestCase):
         facts = [html.unescape(f) for f in re.findall(r"<li>([^<]*)</li>", page)]
         self.assertIn("Refused at the start: projective-dynamics: fluid forces have no projective "
                       "form.", facts)
-        self.assertIn("Stopped: explicit-euler at dt = 5e-05 s diverged at t = 0.0125 s "
+        self.assertIn("Stopped: explicit-euler at 0.05 ms diverged at t = 0.0125 s "
                       "(T = 0.175).", facts)
         self.assertIn("At T = 2 Martin and Moyce measured Z = 2.35; the runs give "
-                      "symplectic-euler 2.47 (5 %), implicit-euler 2.12 (-10 %).", facts)
-        self.assertIn("The fastest front of any completed run is symplectic-euler's 1.5 m/s, "
-                      "below Ritter's bound 2√(2ga) = 2.8 m/s.", facts)
-        self.assertIn("Cost per simulated second: cheapest symplectic-euler at dt = 0.0002 s "
-                      "(8 s), dearest implicit-euler at dt = 0.001 s (16 s), 2 times as much.",
-                      facts)
+                      "symplectic-euler at 0.2 ms 2.47 (5 %), implicit-euler at 1 ms 2.12 "
+                      "(-10 %).", facts)
+        self.assertIn("Within 15 % of the measured front at T = 2: symplectic-euler at 0.2 ms "
+                      "and implicit-euler at 1 ms.", facts)
+        self.assertIn("The fastest front of any completed run, 1.5 m/s (symplectic-euler at "
+                      "0.2 ms), is below Ritter's bound 2√(2ga) = 2.8 m/s.", facts)
+        self.assertIn("Cost per simulated second: cheapest symplectic-euler at 0.2 ms (8 s), "
+                      "dearest implicit-euler at 1 ms (16 s), 2 times as much.", facts)
+        self.assertIn("Largest compression ρ/ρ₀ − 1 in any sampled state: 1.2 % "
+                      "(symplectic-euler at 0.2 ms); the weakly compressible model aims at "
+                      "about 1 %.", facts)
         self.assertIn("Energy at the end, in units of M g a (viscous work, then the integrator's "
-                      "own change E − E₀ + W_visc): implicit-euler 0.3 viscous, -0.1 numerical; "
-                      "symplectic-euler 0.2 viscous, -0.01 numerical.", facts)
+                      "own change E − E₀ + W_visc): implicit-euler at 1 ms 0.3 viscous, -0.1 "
+                      "numerical; symplectic-euler at 0.2 ms 0.2 viscous, -0.01 numerical.",
+                      facts)
         self.assertIn("Largest stable step as the speed of sound grows: symplectic-euler from "
                       "0.0018 s at c = 7 m/s to 0.0009 s at c = 14 m/s, 0.9 to 0.9 times the "
                       "acoustic mode's (ωh)*/ω_max, C = dt (c + |v|max)/h from 0.519 to "
