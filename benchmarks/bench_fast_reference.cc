@@ -98,6 +98,9 @@
 #ifndef NEWTON_REFERENCE_EXE
 #error "NEWTON_REFERENCE_EXE must name the newton_reference executable"
 #endif
+#ifndef VBD_REFERENCE_EXE
+#error "VBD_REFERENCE_EXE must name the vbd_reference executable"
+#endif
 
 namespace springlab::bench {
 namespace {
@@ -364,12 +367,31 @@ const Pair kQuasiNewton = {
     .iterations_tolerance = kQuasiNewtonIterationsTolerance,
 };
 
+// Vertex block descent: the largest distance allowed between springlab's
+// and the reference's final positions after kVbdComparedTEnd (10 steps of
+// 10 iterations; see the header).
+constexpr double kVbdTolerance = 1e-8;                // [m]
+double vbd_compared_t_end(int) { return 10.0 / 60.0; }
+
+const Pair kVbd = {
+    .tag = "vbd",
+    .springlab = {SPRINGLAB_EXE, "run", "SCENE", "--integrator", "vbd", "--iterations", "10",
+                  "--chebyshev", "0.9", "--dt", kDt, "--t-end", "2", "--json"},
+    .reference = {VBD_REFERENCE_EXE, "SCENE", "--dt", kDt, "--t-end", "2", "--iterations", "10",
+                  "--rho", "0.9"},
+    .label = "10 iterations, Chebyshev rho 0.9",
+    .compare_positions = true,
+    .tolerance = kVbdTolerance,
+    .compared_t_end = vbd_compared_t_end,
+};
+
 }  // namespace
 
 void register_fast_reference_benchmarks() {
   for (const auto& [family, pair] : {std::pair{"BM_XpbdVsReference", &kXpbd},
                                       std::pair{"BM_PdVsReference", &kPd},
-                                      std::pair{"BM_QuasiNewtonVsReference", &kQuasiNewton}}) {
+                                      std::pair{"BM_QuasiNewtonVsReference", &kQuasiNewton},
+                                      std::pair{"BM_VbdVsReference", &kVbd}}) {
     for (int n : {32, 64, 128}) {
       benchmark::RegisterBenchmark((std::string(family) + "/cloth/" + std::to_string(n)).c_str(),
                                    [n, pair](benchmark::State& s) { versus_reference(s, *pair, n); })

@@ -1420,8 +1420,8 @@ TEST(ExperimentKinds, RotationShowsLinearElasticityGhostForces) {
 
 // solver-error: every run steps from the tight implicit Euler run's states.
 // On a linear spring of rest length 0 (the oscillator) one projective-
-// dynamics iteration and one xpbd substep are that step exactly (solver
-// error at round-off), and so is Newton; on the cloth more local/global
+// dynamics iteration, one xpbd substep and one vbd iteration are that step
+// exactly (solver error at round-off), and so is Newton; on the cloth more local/global
 // iterations bring projective dynamics closer to the step, Newton at
 // 1e-10 m/s is within 1e-9 of it, and 20 xpbd substeps land closer to the
 // true motion than the exact implicit Euler step does.
@@ -1439,27 +1439,28 @@ TEST(ExperimentKinds, SolverErrorComparesEachStepWithTheSameStepSolvedTightly) {
                      {{"integrator", "projective-dynamics"}, {"iterations", 1}},
                      {{"integrator", "projective-dynamics"}, {"iterations", 30}},
                      {{"integrator", "xpbd"}, {"substeps", 1}, {"iterations", 1}},
-                     {{"integrator", "xpbd"}, {"substeps", 20}, {"iterations", 1}}};
+                     {{"integrator", "xpbd"}, {"substeps", 20}, {"iterations", 1}},
+                     {{"integrator", "vbd"}, {"iterations", 1}}};
   const LoadedExperiment loaded = parse(
       {{"experiment", "solver-error"},
        {"cases", {{{"scene", "oscillator"}}, {{"scene", "cloth"}, {"parameters", {{"n", 6}}}}}},
        {"dt", 1.0 / 60.0}, {"steps", 12}, {"every", 4}, {"runs", runs}});
-  ASSERT_EQ(loaded.experiment->task_count(), 10u);
-  for (std::size_t task : {0u, 1u, 3u}) {  // the oscillator
+  ASSERT_EQ(loaded.experiment->task_count(), 12u);
+  for (std::size_t task : {0u, 1u, 3u, 5u}) {  // the oscillator
     const auto rows = run_task(loaded, task)[0];
     ASSERT_EQ(rows.size(), 3u);  // steps 0, 4, 8
     EXPECT_LT(medians(rows, "solver_error"), 1e-12) << task;
   }
-  const auto newton_task = run_task(loaded, 5);
+  const auto newton_task = run_task(loaded, 6);
   const double newton = medians(newton_task[0], "solver_error");
   // The whole run from rest: implicit Euler loses energy, and its springs
   // stretch (the cloth hangs).
   ASSERT_EQ(newton_task[1].size(), 1u);
   EXPECT_GT(number(newton_task[1][0].at("energy_lost")), 0.0);
   EXPECT_GT(number(newton_task[1][0].at("max_strain")), 0.0);
-  const double pd1 = medians(run_task(loaded, 6)[0], "solver_error");
-  const double pd30 = medians(run_task(loaded, 7)[0], "solver_error");
-  const auto xpbd20 = run_task(loaded, 9)[0];
+  const double pd1 = medians(run_task(loaded, 7)[0], "solver_error");
+  const double pd30 = medians(run_task(loaded, 8)[0], "solver_error");
+  const auto xpbd20 = run_task(loaded, 10)[0];
   EXPECT_LT(newton, 1e-9);
   EXPECT_LT(pd30, pd1);
   EXPECT_LT(medians(xpbd20, "total_error"), medians(xpbd20, "discretization_error"));

@@ -174,12 +174,37 @@ struct CommonOptions {
               return cmd.add_option(name, text, spec.help);
             } else if constexpr (std::is_same_v<Field, bool IntegratorOptions::*>) {
               return cmd.add_flag(name, run.options.*field, spec.help);
+            } else if constexpr (std::is_same_v<Field, double IntegratorOptions::*>) {
+              if (std::isnan(spec.bare_value)) return cmd.add_option(name, run.options.*field, spec.help);
+              // A value may follow (--chebyshev 0.9) or not (--chebyshev):
+              // then the option's bare value.
+              double* value = &(run.options.*field);
+              const double bare = spec.bare_value;
+              return cmd.add_option(
+                         name,
+                         [value, bare](const CLI::results_t& results) {
+                           if (results.empty() || results[0].empty()) {
+                             *value = bare;
+                             return true;
+                           }
+                           return CLI::detail::lexical_cast(results[0], *value);
+                         },
+                         spec.help)
+                  ->expected(0, 1);
             } else {
               return cmd.add_option(name, run.options.*field, spec.help);
             }
           },
           spec.field);
-      if (*spec.default_text != '\0') option->default_str(spec.default_text);
+      // (An option with a bare value would take its default text as the
+      // value: its default is in its text instead.)
+      if (*spec.default_text != '\0') {
+        if (std::isnan(spec.bare_value)) {
+          option->default_str(spec.default_text);
+        } else {
+          option->option_text(std::string("[VALUE]=") + spec.default_text);
+        }
+      }
     }
     cmd.add_option("--blowup", run.blowup,
                    "divergence when kinetic + spring energy exceeds this times E_s");

@@ -329,7 +329,42 @@ def case_facts(data):
                 "E_s (more than %s E_s): springs, gravity and contact make no energy, so this "
                 "motion is the method's, not the scene's" % (fmt(p["gain"], 3),
                                                                fmt(GAIN_FLAG_ES))))
+    contrast = damping_contrast(data["panels"])
+    if contrast:
+        facts.append(contrast)
     return facts
+
+
+# A completed run keeps the energy when its change stays within KEEP_ES of
+# E_s, and damps it when it loses more than LOSE_ES of E_s.
+KEEP_ES = 0.01
+LOSE_ES = 0.1
+
+
+def damping_contrast(panels):
+    """A sentence when, at one step, some completed runs keep the energy and
+    others lose a good part of it: their panels then differ at one moment
+    (one body still bouncing or swinging, another at rest) for a numerical
+    reason, which the reader should be told. None otherwise."""
+    keep, lose = [], []
+    for p in panels:
+        e = [v for v, past in zip(p["energy"], p["past"]) if v is not None and not past]
+        if p["status"] != "completed" or len(e) < 2 or not p["Es"]:
+            continue
+        change = (e[-1] - e[0]) / p["Es"]
+        if abs(change) <= KEEP_ES:
+            keep.append(p["name"])
+        elif change < -LOSE_ES:
+            lose.append((p["name"], -change))
+    if not keep or not lose:
+        return None
+    lo, hi = min(c for _, c in lose), max(c for _, c in lose)
+    amount = fmt(lo, 2) if fmt(lo, 2) == fmt(hi, 2) else "%s to %s" % (fmt(lo, 2), fmt(hi, 2))
+    return ("At this step %s %s the energy within %s E_s while %s %s %s E_s: where their panels "
+            "differ at one moment (one still moving, another at rest), that is the methods' "
+            "numerical damping, not the scene" % (
+                ", ".join(keep), "keeps" if len(keep) == 1 else "keep", fmt(KEEP_ES),
+                ", ".join(n for n, _ in lose), "loses" if len(lose) == 1 else "lose", amount))
 
 
 def player_html(data):

@@ -5,6 +5,8 @@ motion over the step (total error), against its cost per step, next to
 implicit Euler's own discretization error. The sentences are computed from
 the rows."""
 
+import math
+
 import numpy as np
 
 from ..data import Columns
@@ -192,6 +194,75 @@ def label_order(points):
     return front + ends
 
 
+def cheapest_ranges(done):
+    """Which method is cheapest at which solver error (the lower envelope of
+    the left panel), computed from the medians: the variants none is both
+    cheaper and closer than (the front), cost ascending and so error
+    descending; the k-th is the cheapest way to reach any error from its own
+    up to the (k-1)-th's. Consecutive variants of one method (family) make
+    one range: [{"family", "name", "hi" (None: above every error), "lo",
+    "entries"}], from the largest errors to the smallest."""
+    front, best = [], float("inf")
+    for e in sorted(done, key=lambda e: (e["wall_seconds"], e["solver_error"])):
+        if e["solver_error"] < best:
+            front.append(e)
+            best = e["solver_error"]
+    ranges = []
+    for k, e in enumerate(front):
+        hi = front[k - 1]["solver_error"] if k else None
+        if ranges and ranges[-1]["family"] == family(e):
+            ranges[-1]["lo"] = e["solver_error"]
+            ranges[-1]["entries"].append(e)
+        else:
+            ranges.append({"family": family(e), "name": e["name"], "hi": hi,
+                           "lo": e["solver_error"], "entries": [e]})
+    return ranges
+
+
+def cheapest_sentence(ranges):
+    parts = []
+    for r in ranges:
+        first, last = r["entries"][0], r["entries"][-1]
+        where = ("%s m and above" % fmt(r["lo"], 2) if r["hi"] is None
+                 else "%s to %s m" % (fmt(r["hi"], 2), fmt(r["lo"], 2)))
+        how = "%s, %s ms" % (first["variant"] or "defaults", fmt(first["wall_seconds"] * 1e3, 2))
+        if last is not first:
+            how += " to %s, %s ms" % (last["variant"] or "defaults",
+                                      fmt(last["wall_seconds"] * 1e3, 2))
+        parts.append("%s: %s (%s)" % (where, r["family"], how))
+    return ("Cheapest for each solver error (the lower envelope of the left panel: its grey "
+            "staircase and the bands at its right edge, in the cheapest method's colour): %s; no "
+            "run comes closer than %s m." % ("; ".join(parts), fmt(ranges[-1]["lo"], 2)))
+
+
+# A band at least this many decades tall is labelled with its method.
+BAND_LABEL_DECADES = 0.3
+
+
+def draw_cheapest(ax, ranges, integ, disc):
+    """The lower envelope as a grey staircase (cost against error) and, at the
+    axes' right edge, a band per range in its method's colour, labelled where
+    it is tall enough (and clear of the discretization error's line)."""
+    from matplotlib.transforms import blended_transform_factory
+    entries = [e for r in ranges for e in r["entries"]]
+    xs = [e["wall_seconds"] * 1e3 for e in entries]
+    ys = [max(e["solver_error"], FLOOR) for e in entries]
+    ax.step(xs, ys, where="post", color="0.55", lw=2.4, alpha=0.35, zorder=0)
+    top = ax.get_ylim()[1]
+    edge = blended_transform_factory(ax.transAxes, ax.transData)
+    for r in ranges:
+        hi = top if r["hi"] is None else r["hi"]
+        lo = max(r["lo"], FLOOR)
+        colour = integ.style(r["name"])["color"]
+        ax.axhspan(lo, hi, xmin=0.975, xmax=1.0, color=colour, alpha=0.85, lw=0)
+        middle = math.sqrt(lo * hi)
+        if (math.log10(hi / lo) >= BAND_LABEL_DECADES and
+                abs(math.log10(middle / disc)) > 0.15):
+            ax.text(0.965, middle, r["family"], transform=edge, ha="right", va="center",
+                    fontsize=8, color=colour, fontweight="bold",
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+
+
 def case_figure(exp, ctx, db, rows, case, integ):
     disc = float(np.median([db["discretization_error"][r] for r in rows
                             if np.isfinite(db["discretization_error"][r])]))
@@ -205,6 +276,10 @@ def case_figure(exp, ctx, db, rows, case, integ):
         if e["completed"]:
             families.setdefault(family(e), []).append(e)
     labelled = []
+    # Adaptive methods solve the ODE, not the implicit Euler step: their
+    # distance to that step is its own error, not a solver error.
+    cheapest = cheapest_ranges([e for e in entries if e["completed"] and
+                                not integ.adaptive(e["name"])])
     for ax, col, title in ((axes[0], "solver_error", "distance to the implicit Euler step"),
                            (axes[1], "total_error", "distance to the true motion")):
         points = []
@@ -225,6 +300,8 @@ def case_figure(exp, ctx, db, rows, case, integ):
                 ha="right", fontsize=7.5, color="0.3", transform=ax.get_yaxis_transform())
         ax.set_xscale("log")
         ax.set_yscale("log")
+        if col == "solver_error" and cheapest:
+            draw_cheapest(ax, cheapest, integ, disc)
         ax.set_xlabel("wall time per step [ms] (median)")
         ax.set_ylabel("max position error after one step [m] (median)")
         ax.set_title("%s — %s" % (titled, title), loc="left", fontweight="bold", fontsize=10)
@@ -253,6 +330,8 @@ def case_figure(exp, ctx, db, rows, case, integ):
         return "; ".join("%s %s ms (%s m)" % (label(e), fmt(e["wall_seconds"] * 1e3, 3),
                                               fmt(e[column], 2)) for e in chosen)
 
+    if cheapest:
+        facts.append(cheapest_sentence(cheapest))
     if below:
         facts.append("Solver error below it (as good as solving the step exactly), cheapest "
                      "first: %s." % costs(below, "solver_error"))
