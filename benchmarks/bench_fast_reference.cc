@@ -109,30 +109,6 @@ namespace fs = std::filesystem;
 
 constexpr long kSteps = 120;
 
-// Runs argv with stdout to `out`; the wall time in seconds, < 0 on failure,
-// and in *cpu (when given) the child's user + system CPU time.
-double run_process(std::vector<std::string> args, const fs::path& out, double* cpu = nullptr) {
-  std::vector<char*> argv;
-  for (std::string& s : args) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (std::freopen(out.c_str(), "w", stdout) == nullptr) ::_exit(127);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  struct rusage usage {};
-  if (pid < 0 || ::wait4(pid, &status, 0, &usage) != pid) return -1.0;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (cpu != nullptr) {
-    *cpu = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  }
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? seconds : -1.0;
-}
-
 std::string read_text(const fs::path& path) {
   std::ifstream in(path);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -204,12 +180,6 @@ struct Pair {
   double iterations_tolerance = 0.0;
 };
 
-// The number after "key": in a run's JSON line (either spacing); -1 if absent.
-double json_number(const std::string& text, const std::string& key) {
-  const std::size_t at = text.find("\"" + key + "\":");
-  if (at == std::string::npos) return -1.0;
-  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
-}
 // Quasi-Newton (see the header): the bound on the distance of the final
 // positions after kQuasiNewtonComparedTEnd (10 steps), the shorter t_end
 // of cloth 128, and the bound on the iterations' relative difference.
