@@ -125,7 +125,8 @@ void require_positive(const std::string& option, double value) {
 
 void require_integrator(const std::string& name) {
   if (!is_integrator(name)) {
-    throw UsageError("--integrator: " + integrator_registry().unknown("integrator", printable(name)));
+    throw UsageError("--integrator: " +
+                     integrator_registry().unknown("integrator", printable(name)));
   }
 }
 
