@@ -92,7 +92,7 @@
       if (info.error) {
         p.error = info.error;
         status.innerHTML = '<span class="error"></span>';
-        status.firstChild.textContent = name + ": " + info.error;
+        status.firstChild.textContent = name + ": " + info.error + remedyText(info.remedy);
       } else {
         p.id = info.id;
         p.info = info;
@@ -444,6 +444,15 @@
     }
     $("dt-limits").textContent = "theoretical limits (undamped, linearized at the start): " +
                                  lines.join(";  ");
+  }
+
+  // A refusal's remedy (the scene setting that makes the pairing work), told
+  // as the command line tells it, where this scene has that parameter.
+  function remedyText(remedy) {
+    const scene = catalog.scenes.find((s) => s.name === lab.scene);
+    if (!remedy || !scene || !scene.parameters.some((q) => q.name === remedy.field)) return "";
+    return " (for this scene: " + remedy.field + " = " + remedy.value +
+           (remedy.meaning ? " (" + remedy.meaning + ")" : "") + ")";
   }
 
   function showSceneParams() {

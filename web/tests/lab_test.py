@@ -22,7 +22,8 @@ controls: with the page's own controls (setDt, step), symplectic Euler on a
   taken 0.5 s apart differ; a rigid body scene and a fluid scene draw
   (pixels on the panel's canvas) and their pictures change as they run;
   projective dynamics, which refuses fluids, shows the command line's
-  refusal message in its panel; the explicit-Euler panel says "no stable
+  refusal message in its panel, and xpbd on a neo-Hookean block names the
+  remedy (model = corotated); the explicit-Euler panel says "no stable
   step without damping" once.
 frame-rate: prints frames per second, steps per frame, the time a frame
   spends stepping and drawing (wall clock, in the page) and the CPU time
@@ -433,6 +434,15 @@ def drawn_scenes(browser, args):
     if native.returncode != 1 or not refused or not message.endswith("--integrator " + refused):
         problems.append("projective-dynamics on %s: the page says %r, the command line %r"
                         % (scene, refused, message))
+    # A refusal with a remedy (xpbd and a neo-Hookean block): the panel names
+    # the scene setting that makes the pairing work, as the command line does.
+    browser.evaluate("window.springlab.setScene('block', {model: 'neo-hookean'})")
+    browser.evaluate("window.springlab.setIntegrators(['symplectic-euler', 'xpbd'])")
+    said = browser.evaluate("document.querySelectorAll('.status')[1].textContent")
+    print("xpbd on a neo-Hookean block: the panel says %r" % said)
+    if not said.endswith("(for this scene: model = corotated)"):
+        problems.append("xpbd on a neo-Hookean block: the panel says %r, without the remedy "
+                        "model = corotated" % said)
     return problems
 
 
