@@ -98,6 +98,9 @@
 #ifndef NEWTON_REFERENCE_EXE
 #error "NEWTON_REFERENCE_EXE must name the newton_reference executable"
 #endif
+#ifndef VBD_REFERENCE_EXE
+#error "VBD_REFERENCE_EXE must name the vbd_reference executable"
+#endif
 
 namespace springlab::bench {
 namespace {
@@ -105,30 +108,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr long kSteps = 120;
-
-// Runs argv with stdout to `out`; the wall time in seconds, < 0 on failure,
-// and in *cpu (when given) the child's user + system CPU time.
-double run_process(std::vector<std::string> args, const fs::path& out, double* cpu = nullptr) {
-  std::vector<char*> argv;
-  for (std::string& s : args) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (std::freopen(out.c_str(), "w", stdout) == nullptr) ::_exit(127);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  struct rusage usage {};
-  if (pid < 0 || ::wait4(pid, &status, 0, &usage) != pid) return -1.0;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (cpu != nullptr) {
-    *cpu = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  }
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? seconds : -1.0;
-}
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path);
@@ -201,12 +180,6 @@ struct Pair {
   double iterations_tolerance = 0.0;
 };
 
-// The number after "key": in a run's JSON line (either spacing); -1 if absent.
-double json_number(const std::string& text, const std::string& key) {
-  const std::size_t at = text.find("\"" + key + "\":");
-  if (at == std::string::npos) return -1.0;
-  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
-}
 // Quasi-Newton (see the header): the bound on the distance of the final
 // positions after kQuasiNewtonComparedTEnd (10 steps), the shorter t_end
 // of cloth 128, and the bound on the iterations' relative difference.
@@ -394,12 +367,31 @@ const Pair kQuasiNewton = {
     .iterations_tolerance = kQuasiNewtonIterationsTolerance,
 };
 
+// Vertex block descent: the largest distance allowed between springlab's
+// and the reference's final positions after kVbdComparedTEnd (10 steps of
+// 10 iterations; see the header).
+constexpr double kVbdTolerance = 1e-8;                // [m]
+double vbd_compared_t_end(int) { return 10.0 / 60.0; }
+
+const Pair kVbd = {
+    .tag = "vbd",
+    .springlab = {SPRINGLAB_EXE, "run", "SCENE", "--integrator", "vbd", "--iterations", "10",
+                  "--chebyshev", "0.9", "--dt", kDt, "--t-end", "2", "--json"},
+    .reference = {VBD_REFERENCE_EXE, "SCENE", "--dt", kDt, "--t-end", "2", "--iterations", "10",
+                  "--rho", "0.9"},
+    .label = "10 iterations, Chebyshev rho 0.9",
+    .compare_positions = true,
+    .tolerance = kVbdTolerance,
+    .compared_t_end = vbd_compared_t_end,
+};
+
 }  // namespace
 
 void register_fast_reference_benchmarks() {
   for (const auto& [family, pair] : {std::pair{"BM_XpbdVsReference", &kXpbd},
                                       std::pair{"BM_PdVsReference", &kPd},
-                                      std::pair{"BM_QuasiNewtonVsReference", &kQuasiNewton}}) {
+                                      std::pair{"BM_QuasiNewtonVsReference", &kQuasiNewton},
+                                      std::pair{"BM_VbdVsReference", &kVbd}}) {
     for (int n : {32, 64, 128}) {
       benchmark::RegisterBenchmark((std::string(family) + "/cloth/" + std::to_string(n)).c_str(),
                                    [n, pair](benchmark::State& s) { versus_reference(s, *pair, n); })

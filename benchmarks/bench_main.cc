@@ -12,6 +12,7 @@
 //   BM_LinearSolver/<solver>/<scene>/<n>                        bench_linear_solver.cc
 //   BM_RunPair/<symplectic-euler|rk4>/<scene>/<n>               bench_run.cc
 //   BM_Run/<integrator>/cloth/<n>, BM_NewtonAccuracy/...         bench_newton.cc
+//   BM_NewtonBuckling/implicit-euler/cloth/32-128               bench_newton.cc
 //   BM_ElementForce[Jacobian]/<material>/block/<n>              bench_elements.cc
 //   BM_XpbdVsReference/cloth/<n>                                bench_fast_reference.cc
 //     (long: only with SPRINGLAB_BENCH_LONG=1)

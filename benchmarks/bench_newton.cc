@@ -13,6 +13,20 @@
 // the steps taken), newton_per_step, factorizations_per_step,
 // cg_per_step (linear_iterations), energy_final - energy_initial.
 //
+// BM_NewtonBuckling/implicit-euler/cloth/32-128: issue 51's Newton target
+// in one benchmark, so the exponent comes from one run: the first 0.3 s
+// (18 steps of 1/60 s, the cloth falls and starts to buckle) of cloth 32, 64
+// and 128 in turn with the default options, each as a whole `springlab run
+// cloth -p n=N --integrator implicit-euler --dt 1/60 --t-end 0.3 --json`
+// process (timed: its user + system CPU time), then stepped here untimed to
+// see each step's Newton iterations (the same code and options: the total
+// must equal the process's, or the benchmark fails). Counters per size N:
+// cpu_ms_N (the process's CPU time per step), newton_N (per step),
+// newton_max_N (the most in one step: the buckling steps'), over_12_N
+// (steps of more than 12 iterations), cg_N and factorizations_N (per
+// step); exponent = log(cpu_ms_128 / cpu_ms_32) / log(unknowns_128 /
+// unknowns_32).
+//
 // BM_NewtonAccuracy/<integrator>/cloth/<n>[/tol:T]: the same run (at the
 // default tolerance, or at T) stepped here, with
 // every step's Newton iterations recorded (newton_mean, newton_p95,
@@ -29,13 +43,19 @@
 // ratio_max = max of solver_mm / disc_mm over the samples.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include "benchmarks/bench_support.h"
 #include "experiments/driver/simulation.h"
@@ -162,6 +182,77 @@ void accuracy_benchmark(benchmark::State& state, const std::string& name, int n,
   state.SetLabel("dt=1/60 s, 2 s; samples every " + std::to_string(kSampleEvery) + " steps");
 }
 
+// The Newton iterations of each step of the first `duration` seconds of
+// the cloth, from an integrator stepped here with the default options (the
+// same code and options as `springlab run`'s: the same counts).
+std::vector<long> newton_per_step(const Model& model, double duration) {
+  auto integrator = make_integrator("implicit-euler");
+  integrator->initialize(model, 0.0, model.initial_positions(), model.initial_velocities(),
+                         IntegratorOptions{});
+  std::vector<long> counts;
+  const long steps = std::lround(duration / kFrame);
+  for (long k = 1; k <= steps; ++k) {
+    const long before = integrator->stats().newton_iterations;
+    if (!integrator->advance_to(static_cast<double>(k) * kFrame).ok) break;
+    counts.push_back(integrator->stats().newton_iterations - before);
+  }
+  return counts;
+}
+
+void buckling_benchmark(benchmark::State& state) {
+  constexpr double kBucklingDuration = 0.3;
+  constexpr long kMostPerStep = 12;
+  const std::vector<int> sizes = {32, 64, 128};
+  std::vector<double> cpu_ms(sizes.size()), unknowns(sizes.size());
+  const std::filesystem::path out = std::filesystem::temp_directory_path() /
+                                    ("springlab_bench_buckling_" + std::to_string(::getpid()) +
+                                     ".json");
+  for (auto _ : state) {
+    for (std::size_t s = 0; s < sizes.size(); ++s) {
+      const int n = sizes[s];
+      const std::string N = std::to_string(n);
+      double cpu = 0.0;
+      if (run_process({SPRINGLAB_EXE, "run", "cloth", "-p", "n=" + N, "--integrator",
+                       "implicit-euler", "--dt", "0.016666666666666666", "--t-end", "0.3",
+                       "--json"},
+                      out, &cpu) < 0) {
+        state.SkipWithError(("springlab run on cloth " + N + " failed").c_str());
+        return;
+      }
+      std::ifstream in(out);
+      const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+      const double steps = std::max(1.0, json_number(text, "steps"));
+      const double newton = json_number(text, "newton_iterations");
+      // Each step's count, from the same code stepped here (untimed).
+      const std::vector<long> counts = newton_per_step(cloth(n), kBucklingDuration);
+      long most = 0, over = 0, sum = 0;
+      for (long k : counts) {
+        most = std::max(most, k);
+        over += k > kMostPerStep ? 1 : 0;
+        sum += k;
+      }
+      if (static_cast<double>(sum) != newton) {
+        state.SkipWithError(("cloth " + N + ": the stepped run's Newton iterations differ from "
+                             "springlab run's").c_str());
+        return;
+      }
+      cpu_ms[s] = 1e3 * cpu / steps;
+      unknowns[s] = static_cast<double>(cloth(n).dofs());
+      state.counters["cpu_ms_" + N] = cpu_ms[s];
+      state.counters["newton_" + N] = newton / steps;
+      state.counters["newton_max_" + N] = static_cast<double>(most);
+      state.counters["over_12_" + N] = static_cast<double>(over);
+      state.counters["cg_" + N] = json_number(text, "linear_iterations") / steps;
+      state.counters["factorizations_" + N] = json_number(text, "factorizations") / steps;
+      state.counters["unknowns_" + N] = unknowns[s];
+    }
+  }
+  std::filesystem::remove(out);
+  state.counters["exponent"] =
+      std::log(cpu_ms.back() / cpu_ms.front()) / std::log(unknowns.back() / unknowns.front());
+  state.SetLabel("springlab run, dt=1/60 s, 0.3 s, default options, cloth 32, 64, 128 in turn");
+}
+
 }  // namespace
 
 void register_newton_benchmarks() {
@@ -197,6 +288,9 @@ void register_newton_benchmarks() {
         ->Unit(benchmark::kSecond)
         ->Iterations(1);
   }
+  benchmark::RegisterBenchmark("BM_NewtonBuckling/implicit-euler/cloth/32-128", buckling_benchmark)
+      ->Unit(benchmark::kSecond)
+      ->Iterations(1);
   for (int n : {16, 32, 64, 128}) {
     benchmark::RegisterBenchmark(
         ("BM_Run/linear-implicit-euler:definite/cloth/" + std::to_string(n)).c_str(),

@@ -10,6 +10,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -71,5 +72,14 @@ void register_element_benchmarks();
 void register_vtk_benchmarks();
 void register_fast_reference_benchmarks();
 void register_fluid_benchmarks();
+
+// Runs argv (argv[0] a path) with stdout to `out`; the wall time in
+// seconds, < 0 on failure, and in *cpu (when given) the child's user +
+// system CPU time: a whole process, as the user runs it.
+double run_process(std::vector<std::string> args, const std::filesystem::path& out,
+                   double* cpu = nullptr);
+
+// The number after "key": in a run's JSON line (either spacing); -1 if absent.
+double json_number(const std::string& text, const std::string& key);
 
 }  // namespace springlab::bench

@@ -34,12 +34,6 @@ ALLOWED = [
     ("models/core/strict_json.cc", 'message.find("] ")'),
     # The loop's own axis name (cost "wall time" or "steps"), not a message.
     ("report/springlab_report/kinds/work_precision.py", 'what == "wall time"'),
-    # solver_error's case label "substeps S; iterations N" / "newton-tol T;
-    # quasi-newton", written by experiments/kinds/solver_error_experiment.cc:
-    # read back as the options it names (to become columns: issue 47).
-    ("report/springlab_report/kinds/solver_error.py", 'variant.split("; ")'),
-    ("report/springlab_report/kinds/solver_error.py", 'v.startswith("newton-tol ")'),
-    ("report/springlab_report/kinds/solver_error.py", 'text.endswith("; quasi-newton")'),
     # The caption shortens the reference's source sentence at its clause.
     ("report/springlab_report/kinds/fluid.py", 'source.find(": the surge front")'),
 ]

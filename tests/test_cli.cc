@@ -568,6 +568,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"UnknownIntegrator",
                  run_args("spring", plus({"--dt", "0.01", "--t-end", "1"}, kOutputs), "foo"),
                  {"unknown integrator 'foo'"}},
+        BadInput{"BuiltinSceneTypo",
+                 run_args("oscilator", plus({"--dt", "0.01", "--t-end", "1"}, kOutputs)),
+                 {"oscilator: no such scene file or built-in scene (did you mean 'oscillator'?) "
+                  "(built-in scenes: "}},
+        BadInput{"IntegratorTypo",
+                 run_args("spring", plus({"--dt", "0.01", "--t-end", "1"}, kOutputs), "RK4"),
+                 {"unknown integrator 'RK4' (did you mean 'rk4'?) (integrators: "}},
         BadInput{"UnknownStiffness",
                  run_args("spring", plus({"--dt", "0.01", "--t-end", "1", "--stiffness", "soft"},
                                          kOutputs), "linear-implicit-euler"),

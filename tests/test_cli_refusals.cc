@@ -82,7 +82,8 @@ INSTANTIATE_TEST_SUITE_P(
         Refusal{"UnknownOption", {"run", "oscillator", "--bogus"},
                 "unknown option --bogus (springlab run --help lists the options)"},
         Refusal{"UnknownOptionWithValue", run_args("rk4", {"--tend=3"}),
-                "unknown option --tend (springlab run --help lists the options)"},
+                "unknown option --tend (did you mean '--t-end'?) (springlab run --help lists the "
+                "options)"},
         Refusal{"OptionTwice", run_args("rk4", {"--dt", "0.2"}), "--dt: given more than once"},
         Refusal{"OptionTwiceOnceWithEquals", run_args("rk4", {"--t-end=2"}),
                 "--t-end: given more than once"},
@@ -99,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "value - unexpected end of input; expected '[', '{', or a literal"},
         Refusal{"OverLongName", run_args("rk4", {}, kLong),
                 std::string(100, 'a') + "... (5000 bytes): cannot open (File name too long) "
-                                        "(built-in scenes: beam, block, box-chain, box-drop, box-on-slope, box-pile, box-tower, chain, cloth, dam-break, membrane, oscillator, slope, sloshing, spring, tank, tumbling-box)"},
+                                        "(built-in scenes: beam, block, box-chain, box-drop, box-on-slope, box-pile, box-tower, chain, cloth, dam-break, dam-break-obstacle, membrane, oscillator, slope, sloshing, spring, tank, tumbling-box)"},
         Refusal{"ParameterTwice", run_args("rk4", {"-p", "k=3", "-p", "k=4"}), "-p k: given twice (3 and 4)"},
         // -p takes one value: the scene after it is not swallowed.
         Refusal{"ParameterTakesOneValue",

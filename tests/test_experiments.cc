@@ -161,7 +161,17 @@ TEST(ExperimentDefinition, UnknownKeyInsideASecondCase) {
 TEST(ExperimentDefinition, UnknownIntegratorName) {
   Json d = kEnergy;
   d["integrators"] = {"rk4", "forward-euler"};
-  EXPECT_EQ(definition_error(d), "def.json: integrators: unknown integrator 'forward-euler'");
+  // The message lists every method, as the command line's does.
+  EXPECT_EQ(definition_error(d).rfind("def.json: integrators: unknown integrator 'forward-euler' "
+                                      "(integrators: arkode-dirk, ", 0),
+            0u)
+      << definition_error(d);
+  d["integrators"] = {"rk4", "implicit_euler"};
+  EXPECT_EQ(definition_error(d).rfind("def.json: integrators: unknown integrator 'implicit_euler' "
+                                      "(did you mean 'implicit-euler'?) (integrators: ",
+                                      0),
+            0u)
+      << definition_error(d);
   d["integrators"] = "implicit";
   EXPECT_EQ(definition_error(d),
             "def.json: integrators: expected \"all\", \"fixed-step\", \"adaptive\" or a list of "
@@ -458,6 +468,29 @@ TEST(ExperimentKinds, EnergyExplicitEulerGrowsByExactFactor) {
     EXPECT_GE(spring, 0.0);
   }
   EXPECT_TRUE(gravity_seen);
+}
+
+// Without a map in its definition, the stability experiment has no map
+// table (no file with a header and no rows for the report to warn about).
+TEST(ExperimentKinds, StabilityWithoutMapHasNoMapTable) {
+  const LoadedExperiment loaded = parse({{"experiment", "stability"},
+                                         {"integrators", {"symplectic-euler"}},
+                                         {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}}});
+  const std::vector<TableSpec> specs = loaded.experiment->tables();
+  ASSERT_EQ(specs.size(), 1u);
+  EXPECT_EQ(specs[0].suffix, "");
+  const LoadedExperiment with_map = parse(
+      {{"experiment", "stability"},
+       {"integrators", {"symplectic-euler"}},
+       {"cases", {{{"scene", "oscillator"}, {"k", {100}}}}},
+       {"map",
+        {{"scene", "oscillator"},
+         {"integrators", {"symplectic-euler"}},
+         {"k", {100}},
+         {"dt", {0.1}},
+         {"t_end", 1}}}});
+  ASSERT_EQ(with_map.experiment->tables().size(), 2u);
+  EXPECT_EQ(with_map.experiment->tables()[1].suffix, "map");
 }
 
 TEST(ExperimentKinds, StabilityLimitsMatchTheory) {
@@ -1420,8 +1453,8 @@ TEST(ExperimentKinds, RotationShowsLinearElasticityGhostForces) {
 
 // solver-error: every run steps from the tight implicit Euler run's states.
 // On a linear spring of rest length 0 (the oscillator) one projective-
-// dynamics iteration and one xpbd substep are that step exactly (solver
-// error at round-off), and so is Newton; on the cloth more local/global
+// dynamics iteration, one xpbd substep and one vbd iteration are that step
+// exactly (solver error at round-off), and so is Newton; on the cloth more local/global
 // iterations bring projective dynamics closer to the step, Newton at
 // 1e-10 m/s is within 1e-9 of it, and 20 xpbd substeps land closer to the
 // true motion than the exact implicit Euler step does.
@@ -1439,27 +1472,28 @@ TEST(ExperimentKinds, SolverErrorComparesEachStepWithTheSameStepSolvedTightly) {
                      {{"integrator", "projective-dynamics"}, {"iterations", 1}},
                      {{"integrator", "projective-dynamics"}, {"iterations", 30}},
                      {{"integrator", "xpbd"}, {"substeps", 1}, {"iterations", 1}},
-                     {{"integrator", "xpbd"}, {"substeps", 20}, {"iterations", 1}}};
+                     {{"integrator", "xpbd"}, {"substeps", 20}, {"iterations", 1}},
+                     {{"integrator", "vbd"}, {"iterations", 1}}};
   const LoadedExperiment loaded = parse(
       {{"experiment", "solver-error"},
        {"cases", {{{"scene", "oscillator"}}, {{"scene", "cloth"}, {"parameters", {{"n", 6}}}}}},
        {"dt", 1.0 / 60.0}, {"steps", 12}, {"every", 4}, {"runs", runs}});
-  ASSERT_EQ(loaded.experiment->task_count(), 10u);
-  for (std::size_t task : {0u, 1u, 3u}) {  // the oscillator
+  ASSERT_EQ(loaded.experiment->task_count(), 12u);
+  for (std::size_t task : {0u, 1u, 3u, 5u}) {  // the oscillator
     const auto rows = run_task(loaded, task)[0];
     ASSERT_EQ(rows.size(), 3u);  // steps 0, 4, 8
     EXPECT_LT(medians(rows, "solver_error"), 1e-12) << task;
   }
-  const auto newton_task = run_task(loaded, 5);
+  const auto newton_task = run_task(loaded, 6);
   const double newton = medians(newton_task[0], "solver_error");
   // The whole run from rest: implicit Euler loses energy, and its springs
   // stretch (the cloth hangs).
   ASSERT_EQ(newton_task[1].size(), 1u);
   EXPECT_GT(number(newton_task[1][0].at("energy_lost")), 0.0);
   EXPECT_GT(number(newton_task[1][0].at("max_strain")), 0.0);
-  const double pd1 = medians(run_task(loaded, 6)[0], "solver_error");
-  const double pd30 = medians(run_task(loaded, 7)[0], "solver_error");
-  const auto xpbd20 = run_task(loaded, 9)[0];
+  const double pd1 = medians(run_task(loaded, 7)[0], "solver_error");
+  const double pd30 = medians(run_task(loaded, 8)[0], "solver_error");
+  const auto xpbd20 = run_task(loaded, 10)[0];
   EXPECT_LT(newton, 1e-9);
   EXPECT_LT(pd30, pd1);
   EXPECT_LT(medians(xpbd20, "total_error"), medians(xpbd20, "discretization_error"));

@@ -1,8 +1,9 @@
 // The fluid experiment (experiments/kinds/fluid_experiment.cc): a coarse dam
 // break's rows against Martin and Moyce's table (the interpolated reference
 // point, the front at T = 0, Ritter's bound, the energy budget), a refused
-// run's row, the step limit's search beside the acoustic mode's theory, and
-// the definition's refusals.
+// run's row, the step limit's search beside the acoustic mode's theory, the
+// 3-D water heights against MARIN's measured ones, and the definition's
+// refusals.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -115,6 +116,54 @@ TEST(FluidExperiment, StepLimitBesideTheAcousticMode) {
   EXPECT_LT(ratio, 1.5);
   EXPECT_NEAR(number(r, "C_measured"),
               number(r, "dt_max_stable") * (c + number(r, "v_max")) / h, 1e-12);
+}
+
+// MARIN's 3-D dam break onto a box (SPHERIC test 2) at spacing 11 cm (495
+// water particles, 5 layers: the measured 0.55 m deep exactly), symplectic
+// Euler at 2 ms to 0.7 s: the gauge's height is n l over a column of n
+// layers at rest (H4, in the water: 0.55 m) and 0 where there is no water
+// (H2); over the run both stay near the measured heights, and the water
+// reaches H2 (1.0 m downstream of its front) near the measured 0.367 s.
+TEST(FluidExperiment, GaugesAgainstMarinsMeasuredHeights) {
+  Json d = small_definition();
+  d["t_end"] = 0.004;
+  d["runs"] = {{{"integrator", "symplectic-euler"}, {"dt", 0.0002}}};
+  d.erase("limits");
+  d["gauges"] = {
+      {"scene", "dam-break-obstacle"},
+      {"parameters", {{"spacing", 0.11}}},
+      {"integrator", "symplectic-euler"},
+      {"dt", 0.002},
+      {"t_end", 0.7},
+      {"sample", 0.01},
+      {"reference", std::string(SPRINGLAB_TEST_DATA) +
+                        "/../../experiments/reference/kleefsman-2005-spheric-test2.csv"},
+      {"gauges", {{{"name", "H2"}, {"x", 0.992}, {"z", 0.5}},
+                  {{"name", "H4"}, {"x", 2.638}, {"z", 0.5}}}},
+      {"bound", 0.03}};
+  const LoadedExperiment e = parse_definition(d);
+  ASSERT_EQ(e.experiment->task_count(), 2u);
+  const auto tables = task_rows(e, 1);
+  const auto& heights = tables[4];
+  ASSERT_EQ(heights.size(), 2u * 71u);  // every 10 ms, t = 0 included, per gauge
+  EXPECT_EQ(heights[0].at("gauge"), "H2");
+  EXPECT_NEAR(number(heights[0], "height"), 0.0, 1e-12);
+  EXPECT_EQ(heights[71].at("gauge"), "H4");
+  EXPECT_NEAR(number(heights[71], "height"), 0.55, 0.02 * 0.55);
+  const auto& summary = tables[5];
+  ASSERT_EQ(summary.size(), 2u);
+  for (const auto& g : summary) {
+    EXPECT_EQ(g.at("status"), "completed");
+    std::cout << "gauge " << g.at("gauge") << ": rms " << g.at("rms_error") << " m, largest "
+              << g.at("max_error") << " m, arrival " << g.at("arrival_simulated") << " s (measured "
+              << g.at("arrival_measured") << " s)\n";
+  }
+  EXPECT_LT(number(summary[0], "rms_error"), 0.04);  // H2, the front's flow
+  EXPECT_LT(number(summary[1], "rms_error"), 0.02);  // H4, the draining column
+  EXPECT_NEAR(number(summary[0], "arrival_measured"), 0.367, 0.002);
+  EXPECT_NEAR(number(summary[0], "arrival_simulated"), 0.367, 0.08);
+  EXPECT_EQ(summary[1].at("arrival_measured"), "");  // H4 starts in the water
+  EXPECT_EQ(tables[6].size(), 2u * 101u);  // the measured rows, 0 to 1 s
 }
 
 TEST(FluidExperiment, DefinitionErrorsNameTheKey) {

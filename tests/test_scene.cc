@@ -97,8 +97,9 @@ std::vector<BadScene> bad_scenes() {
       {"MissingSprings", R"({"dimension": 2, "particles": [{"x": [0, 0]}]})",
        "scene.json: missing required key 'springs'"},
       {"UnknownTopLevelKey", two_particles(p, s, R"("gravty": [0, -9.81], )"),
-       "scene.json: unknown key 'gravty' (allowed keys: name, dimension, gravity, drag, wind, "
-       "materials, contact, planes, particles, springs, triangles, tetrahedra, bodies, fluids)"},
+       "scene.json: unknown key 'gravty' (did you mean 'gravity'?) (allowed keys: name, "
+       "dimension, gravity, drag, wind, materials, contact, planes, particles, springs, "
+       "triangles, tetrahedra, bodies, fluids)"},
       {"UnknownKeyIsEscaped", two_particles(p, s, R"("a\nb": 1, )"),
        "scene.json: unknown key 'a\\nb' (allowed keys: name, dimension, gravity, drag, wind, "
        "materials, contact, planes, particles, springs, triangles, tetrahedra, bodies, fluids)"},

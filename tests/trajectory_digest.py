@@ -61,6 +61,7 @@ CASES = [
     ("box-drop", "box-drop", ["n=4", "columns=2", "width=0.4"], "0.01", "0.2"),
     ("box-chain", "box-chain", ["n=2"], "0.005", "0.05"),
     ("dam-break", "dam-break", ["spacing=0.025"], "0.002", "0.02"),
+    ("dam-break-obstacle", "dam-break-obstacle", ["spacing=0.25"], "0.005", "0.05"),
     ("sloshing", "sloshing", ["spacing=0.05"], "0.002", "0.02"),
     ("tank", "tank", ["spacing=0.05"], "0.002", "0.02"),
     ("spec-damped", os.path.join(HERE, "data", "scenes", "spec_example.json"), [], "0.01", "0.3"),

@@ -101,7 +101,7 @@
       if (info.error) {
         p.error = info.error;
         status.innerHTML = '<span class="error"></span>';
-        status.firstChild.textContent = name + ": " + info.error;
+        status.firstChild.textContent = name + ": " + info.error + remedyText(info.remedy);
       } else {
         p.id = info.id;
         p.info = info;
@@ -316,11 +316,13 @@
     }
     if (p.markEl.textContent !== p.mark) p.markEl.textContent = p.mark;
     const s = p.state, lim = p.limit;
-    const limit = lim === Infinity ? "no step limit" :
-                  Number.isNaN(lim) ? "step limit: not one number" :
-                  lim === 0 ? "no stable step without damping" : "dt limit " + lim.toPrecision(3) + " s";
+    // A limit of 0 (w h <= 0) is already in the stability text, which the
+    // core writes from the same stability_limit: "no stable step without damping".
+    const limit = lim === Infinity ? "; no step limit" :
+                  Number.isNaN(lim) ? "; step limit: not one number" :
+                  lim === 0 ? "" : "; dt limit " + lim.toPrecision(3) + " s";
     p.status.textContent = "t = " + s.t.toFixed(4) + " s   E = " + fmt(s.total) + " J   " +
-        "(E0 " + fmt(p.e0) + ")\n" + p.info.integrator.stability_text + "; " + limit +
+        "(E0 " + fmt(p.e0) + ")\n" + p.info.integrator.stability_text + limit +
         (fluid.length > 0 ?
          "\ncolour: speed, blue 0 to red " + lab.speedMax.toPrecision(3) + " m/s" : "") +
         (s.failure ? "\n" + s.failure : "");
@@ -453,6 +455,15 @@
                                  lines.join(";  ");
   }
 
+  // A refusal's remedy (the scene setting that makes the pairing work), told
+  // as the command line tells it, where this scene has that parameter.
+  function remedyText(remedy) {
+    const scene = catalog.scenes.find((s) => s.name === lab.scene);
+    if (!remedy || !scene || !scene.parameters.some((q) => q.name === remedy.field)) return "";
+    return " (for this scene: " + remedy.field + " = " + remedy.value +
+           (remedy.meaning ? " (" + remedy.meaning + ")" : "") + ")";
+  }
+
   function showSceneParams() {
     const scene = catalog.scenes.find((s) => s.name === lab.scene);
     const box = $("scene-params");
@@ -546,7 +557,7 @@
     $("reset").onclick = () => makePanels();
     $("panel-count").onchange = (ev) => {
       const n = Number(ev.target.value);
-      const more = ["xpbd", "projective-dynamics", "rk4", "verlet"];
+      const more = ["xpbd", "projective-dynamics", "vbd", "rk4", "verlet"];
       while (lab.integrators.length < n) lab.integrators.push(more[lab.integrators.length % more.length]);
       lab.integrators.length = n;
       makePanels();

@@ -263,6 +263,17 @@ EMSCRIPTEN_KEEPALIVE const char* lab_panel_new(const char* request_text) {
                  {"integrator", integrator_json(panel->integrator())}};
     panels()[id] = std::move(panel);
     return answer(info);
+  } catch (const RunRefused& e) {
+    // The scene setting that makes the pairing work travels as data
+    // (models/core/refusal.h); the page offers it where the scene has a
+    // parameter of that name, as the command line does.
+    Json out = {{"error", e.what()}};
+    if (!e.remedy().empty()) {
+      out["remedy"] = {{"field", e.remedy().field},
+                       {"value", e.remedy().value},
+                       {"meaning", e.remedy().meaning}};
+    }
+    return answer(out);
   } catch (const std::exception& e) {
     return error_answer(e.what());
   }

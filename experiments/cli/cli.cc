@@ -45,6 +45,7 @@
 #include "integrators/registry/plugins.h"
 #include "integrators/registry/registry.h"
 #include "integrators/linear/sparse_direct_solver.h"
+#include "models/core/registry.h"
 #include "models/scenes/builtin_scenes.h"
 #include "models/core/element_kind.h"
 #include "models/model/model.h"
@@ -124,10 +125,8 @@ void require_positive(const std::string& option, double value) {
 
 void require_integrator(const std::string& name) {
   if (!is_integrator(name)) {
-    std::string valid;
-    for (const std::string& n : integrator_names()) valid += (valid.empty() ? "" : ", ") + n;
-    throw UsageError("--integrator: unknown integrator '" + printable(name) + "' (integrators: " +
-                     valid + ")");
+    throw UsageError("--integrator: " +
+                     integrator_registry().unknown("integrator", printable(name)));
   }
 }
 
@@ -174,12 +173,37 @@ struct CommonOptions {
               return cmd.add_option(name, text, spec.help);
             } else if constexpr (std::is_same_v<Field, bool IntegratorOptions::*>) {
               return cmd.add_flag(name, run.options.*field, spec.help);
+            } else if constexpr (std::is_same_v<Field, double IntegratorOptions::*>) {
+              if (std::isnan(spec.bare_value)) return cmd.add_option(name, run.options.*field, spec.help);
+              // A value may follow (--chebyshev 0.9) or not (--chebyshev):
+              // then the option's bare value.
+              double* value = &(run.options.*field);
+              const double bare = spec.bare_value;
+              return cmd.add_option(
+                         name,
+                         [value, bare](const CLI::results_t& results) {
+                           if (results.empty() || results[0].empty()) {
+                             *value = bare;
+                             return true;
+                           }
+                           return CLI::detail::lexical_cast(results[0], *value);
+                         },
+                         spec.help)
+                  ->expected(0, 1);
             } else {
               return cmd.add_option(name, run.options.*field, spec.help);
             }
           },
           spec.field);
-      if (*spec.default_text != '\0') option->default_str(spec.default_text);
+      // (An option with a bare value would take its default text as the
+      // value: its default is in its text instead.)
+      if (*spec.default_text != '\0') {
+        if (std::isnan(spec.bare_value)) {
+          option->default_str(spec.default_text);
+        } else {
+          option->option_text(std::string("[VALUE]=") + spec.default_text);
+        }
+      }
     }
     cmd.add_option("--blowup", run.blowup,
                    "divergence when kinetic + spring energy exceeds this times E_s");
@@ -760,7 +784,14 @@ Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>
   if (is_builtin_scene(scene_arg)) return make_builtin_scene(scene_arg, split_parameters(parameters));
   const std::string why = from_stdin || error == ENOENT ? "no such scene file or built-in scene"
                                                         : std::string("cannot open (") + std::strerror(error) + ")";
-  throw SceneError(printable(scene_arg) + ": " + why + " (built-in scenes: " + builtin_list() + ")");
+  std::vector<std::string> names;
+  for (const BuiltinScene& s : builtin_scenes()) names.push_back(s.name);
+  // A name like a built-in's, not a path: say which one it may be.
+  const std::string like = scene_arg.find('/') == std::string::npos && !from_stdin
+                               ? did_you_mean(scene_arg, names)
+                               : std::string();
+  throw SceneError(printable(scene_arg) + ": " + why + like + " (built-in scenes: " +
+                   builtin_list() + ")");
 }
 
 RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,

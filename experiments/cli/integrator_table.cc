@@ -29,6 +29,7 @@ const std::map<std::string, IntegratorStyle>& style_table() {
       {"discrete-gradient", {"#8c564b", "h"}},
       {"projective-dynamics", {"#bcbd22", "8"}},
       {"xpbd", {"#6b6ecf", "1"}},
+      {"vbd", {"#c51b7d", "$V$"}},
       {"cvode-bdf", {"#000000", "<"}},
       {"cvode-adams", {"#e6ab02", ">"}},
       {"ida", {"#7f7f7f", "p"}},

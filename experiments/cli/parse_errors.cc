@@ -8,7 +8,8 @@
 #include <map>
 #include <vector>
 
-#include "models/core/scene.h"  // printable
+#include "models/core/registry.h"  // did_you_mean
+#include "models/core/scene.h"     // printable
 
 namespace springlab {
 namespace {
@@ -99,10 +100,18 @@ std::string parse_error_line(const CLI::ParseError& e, const CLI::App& app, int 
   std::string help = "springlab --help";
   if (!command.empty()) help = "springlab " + command + " --help";
   if (read.command != nullptr) help = "springlab " + read.command->get_name() + " --help";
-  if (!read.unknown.empty()) {
-    return "unknown option " + printable(read.unknown) + " (" + help + " lists the options)";
-  }
   const CLI::App& scope = read.command != nullptr ? *read.command : app;
+  if (!read.unknown.empty()) {
+    // The command's long options and the program's, for "did you mean".
+    std::vector<std::string> names;
+    for (const CLI::App* where : {&scope, &app}) {
+      for (const CLI::Option* option : where->get_options()) {
+        for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+      }
+    }
+    return "unknown option " + printable(read.unknown) + did_you_mean(read.unknown, names) + " (" +
+           help + " lists the options)";
+  }
   if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr) {
     // An option that takes one value, given twice.
     std::map<std::string, int> count;

@@ -69,7 +69,9 @@ nlohmann::json accuracy_reference(const DefinitionObject& o, const char* key, co
   const DefinitionObject r = o.object(key);
   r.allow_only({"integrator", "dt"});
   const std::string name = r.string("integrator");
-  if (!is_integrator(name)) r.fail("integrator", "unknown integrator '" + name + "'");
+  if (!is_integrator(name)) {
+    r.fail("integrator", integrator_registry().unknown("integrator", printable(name)));
+  }
   if (make_integrator(name)->info().adaptive) {
     r.fail("integrator", "'" + name + "' is adaptive; the reference must be a fixed-step method");
   }

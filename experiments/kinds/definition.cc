@@ -184,7 +184,7 @@ Scene definition_scene(const DefinitionObject& o,
 
 std::string definition_integrator(const DefinitionObject& o, const char* key) {
   const std::string name = o.string(key);
-  if (!is_integrator(name)) o.fail(key, "unknown integrator '" + printable(name) + "'");
+  if (!is_integrator(name)) o.fail(key, integrator_registry().unknown("integrator", printable(name)));
   return name;
 }
 
@@ -207,7 +207,9 @@ std::vector<std::string> definition_integrators(const DefinitionObject& o, const
   for (const auto& item : choice) {
     if (!item.is_string()) o.fail(key, "expected integrator names");
     const std::string name = item.get<std::string>();
-    if (!is_integrator(name)) o.fail(key, "unknown integrator '" + printable(name) + "'");
+    if (!is_integrator(name)) {
+      o.fail(key, integrator_registry().unknown("integrator", printable(name)));
+    }
     if (std::find(names.begin(), names.end(), name) != names.end()) {
       o.fail(key, "'" + name + "' is listed twice");
     }

@@ -29,7 +29,10 @@
 //     `t_end` (the flow's own speed: near the limit, a trial that stays
 //     under the divergence rule can still throw a few particles).
 // The measured points are read from the CSV file `reference` (next to the
-// definition; '#' lines are its source) into the "reference" table.
+// definition; '#' lines are its source) into the "reference" table. An
+// optional "gauges" part adds a 3-D run's water heights at fixed points
+// against a measurement (MARIN's dam break onto a box, SPHERIC test 2:
+// fluid_gauges.h), as the last task.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -40,13 +43,14 @@
 
 #include <time.h>
 
+#include "experiments/analysis/stability.h"
+#include "experiments/io/output_files.h"
 #include "experiments/kinds/experiment.h"
 #include "experiments/kinds/experiment_support.h"
-#include "experiments/io/output_files.h"
-#include "experiments/analysis/stability.h"
+#include "experiments/kinds/fluid_gauges.h"
 #include "models/fluids/fluids.h"
-#include "models/springs/gravity.h"
 #include "models/model/energy_layout.h"
+#include "models/springs/gravity.h"
 
 namespace springlab {
 namespace {
@@ -271,7 +275,8 @@ class FluidExperiment final : public Experiment {
  public:
   explicit FluidExperiment(const DefinitionObject& d) {
     d.allow_only({"experiment", "name", "title", "description", "rtol", "atol", "newton_tol",
-                  "scene", "parameters", "runs", "t_end", "sample", "reference", "limits"});
+                  "scene", "parameters", "runs", "t_end", "sample", "reference", "limits",
+                  "gauges"});
     options_ = definition_options(d);
     scene_ = definition_scene(d);
     if (!scene_.has<Fluids>() || scene_.get<Fluids>().empty()) {
@@ -332,12 +337,13 @@ class FluidExperiment final : public Experiment {
       limit_periods_ = l.positive("periods", 20.0);
       limit_a_ = column_width(l, limit_scenes_.front());
     }
+    if (d.has("gauges")) gauges_ = std::make_unique<FluidGauges>(d.object("gauges"), options_);
     check_task_count(d, "runs", static_cast<double>(task_count()));
     check_output_rows(d, "runs", static_cast<double>(runs_.size()) * (t_end_ / sample_ + 3.0));
   }
 
   std::vector<TableSpec> tables() const override {
-    return {{"", {"integrator", "dt", "t", "T", "Z", "kinetic", "gravity", "pressure", "total",
+    std::vector<TableSpec> out = {{"", {"integrator", "dt", "t", "T", "Z", "kinetic", "gravity", "pressure", "total",
                   "viscous_work", "numerical", "compression"}},
             {"runs", {"integrator", "dt", "substeps", "iterations", "status", "diverged_at",
                       "t_final", "steps", "force_evals", "newton_iterations", "wall_seconds",
@@ -348,16 +354,20 @@ class FluidExperiment final : public Experiment {
             {"limits", {"sound", "c", "integrator", "particles", "h", "hydrostatic", "w_max",
                         "dt_theory", "C_theory", "dt_max_stable", "lo", "hi", "v_max",
                         "C_measured", "ratio", "outcome"}}};
+    for (TableSpec& t : FluidGauges::tables()) out.push_back(std::move(t));
+    return out;
   }
 
   std::size_t task_count() const override {
-    return runs_.size() + sound_.size() * limit_integrators_.size();
+    return runs_.size() + sound_.size() * limit_integrators_.size() + (gauges_ ? 1 : 0);
   }
 
   TaskOutput run_task(std::size_t index) const override {
     TaskOutput out;
-    out.rows.resize(4);
-    if (index < runs_.size()) {
+    out.rows.resize(4 + FluidGauges::tables().size());
+    if (gauges_ && index + 1 == task_count()) {
+      gauges_->run(out, 4);
+    } else if (index < runs_.size()) {
       run_dam_break(runs_[index], out);
       if (index == 0) {
         for (std::size_t k = 0; k < reference_.T.size(); ++k) {
@@ -396,7 +406,8 @@ class FluidExperiment final : public Experiment {
                         {"blowup", limit_blowup_}, {"dt_max_factor", limit_dt_max_factor_},
                         {"periods", limit_periods_},
                         {"a", limit_a_},
-                        {"particles", limit_scenes_.empty() ? 0 : limit_scenes_.front().particles.size()}}}};
+                        {"particles", limit_scenes_.empty() ? 0 : limit_scenes_.front().particles.size()}}},
+            {"gauges", gauges_ ? gauges_->settings() : nlohmann::json()}};
   }
 
  private:
@@ -514,6 +525,7 @@ class FluidExperiment final : public Experiment {
   std::vector<std::string> limit_integrators_;
   double limit_t_end_ = 0.0, limit_rel_tol_ = 1e-2, limit_a_ = 0.0, limit_blowup_ = 1000.0;
   double limit_dt_max_factor_ = 10.0, limit_periods_ = 20.0;
+  std::unique_ptr<FluidGauges> gauges_;  // the 3-D water heights against a measurement
 };
 
 }  // namespace

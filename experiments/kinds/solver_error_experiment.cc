@@ -37,6 +37,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "experiments/kinds/experiment.h"
@@ -53,6 +54,10 @@ struct Variant {
   std::string integrator;
   IntegratorOptions options;
   std::string label;  // what distinguishes it: "newton-tol 0.001", "iterations 10", ...
+  // The options the definition set, as the tables' option_* columns (empty
+  // where not set): the report reads these, not the label.
+  std::optional<double> newton_tol, substeps, iterations, chebyshev, rtol;
+  std::string solver;
 };
 
 struct SampledStep {
@@ -93,6 +98,7 @@ class SolverErrorExperiment final : public Experiment {
       auto note = [&](const std::string& text) { label += (label.empty() ? "" : "; ") + text; };
       if (r.has("newton_tol")) {
         v.options.newton_tol = r.positive("newton_tol");
+        v.newton_tol = v.options.newton_tol;
         note("newton-tol " + format_number(v.options.newton_tol));
       }
       if (r.has("solver")) {
@@ -100,13 +106,16 @@ class SolverErrorExperiment final : public Experiment {
           r.fail("solver", "expected \"newton\" or \"quasi-newton\"");
         }
         note(to_string(v.options.solver));
+        v.solver = to_string(v.options.solver);
       }
       if (r.has("substeps")) {
         v.options.substeps = r.count("substeps", 1, 1, 100000);
+        v.substeps = v.options.substeps;
         note("substeps " + std::to_string(v.options.substeps));
       }
       if (r.has("iterations")) {
         v.options.iterations = r.count("iterations", 1, 1, 100000);
+        v.iterations = v.options.iterations;
         note("iterations " + std::to_string(v.options.iterations));
       }
       if (r.has("chebyshev")) {
@@ -115,9 +124,11 @@ class SolverErrorExperiment final : public Experiment {
           r.fail("chebyshev", "expected a spectral radius in (0, 1)");
         }
         note("chebyshev " + format_number(v.options.chebyshev));
+        v.chebyshev = v.options.chebyshev;
       }
       if (r.has("rtol")) {
         v.options.rtol = r.positive("rtol");
+        v.rtol = v.options.rtol;
         note("rtol " + format_number(v.options.rtol));
       }
       if (r.has("atol")) v.options.atol = r.positive("atol");
@@ -130,12 +141,14 @@ class SolverErrorExperiment final : public Experiment {
   }
 
   std::vector<TableSpec> tables() const override {
-    return {{"", {"case", "scene", "integrator", "variant", "dt", "step", "t", "status",
-                  "solver_error", "total_error", "discretization_error", "wall_seconds",
-                  "iterations", "failure"}},
-            {"runs", {"case", "scene", "integrator", "variant", "dt", "status", "t_final",
-                      "energy_initial", "energy_lost", "max_strain", "wall_seconds_per_step",
-                      "failure", "warnings"}}};
+    return {{"", {"case", "scene", "integrator", "variant", "option_newton_tol", "option_solver",
+                  "option_substeps", "option_iterations", "option_chebyshev", "option_rtol", "dt",
+                  "step", "t", "status", "solver_error", "total_error", "discretization_error",
+                  "wall_seconds", "iterations", "failure"}},
+            {"runs", {"case", "scene", "integrator", "variant", "option_newton_tol",
+                      "option_solver", "option_substeps", "option_iterations", "option_chebyshev",
+                      "option_rtol", "dt", "status", "t_final", "energy_initial", "energy_lost",
+                      "max_strain", "wall_seconds_per_step", "failure", "warnings"}}};
   }
 
   std::size_t task_count() const override { return cases_.size() * variants_.size(); }
@@ -146,6 +159,9 @@ class SolverErrorExperiment final : public Experiment {
     std::call_once(c.once, [&] { prepare(c); });
     const std::string prefix = Row().add(static_cast<long>(index / variants_.size()))
                                    .add(c.scene.name).add(variant.integrator).add(variant.label)
+                                   .add(variant.newton_tol).add(variant.solver)
+                                   .add(variant.substeps).add(variant.iterations)
+                                   .add(variant.chebyshev).add(variant.rtol)
                                    .add(dt_).str();
     // A model of its own: a model's scratch arrays serve one thread at a time.
     const Model model(c.scene);

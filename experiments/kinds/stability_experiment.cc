@@ -133,17 +133,24 @@ class StabilityExperiment final : public Experiment {
     }
   }
 
+  // The map's table only when the definition asks for a map (an empty one
+  // would be a file with a header and no rows).
   std::vector<TableSpec> tables() const override {
-    return {{"", {"scene", "integrator", "k", "w_max", "t_end", "max_stable_dt", "bracket_lo",
-                  "bracket_hi", "theory_dt", "ratio"}},
-            {"map", {"scene", "integrator", "k", "dt", "w_max", "energy_ratio", "diverged"}}};
+    std::vector<TableSpec> specs = {
+        {"", {"scene", "integrator", "k", "w_max", "t_end", "max_stable_dt", "bracket_lo",
+              "bracket_hi", "theory_dt", "ratio"}}};
+    if (map_) {
+      specs.push_back(
+          {"map", {"scene", "integrator", "k", "dt", "w_max", "energy_ratio", "diverged"}});
+    }
+    return specs;
   }
 
   std::size_t task_count() const override { return limit_tasks_.size() + map_tasks_.size(); }
 
   TaskOutput run_task(std::size_t index) const override {
     TaskOutput out;
-    out.rows.resize(2);
+    out.rows.resize(map_ ? 2 : 1);  // one list per table
     if (index < limit_tasks_.size()) {
       out.rows[0].push_back(run_limit(limit_tasks_[index]));
     } else {

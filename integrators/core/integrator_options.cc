@@ -76,13 +76,19 @@ const std::vector<OptionSpec>& integrator_options() {
        .set = [](O& o, const std::string& v) { return parse_solver(v, o.solver); }},
       {.name = "iterations", .field = &O::iterations, .range = Range::kOneToCap,
        .default_text = "the method's",
-       .help = "projective-dynamics (default 10), xpbd (default 1): iterations per step or "
-               "substep"},
+       .help = "projective-dynamics (default 10), xpbd (default 1), vbd (default 10): "
+               "iterations per step or substep"},
       {.name = "chebyshev", .field = &O::chebyshev, .range = Range::kUnitOpen,
-       .help = "projective-dynamics: Chebyshev acceleration with this spectral radius rho of "
-               "the plain iteration, in (0, 1) (Wang 2015); 0: off"},
+       .default_text = "0",
+       .help = "projective-dynamics, vbd: Chebyshev acceleration with this spectral radius rho "
+               "of the plain iteration, in (0, 1) (Wang 2015); 0: off; vbd also without a value: "
+               "on at its own rho, 0.9",
+       .bare_value = kChebyshevOn},
+      {.name = "no-chebyshev", .field = &O::no_chebyshev,
+       .help = "projective-dynamics, vbd: no Chebyshev acceleration, whatever --chebyshev says"},
       {.name = "substeps", .field = &O::substeps, .range = Range::kOneToCap,
-       .default_text = "10", .help = "xpbd: substeps per --dt"},
+       .default_text = "the method's", .help = "xpbd (default 10), vbd (default 1): substeps "
+                                               "per --dt"},
       {.name = "beta", .field = &O::beta, .default_text = "1/4",
        .help = "newmark: beta in [0, 1/2]"},
       {.name = "gamma", .field = &O::gamma, .default_text = "1/2",
@@ -161,6 +167,7 @@ std::string check_option_range(const OptionSpec& spec, const IntegratorOptions& 
       }
       break;
     case Range::kUnitOpen:
+      if (value == spec.bare_value) break;     // given without a value
       if (!(value >= 0.0 && value < 1.0)) return "must be in [0, 1) (0: off)";
       break;
     case Range::kAny:

@@ -40,9 +40,12 @@ struct IntegratorOptions {
   int max_newton = 200;       // Newton iterations per step before giving up (measured: benchmarks/README.md)
   Stiffness stiffness = Stiffness::kExact;  // linear-implicit-euler's dF/dx
   Solver solver = Solver::kNewton;          // implicit-euler's
-  int iterations = 0;  // projective-dynamics, xpbd: iterations per (sub)step; 0 = the method's
-  double chebyshev = 0.0;  // projective-dynamics: Chebyshev's spectral radius rho; 0 = off
-  int substeps = 0;    // xpbd: substeps per step; 0 = the method's
+  int iterations = 0;  // projective-dynamics, xpbd, vbd: iterations per (sub)step; 0 = the method's
+  // projective-dynamics, vbd: Chebyshev's spectral radius rho; 0 = off;
+  // kChebyshevOn (--chebyshev without RHO) = on at vbd's own rho.
+  double chebyshev = 0.0;
+  bool no_chebyshev = false;  // --no-chebyshev: off, whatever --chebyshev says
+  int substeps = 0;    // xpbd, vbd: substeps per step; 0 = the method's
   double rtol = 1e-6;         // adaptive methods
   double atol = 1e-8;
   long max_steps = 0;         // adaptive: internal steps per output interval; 0 = scaled to the system
@@ -86,12 +89,19 @@ struct OptionSpec {
   // name that is not one of `choices`).
   std::string (*get)(const IntegratorOptions&) = nullptr;
   bool (*set)(IntegratorOptions&, const std::string&) = nullptr;
+  // The value an option given without one takes (NaN: a value is required):
+  // --chebyshev alone is kChebyshevOn.
+  double bare_value = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The table, in the order --help lists them.
 const std::vector<OptionSpec>& integrator_options();
 // The spec of --name (nullptr when there is none).
 const OptionSpec* find_integrator_option(std::string_view name);
+
+// --chebyshev given without RHO: Chebyshev acceleration on, at the
+// method's own rho (vbd's; projective dynamics has none and refuses it).
+inline constexpr double kChebyshevOn = -1.0;
 
 // Iterations or substeps per step at most (--iterations, --substeps, and
 // the experiment definitions' caps): more would only spin.

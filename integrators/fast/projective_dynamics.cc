@@ -28,6 +28,16 @@ ProjectiveDynamics::ProjectiveDynamics()
                   .stability_note = "for linear springs, drag and wind (one iteration is "
                                     "implicit Euler); spring damping is explicit"}) {}
 
+std::string ProjectiveDynamics::check_options(const IntegratorOptions& options,
+                                              Eigen::Index) const {
+  if (options.chebyshev == kChebyshevOn && !options.no_chebyshev) {
+    return name() + ": --chebyshev needs RHO, the plain iteration's spectral radius in (0, 1) "
+                    "(docs/integrators.md \"Fast solvers\": watch the solver error fall with "
+                    "--iterations), e.g. --chebyshev 0.99";
+  }
+  return {};
+}
+
 StepResult ProjectiveDynamics::do_initialize() {
   StepResult base = FastSolver::do_initialize();
   if (!base.ok) return base;
@@ -273,7 +283,8 @@ StepResult ProjectiveDynamics::do_step(double h) {
   }
   begin_right_hand_side(h);
   x_new_ = y_;
-  const double rho = options().chebyshev;
+  // 0 is off, as is --no-chebyshev.
+  const double rho = options().no_chebyshev ? 0.0 : options().chebyshev;
   double omega = 1.0;
   for (int it = 0; it < iterations; ++it) {
     if (rho > 0.0) {  // keep x^(k-1) and x^(k) for the extrapolation

@@ -70,8 +70,10 @@ class ProjectiveDynamics final : public FastSolver {
  public:
   ProjectiveDynamics();
   std::vector<std::string> options_read() const override {
-    return {"iterations", "chebyshev"};
+    return {"iterations", "chebyshev", "no-chebyshev"};
   }
+  // --chebyshev without RHO: projective dynamics has no rho of its own.
+  std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const override;
   // It reads dF/dv once where the damping is diagonal (read_linear_damping).
   bool assembles_jacobians(const MechanicalSystem& system) const override {
     return system.velocity_dependence() == VelocityDependence::kDiagonal;

@@ -105,6 +105,16 @@ void SparseDirectSolver::reset() {
 bool SparseDirectSolver::fits(const SparseMatrix& a) {
   if (fit_checked_) return true;
   const double limit = memory_limit_ < 0.0 ? memory_limit_bytes() : memory_limit_;
+  // A dense factor, the most any ordering can fill, fits: no estimate
+  // needed (it is a symbolic analysis of its own, as costly as the
+  // factorization's: a fluid's pattern, rebuilt as it flows, paid it at
+  // every new pattern).
+  const double n = static_cast<double>(a.rows());
+  if (0.5 * n * (n + 1.0) * kFactorBytesPerNonzero +
+          (cholesky_->uses_blas() ? kBlasBufferBytes : 0.0) <= limit) {
+    fit_checked_ = true;
+    return true;
+  }
   std::string why = factor_fit_error(a, limit, cholesky_->uses_blas() ? kBlasBufferBytes : 0.0);
   if (!why.empty()) {
     out_of_memory_ = true;

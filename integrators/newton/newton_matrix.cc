@@ -1,5 +1,7 @@
 #include "integrators/newton/newton_matrix.h"
 
+#include "models/core/sparse_pattern.h"
+
 namespace springlab {
 
 void NewtonMatrix::assemble(bool definite, SparseMatrix& out) {
@@ -16,8 +18,11 @@ void NewtonMatrix::assemble(bool definite, SparseMatrix& out) {
   }
   // All three share the model's pattern: combine value by value. (Where the
   // pattern varies, as a fluid's does, an equal count does not mean an
-  // equal pattern: always the current one.)
-  if (model.system().pattern_varies() || out.nonZeros() != dfdx_.nonZeros()) out = dfdx_;
+  // equal pattern: the indices are compared, cheaper than a copy.)
+  if (model.system().pattern_varies() ? !same_pattern(out, dfdx_)
+                                      : out.nonZeros() != dfdx_.nonZeros()) {
+    out = dfdx_;
+  }
   const Eigen::Index nnz = dfdx_.nonZeros();
   const double* px = dfdx_.valuePtr();
   double* pj = out.valuePtr();

@@ -28,6 +28,7 @@
   X(IntegratorEntry, rk4_integrator)                    \
   X(IntegratorEntry, symplectic_euler_integrator)       \
   X(IntegratorEntry, tr_bdf2_integrator)                \
+  X(IntegratorEntry, vbd_integrator)                    \
   X(IntegratorEntry, verlet_integrator)                 \
   X(IntegratorEntry, xpbd_integrator)                   \
   X(IntegratorEntry, yoshida4_integrator)               \

@@ -114,7 +114,41 @@ class FrictionForce final : public ForceTerm {
     if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
   }
 
+  // Vertex block descent (models/vertex_blocks.h): the same force and
+  // blocks per particle (lagged during vbd's step, as during Newton's).
+  bool has_vertex_blocks() const override { return true; }
+  void add_vertex_blocks(const Configuration& c, const int* particles, int count, bool definite,
+                         const VertexBlocks& out) const override {
+    if (dim_ == 2) add_vertex_blocks_d<2>(c, particles, count, definite, out);
+    else add_vertex_blocks_d<3>(c, particles, count, definite, out);
+  }
+
  private:
+  template <int D>
+  void add_vertex_blocks_d(const Configuration& c, const int* particles, int count,
+                           bool definite, const VertexBlocks& out) const {
+    for (int n = 0; n < count; ++n) {
+      const int i = particles[n];
+      for_particle<D>(c, i, [&](double mu, const Sliding<D>& s) {
+        for (int r = 0; r < D; ++r) {
+          out.f[n * D + r] -= mu * s.f_n * s.g * s.vt[r];
+          for (int q = 0; q < D; ++q) {
+            const double T_rq = (r == q ? 1.0 : 0.0) - s.n[r] * s.n[q];
+            if (out.dfdv != nullptr) {
+              out.dfdv[n * D * D + r * D + q] -=
+                  mu * s.f_n * (s.g * T_rq + s.g_over_y * s.vt[r] * s.vt[q]);
+            }
+            // Live, the normal force's change: not symmetric, left out of
+            // the definite block.
+            if (!definite && s.curvature != 0.0) {
+              out.dfdx[n * D * D + r * D + q] += mu * s.g * s.curvature * s.vt[r] * s.n[q];
+            }
+          }
+        }
+      });
+    }
+  }
+
   // One particle in contact with one plane: what both the force and the
   // Jacobians need.
   template <int D>
@@ -132,38 +166,50 @@ class FrictionForce final : public ForceTerm {
   template <int D, typename Visit>
   void for_each_contact(const Configuration& c, Visit visit) const {
     for (std::size_t k = 0; k < planes_.size(); ++k) {
-      const FrictionPlane& p = planes_[k];
       for (int i = 0; i < free_particles_; ++i) {
         Sliding<D> s;
-        double d = 0.0, vn = 0.0;
-        for (int r = 0; r < D; ++r) {
-          s.n[r] = p.normal[r];
-          d += s.n[r] * (c.x[i * D + r] - p.point[r]);
-          vn += s.n[r] * c.v[i * D + r];
-        }
-        if (lagged_) {
-          s.f_n = lagged_fn_[k * static_cast<std::size_t>(free_particles_) +
-                             static_cast<std::size_t>(i)];
-          s.curvature = 0.0;
-          if (s.f_n == 0.0) continue;  // not in contact at the lagged state
-        } else {
-          const ContactPhi phi = law_(d);
-          if (phi.value == 0.0 && phi.slope == 0.0) continue;  // not in contact
-          s.f_n = -phi.slope;
-          s.curvature = phi.curvature;
-        }
-        double y2 = 0.0;
-        for (int r = 0; r < D; ++r) {
-          s.vt[r] = c.v[i * D + r] - vn * s.n[r];
-          y2 += s.vt[r] * s.vt[r];
-        }
-        const FrictionWeight w = friction_weight(y2, eps_);
-        s.y = w.y;
-        s.g = w.g;
-        s.g_over_y = w.g_over_y;
-        visit(i, p.mu, s);
+        if (sliding<D>(c, k, i, s)) visit(i, planes_[k].mu, s);
       }
     }
+  }
+  // The same for one particle, over the planes: visit(mu, sliding).
+  template <int D, typename Visit>
+  void for_particle(const Configuration& c, int i, Visit visit) const {
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      Sliding<D> s;
+      if (sliding<D>(c, k, i, s)) visit(planes_[k].mu, s);
+    }
+  }
+  // Particle i on plane k: false when not in contact.
+  template <int D>
+  bool sliding(const Configuration& c, std::size_t k, int i, Sliding<D>& s) const {
+    const FrictionPlane& p = planes_[k];
+    double d = 0.0, vn = 0.0;
+    for (int r = 0; r < D; ++r) {
+      s.n[r] = p.normal[r];
+      d += s.n[r] * (c.x[i * D + r] - p.point[r]);
+      vn += s.n[r] * c.v[i * D + r];
+    }
+    if (lagged_) {
+      s.f_n = lagged_fn_[k * static_cast<std::size_t>(free_particles_) + static_cast<std::size_t>(i)];
+      s.curvature = 0.0;
+      if (s.f_n == 0.0) return false;  // not in contact at the lagged state
+    } else {
+      const ContactPhi phi = law_(d);
+      if (phi.value == 0.0 && phi.slope == 0.0) return false;  // not in contact
+      s.f_n = -phi.slope;
+      s.curvature = phi.curvature;
+    }
+    double y2 = 0.0;
+    for (int r = 0; r < D; ++r) {
+      s.vt[r] = c.v[i * D + r] - vn * s.n[r];
+      y2 += s.vt[r] * s.vt[r];
+    }
+    const FrictionWeight w = friction_weight(y2, eps_);
+    s.y = w.y;
+    s.g = w.g;
+    s.g_over_y = w.g_over_y;
+    return true;
   }
 
   template <int D>

@@ -111,6 +111,38 @@ class PlaneContactForce final : public ForceTerm {
     });
   }
 
+  // Vertex block descent (models/vertex_blocks.h): F_p = -phi'(d) n and
+  // dF_p/dx_p = -phi''(d) n n^T per plane (already semidefinite), and the
+  // barrier's cap: particle p alone closes a gap at d / (-n.dx).
+  bool has_vertex_blocks() const override { return true; }
+  void add_vertex_blocks(const Configuration& c, const int* particles, int count, bool,
+                         const VertexBlocks& out) const override {
+    for (int n = 0; n < count; ++n) {
+      const int i = particles[n];
+      for (const Plane& p : planes_) {
+        const ContactPhi phi = law_(gap(c, p, i));
+        if (phi.value == 0.0 && phi.slope == 0.0) continue;
+        for (int r = 0; r < dim_; ++r) {
+          out.f[n * dim_ + r] -= phi.slope * p.normal[r];
+          for (int q = 0; q < dim_; ++q) {
+            out.dfdx[n * dim_ * dim_ + r * dim_ + q] -= phi.curvature * p.normal[r] * p.normal[q];
+          }
+        }
+      }
+    }
+  }
+  double vertex_admissible_fraction(const Configuration& c, int i,
+                                    const double* dx) const override {
+    double fraction = std::numeric_limits<double>::infinity();
+    if (law_.model != ContactModel::kBarrier) return fraction;
+    for (const Plane& p : planes_) {
+      double approach = 0.0;
+      for (int r = 0; r < dim_; ++r) approach += p.normal[r] * dx[r];
+      if (approach < 0.0) fraction = std::min(fraction, gap(c, p, i) / -approach);
+    }
+    return std::max(fraction, 0.0);
+  }
+
  private:
   // Calls visit(particle, plane, phi) for every free particle and plane
   // with a nonzero phi.

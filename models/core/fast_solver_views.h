@@ -91,9 +91,15 @@ class PositionProjection {
   virtual void correct_velocity(const Vector& /*x*/, Vector& /*v*/, double /*hs*/) {}
 };
 
+class VertexBlockView;  // models/vertex_blocks.h
+
 class FastSolverViews {
  public:
   virtual ~FastSolverViews() = default;
+
+  // Vertex block descent's per-particle view (models/vertex_blocks.h), or
+  // nullptr when the system has none.
+  virtual const VertexBlockView* vertex_block_view() const { return nullptr; }
 
   // Projective dynamics' view: the stiff conservative forces as distance
   // constraints and projective elements (above), and F minus their forces

@@ -22,6 +22,7 @@
 
 #include "models/core/fast_solver_views.h"
 #include "models/core/mechanical_system.h"
+#include "models/core/vertex_blocks.h"
 
 namespace springlab {
 
@@ -205,6 +206,25 @@ class ForceTerm {
   // MechanicalSystem::admissible_fraction for this term; dx has the layout
   // of c.x (fixed particles: 0).
   virtual double admissible_fraction(const Configuration&, const double* /*dx*/) const {
+    return std::numeric_limits<double>::infinity();
+  }
+  // Vertex block descent's view (models/vertex_blocks.h, VertexBlockView):
+  // for each of `count` free particles p (the k-th's blocks at out.f +
+  // k dim, out.dfdx + k dim^2, out.dfdv + k dim^2, row-major), adds this
+  // term's force on p from its elements around p, dF_p/dx_p and, where
+  // out.dfdv is not null, dF_p/dv_p; with `definite`, each element's share
+  // of dF_p/dx_p made negative semidefinite (VertexBlockView::
+  // vertex_blocks). A term without it (has_vertex_blocks false) makes the
+  // system refuse vbd, naming the term; a constant term (gravity) needs
+  // none (the model adds its force itself).
+  virtual bool has_vertex_blocks() const { return false; }
+  virtual void add_vertex_blocks(const Configuration& /*c*/, const int* /*particles*/,
+                                 int /*count*/, bool /*definite*/,
+                                 const VertexBlocks& /*out*/) const {}
+  // VertexBlockView::vertex_admissible_fraction for this term: moving free
+  // particle p alone by a dx keeps its energy finite for a below it.
+  virtual double vertex_admissible_fraction(const Configuration& /*c*/, int /*particle*/,
+                                            const double* /*dx*/) const {
     return std::numeric_limits<double>::infinity();
   }
   // A stiff conservative term that is a set of distance constraints

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "models/core/decimal_text.h"
+#include "models/core/registry.h"  // did_you_mean
 
 namespace springlab {
 namespace {
@@ -86,8 +87,9 @@ void check_keys(const Reporter& r, const std::string& where, const Json& object,
                 const std::vector<std::string>& allowed, const std::vector<std::string>& required) {
   for (const auto& item : object.items()) {
     if (std::find(allowed.begin(), allowed.end(), item.key()) == allowed.end()) {
-      r.fail(where, "unknown key '" + printable(item.key()) + "' (allowed keys: " +
-                        join(allowed) + ")");
+      r.fail(where, "unknown key '" + printable(item.key()) + "'" +
+                        did_you_mean(item.key(), allowed) + " (allowed keys: " + join(allowed) +
+                        ")");
     }
   }
   for (const std::string& name : required) {

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <memory>
 #include <random>
 #include <string>
@@ -100,6 +101,15 @@ class ElementTerm : public ForceTerm {
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override;
   bool projective_elements(std::vector<ProjectiveElement>& out, Refusal& why) const override;
   bool laplacian_elements(std::vector<ProjectiveElement>& out) const override;
+  // Vertex block descent (models/vertex_blocks.h; fem_vertex_blocks.cc):
+  // per particle, the plain element force and its 3 x 3 (d x d) block from
+  // the material's dP, and the cap that keeps a solid uninverted where its
+  // material has no energy at J <= 0.
+  bool has_vertex_blocks() const override { return true; }
+  void add_vertex_blocks(const Configuration& c, const int* particles, int count, bool definite,
+                         const VertexBlocks& out) const override;
+  double vertex_admissible_fraction(const Configuration& c, int particle,
+                                    const double* dx) const override;
 
  protected:
   // Element e as its term stores it: internal node indices, G (nodes x k,
@@ -116,6 +126,27 @@ class ElementTerm : public ForceTerm {
   virtual Shape shape(std::size_t e) const = 0;
 
  private:
+  // Each element as its particles' vertex blocks read it (built at the
+  // first vertex block), and each free particle's elements (its node slot
+  // in each) at [vertex_first_[p], vertex_first_[p + 1]).
+  struct VertexShape {
+    std::array<int, 4> nodes{};
+    int count = 0;
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 3> G;
+    double W = 0.0;
+    const MaterialModel* model = nullptr;
+    Lame lame;
+  };
+  struct VertexElement {
+    int element;
+    int slot;
+  };
+  void build_vertex_elements() const;
+  Mat vertex_deformation(const Configuration& c, const VertexShape& e) const;
+  mutable std::vector<VertexShape> vertex_shapes_;
+  mutable std::vector<int> vertex_first_;
+  mutable std::vector<VertexElement> vertex_elements_;
+
   int free_particles_;
   bool forbids_states_ = false;
   std::string_view kind_;

@@ -11,7 +11,7 @@
 // particles too: their density depends on the fluid's positions). The pair
 // forces are equal and opposite: momentum is conserved.
 //
-// Jacobian. With R_jk = d rho_j / d x_k (R_jj = sum_l m_l G_jl, R_jk =
+// Jacobian (assembled in fluid_pressure_hessian.cc). With R_jk = d rho_j / d x_k (R_jj = sum_l m_l G_jl, R_jk =
 // m_k G_kj for a neighbour k) and H_ij = grad grad W (the kernel's Hessian:
 // W'/r I + (W'' - W'/r) u u^T), the Hessian of E is
 //
@@ -39,6 +39,7 @@
 
 #include "models/fluids/fluid_forces.h"
 #include "models/fluids/fluid_pattern.h"
+#include "models/fluids/fluid_pressure_hessian.h"
 #include "models/fluids/fluids.h"
 #include "models/fluids/sph_particles.h"
 
@@ -135,138 +136,12 @@ class FluidPressureForce final : public ForceTerm {
     }
   }
 
-  // s * M into block (row particle p, column particle q) when both are free.
-  template <int D>
-  void add(double* values, int p, int q, const double (&M)[D][D], double s) const {
-    if (p >= free_ || q >= free_) return;
-    add_block<D>(values, find_block_slot(*pattern_matrix_, D, p, q), M, s);
-  }
-
   template <int D>
   void add_stiffness_d(const Configuration& c, double* values, bool definite) const {
     for (const auto& shared : fluids_) {
       SphParticles& fluid = *shared;
       fluid.update(c.x);
-      const int n = fluid.size();
-      const auto& pairs = fluid.pairs();
-      const CubicSpline& w = fluid.kernel();
-      // A, A', and R_jj = sum_l m_l G_jl per particle; G_ab per pair.
-      std::vector<double> a(static_cast<std::size_t>(n)), a_slope(static_cast<std::size_t>(n));
-      std::vector<double> self(static_cast<std::size_t>(n * D), 0.0), g(pairs.size() * D);
-      for (int j = 0; j < n; ++j) {
-        const double rho = fluid.density()[static_cast<std::size_t>(j)];
-        a[static_cast<std::size_t>(j)] = fluid.eos().a(rho);
-        a_slope[static_cast<std::size_t>(j)] = fluid.eos().a_slope(rho);
-      }
-      // Each particle's neighbours: (partner, pair, sign of G toward it).
-      std::vector<int> start(static_cast<std::size_t>(n + 1), 0);
-      for (const auto& [p, q] : pairs) {
-        ++start[static_cast<std::size_t>(p + 1)];
-        ++start[static_cast<std::size_t>(q + 1)];
-      }
-      for (int j = 0; j < n; ++j) start[static_cast<std::size_t>(j + 1)] += start[static_cast<std::size_t>(j)];
-      std::vector<int> partner(static_cast<std::size_t>(start.back())), via(partner.size());
-      std::vector<int> fill(start.begin(), start.end() - 1);
-      for (std::size_t k = 0; k < pairs.size(); ++k) {
-        const auto [p, q] = pairs[k];
-        const double so = w.slope_over_r(fluid.distance(k));
-        const double* d = fluid.separation(k);
-        for (int r = 0; r < D; ++r) {
-          g[k * D + r] = so * d[r];  // G_pq
-          self[static_cast<std::size_t>(p * D + r)] += fluid.mass(q) * g[k * D + r];
-          self[static_cast<std::size_t>(q * D + r)] -= fluid.mass(p) * g[k * D + r];
-        }
-        const int ep = fill[static_cast<std::size_t>(p)]++;
-        const int eq = fill[static_cast<std::size_t>(q)]++;
-        partner[static_cast<std::size_t>(ep)] = q;
-        via[static_cast<std::size_t>(ep)] = static_cast<int>(k);
-        partner[static_cast<std::size_t>(eq)] = p;
-        via[static_cast<std::size_t>(eq)] = static_cast<int>(k);
-      }
-
-      // Pair terms: dF_a/dx_a = -K, K = m_a m_b (A_a + A_b) H_ab.
-      for (std::size_t k = 0; k < pairs.size(); ++k) {
-        const auto [p, q] = pairs[k];
-        const double coefficient = fluid.mass(p) * fluid.mass(q) *
-                                   (a[static_cast<std::size_t>(p)] + a[static_cast<std::size_t>(q)]);
-        if (coefficient == 0.0) continue;
-        const double r = fluid.distance(k);
-        double across = w.slope_over_r(r), along = r > 0.0 ? w.curvature(r) : across;
-        if (definite) {
-          across = std::max(across, 0.0);
-          along = std::max(along, 0.0);
-        }
-        double u[D];
-        const double* d = fluid.separation(k);
-        for (int i = 0; i < D; ++i) u[i] = r > 0.0 ? d[i] / r : 0.0;
-        double K[D][D];
-        for (int i = 0; i < D; ++i) {
-          for (int j = 0; j < D; ++j) {
-            K[i][j] = coefficient * ((i == j ? across : 0.0) + (along - across) * u[i] * u[j]);
-          }
-        }
-        const int pi = fluid.index(p), qi = fluid.index(q);
-        add<D>(values, pi, pi, K, -1.0);
-        add<D>(values, qi, qi, K, -1.0);
-        add<D>(values, pi, qi, K, 1.0);
-        add<D>(values, qi, pi, K, 1.0);
-      }
-
-      // Rank-one terms: block (a, k) -= m_j A'_j R_ja R_jk^T over a, k in
-      // {j} and j's neighbours.
-      std::vector<int> members;
-      std::vector<double> gradient;
-      for (int j = 0; j < n; ++j) {
-        const double weight = fluid.mass(j) * a_slope[static_cast<std::size_t>(j)];
-        if (weight == 0.0) continue;
-        members.assign(1, j);
-        gradient.assign(self.begin() + j * D, self.begin() + (j + 1) * D);
-        for (int e = start[static_cast<std::size_t>(j)]; e < start[static_cast<std::size_t>(j + 1)]; ++e) {
-          const int other = partner[static_cast<std::size_t>(e)];
-          const std::size_t k = static_cast<std::size_t>(via[static_cast<std::size_t>(e)]);
-          // R_j,other = m_other G_other,j = -m_other G_j,other; g[k] is
-          // G_first,second.
-          const double sign = pairs[k].first == other ? 1.0 : -1.0;
-          members.push_back(other);
-          for (int r = 0; r < D; ++r) gradient.push_back(sign * fluid.mass(other) * g[k * D + r]);
-        }
-        add_rank_one<D>(values, fluid, members, gradient, -weight);
-      }
-    }
-  }
-
-  // values += s g g^T over the blocks (a, k) of the free members a, k (g:
-  // D entries per member). The members' rows are found in each column by
-  // one sweep in increasing order (a pattern of whole blocks has the same
-  // rows in every column of a block column), not by one search per block.
-  template <int D>
-  void add_rank_one(double* values, const SphParticles& fluid, const std::vector<int>& members,
-                    const std::vector<double>& g, double s) const {
-    order_.clear();
-    for (std::size_t m = 0; m < members.size(); ++m) {
-      const int p = fluid.index(members[m]);
-      if (p < free_) order_.emplace_back(p, static_cast<int>(m));
-    }
-    std::sort(order_.begin(), order_.end());
-    const int* outer = pattern_matrix_->outerIndexPtr();
-    const int* inner = pattern_matrix_->innerIndexPtr();
-    for (const auto& [pt, t] : order_) {
-      const int* begin = inner + outer[pt * D];
-      const int* end = inner + outer[pt * D + 1];
-      const int* from = begin;
-      for (const auto& [ps, m] : order_) {
-        from = std::lower_bound(from, end, ps * D);
-        if (from == end || *from != ps * D) {
-          throw std::logic_error("fluid: a Jacobian block is not in the pattern");
-        }
-        const int rank = static_cast<int>(from - begin);
-        for (int c = 0; c < D; ++c) {
-          double* column = values + outer[pt * D + c] + rank;
-          const double gc = g[static_cast<std::size_t>(t * D + c)];
-          // (As add_block: s times the product, the same rounding.)
-          for (int r = 0; r < D; ++r) column[r] += s * (g[static_cast<std::size_t>(m * D + r)] * gc);
-        }
-      }
+      add_pressure_stiffness<D>(fluid, free_, *pattern_matrix_, definite, values, hessian_);
     }
   }
 
@@ -277,7 +152,7 @@ class FluidPressureForce final : public ForceTerm {
   const SparseMatrix* pattern_matrix_ = nullptr;
   std::vector<double> x_all0_;  // every particle at the start, internal order
   mutable std::vector<double> a_;
-  mutable std::vector<std::pair<int, int>> order_;  // add_rank_one's (index, member)
+  mutable PressureHessianScratch hessian_;
 };
 
 }  // namespace

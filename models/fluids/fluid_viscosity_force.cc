@@ -21,6 +21,19 @@
 // and F_j = -F_i. Its pairs change as the fluid moves: like the pressure's
 // (fluid_pressure_force.cc) its pattern holds the pairs within 2h + a skin
 // and follows the fluid.
+//
+// Lagging (MechanicalSystem::lag_normal_forces, as friction's normal
+// forces). Evaluated live, the viscosity is a force of (x, v) like spring
+// damping: no potential, and a dF/dx that is not symmetric, so Newton would
+// work on ||r|| with sparse LU. The hand-written implicit methods lag its
+// pairs and coefficients kappa_ij from the step's start during their solve:
+// it is then F = -dW/dv of the dissipation potential
+//   W(v) = 1/2 sum_pairs kappa_ij |v_i - v_j|^2    (kappa_ij at x_n),
+// with dF/dx = 0 and dF/dv = -d^2W/dv^2 symmetric, negative semidefinite,
+// so Newton minimizes the step's incremental potential with the symmetric
+// definite matrix (Cholesky, CG). The change within a step is kappa's
+// variation over h (O(h), as for friction); explicit and adaptive methods
+// evaluate it live.
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -39,41 +52,83 @@ constexpr double kEta2 = 0.01;         // eta^2 / h^2
 class FluidViscosityForce final : public ForceTerm {
  public:
   FluidViscosityForce(std::vector<std::shared_ptr<SphParticles>> fluids, std::vector<double> nu,
-                      int dim,
-                      int free_particles, std::vector<double> x_all)
+                      int dim, int free_particles, std::vector<double> x_all)
       : fluids_(std::move(fluids)),
         nu_(std::move(nu)),
         dim_(dim),
         free_(free_particles),
-        pattern_(1.0, dim, std::move(x_all)) {}
+        pattern_(1.0, dim, x_all),
+        x_size_(x_all.size()) {}
 
   std::string_view name() const override { return "fluid-viscosity"; }
   bool conservative() const override { return false; }
   VelocityDependence velocity_dependence() const override { return VelocityDependence::kCoupled; }
-  bool symmetric_jacobians() const override { return false; }
+  // Live: dF/dx is not symmetric and F has no potential; lagged: F = -dW/dv
+  // (see the header).
+  bool symmetric_jacobians() const override { return lagged_; }
+  bool derives_from_potentials() const override { return lagged_; }
+  double velocity_potential(const Configuration& c) const override {
+    if (!lagged_) return 0.0;
+    double sum = 0.0;
+    for (const LaggedPair& p : lagged_pairs_) {
+      double w2 = 0.0;
+      for (int r = 0; r < dim_; ++r) {
+        const double w = c.v[p.a * dim_ + r] - c.v[p.b * dim_ + r];
+        w2 += w * w;
+      }
+      sum += 0.5 * p.kappa * w2;
+    }
+    return sum;
+  }
+  void lag(const Configuration* c, double) override {
+    lagged_ = false;
+    lagged_pairs_.clear();
+    lagged_slots_.clear();
+    if (c == nullptr) return;
+    for_each_pair(*c, [&](const Pair& p) {
+      const double kappa = p.C * p.phi;
+      if (kappa != 0.0) lagged_pairs_.push_back({p.a, p.b, kappa});
+    });
+    // Where the lagged pairs were found: the pattern declares the pairs
+    // around it for the duration of the lag (they do not move with c).
+    x_lag_.assign(c->x, c->x + x_size_);
+    lagged_ = true;
+  }
 
   void add_force(const Configuration& c, double* f) const override {
-    for_each_pair(c, [&](const Pair& p) {
-      const double kappa = p.C * p.phi;
+    auto add = [&](int a, int b, double kappa) {
       for (int r = 0; r < dim_; ++r) {
-        const double force = -kappa * (c.v[p.a * dim_ + r] - c.v[p.b * dim_ + r]);
-        f[p.a * dim_ + r] += force;
-        f[p.b * dim_ + r] -= force;
+        const double force = -kappa * (c.v[a * dim_ + r] - c.v[b * dim_ + r]);
+        f[a * dim_ + r] += force;
+        f[b * dim_ + r] -= force;
       }
-    });
+    };
+    if (lagged_) {
+      for (const LaggedPair& p : lagged_pairs_) add(p.a, p.b, p.kappa);
+      return;
+    }
+    for_each_pair(c, [&](const Pair& p) { add(p.a, p.b, p.C * p.phi); });
   }
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
     pattern_.declare(fluids_, builder, free_);
   }
-  void bind_jacobian(const SparseMatrix& pattern) override { pattern_matrix_ = &pattern; }
-  // Neighbours couple: fluid_pattern.h.
+  void bind_jacobian(const SparseMatrix& pattern) override {
+    pattern_matrix_ = &pattern;
+    lagged_slots_.clear();
+  }
+  // Neighbours couple: fluid_pattern.h. Lagged, the pairs are those at the
+  // lag's configuration, whatever c is.
   bool pattern_varies() const override { return true; }
   std::string pattern_change() const override {
     return "its particles change neighbours (a fluid)";
   }
-  bool pattern_holds(const Configuration& c) const override { return pattern_.holds(fluids_, c.x); }
-  void follow_pattern(const Configuration& c) override { pattern_.follow(fluids_, c.x); }
+  bool pattern_holds(const Configuration& c) const override {
+    return pattern_.holds(fluids_, lagged_ ? x_lag_.data() : c.x);
+  }
+  void follow_pattern(const Configuration& c) override {
+    pattern_.follow(fluids_, lagged_ ? x_lag_.data() : c.x);
+  }
 
   void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
     if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
@@ -126,6 +181,23 @@ class FluidViscosityForce final : public ForceTerm {
 
   template <int D>
   void add_jacobians_d(const Configuration& c, double* dfdx, double* dfdv) const {
+    if (lagged_) {
+      // dF/dv = -d^2W/dv^2; dF/dx = 0. The pairs are fixed for the lag:
+      // their slots are found once per lag and pattern.
+      if (dfdv == nullptr) return;
+      if (lagged_slots_.size() != lagged_pairs_.size()) {
+        lagged_slots_.clear();
+        for (const LaggedPair& p : lagged_pairs_) {
+          lagged_slots_.push_back(find_pair_slots(*pattern_matrix_, D, p.a, p.b, free_));
+        }
+      }
+      for (std::size_t k = 0; k < lagged_pairs_.size(); ++k) {
+        double K[D][D] = {};
+        for (int i = 0; i < D; ++i) K[i][i] = lagged_pairs_[k].kappa;
+        add_pair_blocks<D>(dfdv, lagged_slots_[k], K, -1.0);
+      }
+      return;
+    }
     for_each_pair(c, [&](const Pair& p) {
       if (dfdv != nullptr) {
         double K[D][D] = {};
@@ -157,6 +229,17 @@ class FluidViscosityForce final : public ForceTerm {
   int dim_, free_;
   FluidPattern pattern_;  // the pairs declared in the Jacobian's pattern
   const SparseMatrix* pattern_matrix_ = nullptr;
+  // The lag (see the header): each pair's internal indices and kappa at the
+  // lag's configuration x_lag_ (every particle, internal order).
+  struct LaggedPair {
+    int a, b;
+    double kappa;
+  };
+  bool lagged_ = false;
+  std::vector<LaggedPair> lagged_pairs_;
+  mutable std::vector<PairSlots> lagged_slots_;  // of the bound pattern (empty: to find)
+  std::vector<double> x_lag_;
+  std::size_t x_size_ = 0;  // every particle's coordinates
 };
 
 }  // namespace

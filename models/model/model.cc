@@ -10,6 +10,7 @@
 
 #include "models/bodies/bodies.h"
 #include "models/core/element_kind.h"
+#include "models/core/sparse_pattern.h"
 #include "models/model/element_registry.h"
 #include "models/model/energy_layout.h"
 #include "models/model/scene_extent.h"
@@ -158,16 +159,42 @@ void Model::build_pattern() const {
   JacobianPatternBuilder builder(dim);
   for (int p = 0; p < unknown_particles; ++p) builder.add_block(p, p);
   for (const auto& term : terms_) term->declare_jacobian_blocks(builder);
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(builder.blocks().size() * static_cast<std::size_t>(dim * dim));
-  for (const auto& [a, b] : builder.blocks()) {
-    for (int r = 0; r < dim; ++r)
-      for (int c = 0; c < dim; ++c) entries.emplace_back(a * dim + r, b * dim + c, 0.0);
+  // The compressed pattern straight from the blocks (a, b) (row, column
+  // particle; repeated ones once): each block column's row particles,
+  // bucketed by a counting sort, then sorted and made unique, give the same
+  // rows to each of its dim columns. (A fluid's pattern is rebuilt as it
+  // flows: setFromTriplets of dim^2 entries per block cost 5 % of an
+  // implicit dam break.)
+  const std::size_t columns = static_cast<std::size_t>(unknown_particles);
+  std::vector<int> start(columns + 1, 0);
+  for (const auto& block : builder.blocks()) ++start[static_cast<std::size_t>(block.second) + 1];
+  for (std::size_t b = 0; b < columns; ++b) start[b + 1] += start[b];
+  std::vector<int> rows(builder.blocks().size()), fill(start.begin(), start.end() - 1);
+  for (const auto& [a, b] : builder.blocks()) rows[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = a;
+  std::vector<int> count(columns);  // distinct row particles per block column
+  Eigen::Index nonzeros = 0;
+  for (std::size_t b = 0; b < columns; ++b) {
+    const auto first = rows.begin() + start[b], last = rows.begin() + start[b + 1];
+    std::sort(first, last);
+    count[b] = static_cast<int>(std::unique(first, last) - first);
+    nonzeros += static_cast<Eigen::Index>(count[b]) * dim * dim;
   }
   pattern_ = SparseMatrix();
   pattern_.resize(n, n);
-  pattern_.setFromTriplets(entries.begin(), entries.end());
-  pattern_.makeCompressed();
+  pattern_.resizeNonZeros(nonzeros);
+  int* outer = pattern_.outerIndexPtr();
+  int* inner = pattern_.innerIndexPtr();
+  int at = 0;
+  for (std::size_t b = 0; b < columns; ++b) {
+    for (int c = 0; c < dim; ++c) {
+      outer[b * static_cast<std::size_t>(dim) + static_cast<std::size_t>(c)] = at;
+      for (int k = 0; k < count[b]; ++k) {
+        const int a = rows[static_cast<std::size_t>(start[b] + k)];
+        for (int r = 0; r < dim; ++r) inner[at++] = a * dim + r;
+      }
+    }
+  }
+  outer[n] = at;
   std::fill(pattern_.valuePtr(), pattern_.valuePtr() + pattern_.nonZeros(), 0.0);
   for (const auto& term : terms_) term->bind_jacobian(pattern_);
   pattern_built_ = true;
@@ -293,8 +320,9 @@ void Model::assemble_jacobians(ForcePart part, bool definite, double t, const Ve
   for (SparseMatrix* m : {dfdx, dfdv}) {
     if (m == nullptr) continue;
     // (With a varying pattern an equal count does not mean an equal
-    // pattern: always the current one.)
-    if (pattern_varies_ || m->nonZeros() != pattern_.nonZeros() || m->rows() != pattern_.rows()) {
+    // pattern: the indices are compared, cheaper than a copy.)
+    if (pattern_varies_ ? !same_pattern(*m, pattern_)
+                        : m->nonZeros() != pattern_.nonZeros() || m->rows() != pattern_.rows()) {
       *m = pattern_;
     }
     std::fill(m->valuePtr(), m->valuePtr() + m->nonZeros(), 0.0);

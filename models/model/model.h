@@ -25,10 +25,13 @@
 #include "models/core/scene.h"
 #include "models/model/energy_layout.h"
 #include "models/core/verdict.h"
+#include "models/core/vertex_blocks.h"
 
 namespace springlab {
 
-class Model final : public MechanicalSystem, public FastSolverViews {
+class Model final : public MechanicalSystem,
+                    public FastSolverViews,
+                    public VertexBlockView {
  public:
   explicit Model(const Scene& scene);
 
@@ -90,6 +93,20 @@ class Model final : public MechanicalSystem, public FastSolverViews {
   void plane_constraints(std::vector<PlaneConstraint>& out) const override;
   void external_force(double t, const Vector& x, const Vector& v, Vector& f) const override;
   int dimension_of_state() const override { return order_.dim; }
+  const VertexBlockView* vertex_block_view() const override { return this; }
+
+  // VertexBlockView (vertex_blocks.h), from the same terms.
+  bool vertex_form(Refusal& why) const override;
+  Eigen::Index all_particles() const override {
+    return static_cast<Eigen::Index>(order_.scene_of_internal.size());
+  }
+  void fill_fixed(Vector& x_all) const override;
+  bool reads_velocity() const override { return reads_velocity_; }
+  void constant_force(double* f) const override;
+  void vertex_blocks(double t, const double* x_all, const double* v_all, const int* particles,
+                     int count, bool definite, const VertexBlocks& out) const override;
+  double vertex_admissible_fraction(const double* x_all, int particle,
+                                    const double* dx) const override;
 
   int dimension() const { return order_.dim; }
   int particle_count() const { return static_cast<int>(order_.internal_of_scene.size()); }

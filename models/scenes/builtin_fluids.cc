@@ -1,5 +1,6 @@
 // The built-in fluid scenes (docs/scenes.md "Built-in scenes"): `dam-break`
-// (Martin and Moyce's collapsing column), `tank` (water at rest) and
+// (Martin and Moyce's collapsing column), `dam-break-obstacle` (MARIN's 3-D
+// dam break onto a box, SPHERIC test 2), `tank` (water at rest) and
 // `sloshing` (the first mode of a tank). Each is one fluid (fluids.h) on a
 // square (cubic) lattice of spacing l: the water's particles first, then
 // the walls' -- kWallLayers layers of fixed particles continuing the
@@ -16,6 +17,7 @@
 // (Monaghan 2005, Rep. Prog. Phys. 68:1703, the shear viscosity his term
 // corresponds to; alpha = 0.01-0.1 in dam-break codes).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -36,12 +38,25 @@ using Values = SceneValues;
 constexpr int kWallLayers = 3;  // >= the support 2h = 2.6 l
 
 // The box's lattice: nx x ny_wall (x nz) cells inside, the water's nx_water x
-// ny_water (x nz) of them from the corner at the origin.
+// ny_water (x nz) of them from the corner at the origin, and an obstacle:
+// the cells [lo, hi) along each axis (none when empty) filled with fixed
+// particles, as the walls.
 struct Box {
   int dim = 2;
   double l = 1.0;
   int nx = 1, ny_wall = 1, nz = 1;  // nz: 1 in 2-D
   int nx_water = 1, ny_water = 1;
+  int water_from = 0;  // the water's first cell along x
+  std::array<int, 3> obstacle_lo{0, 0, 0}, obstacle_hi{0, 0, 0};
+  bool in_obstacle(int i, int j, int k) const {
+    return i >= obstacle_lo[0] && i < obstacle_hi[0] && j >= obstacle_lo[1] &&
+           j < obstacle_hi[1] && k >= obstacle_lo[2] && k < obstacle_hi[2];
+  }
+  double count_obstacle() const {
+    double n = 1.0;
+    for (int r = 0; r < 3; ++r) n *= std::max(0, obstacle_hi[r] - obstacle_lo[r]);
+    return n;
+  }
   double count_water() const { return static_cast<double>(nx_water) * ny_water * nz; }
   double count_walls() const {
     const double z_out = dim == 3 ? nz + 2.0 * kWallLayers : 1.0;
@@ -69,7 +84,7 @@ Scene fill_box(const Box& b, const Values& p, double water_height) {
   const int k_lo = b.dim == 3 ? 0 : 0, k_hi = b.dim == 3 ? b.nz : 1;
   for (int k = k_lo; k < k_hi; ++k) {
     for (int j = 0; j < b.ny_water; ++j) {
-      for (int i = 0; i < b.nx_water; ++i) {
+      for (int i = b.water_from; i < b.water_from + b.nx_water; ++i) {
         Particle q;
         q.x = site(b, i, j, k);
         q.mass = mass;
@@ -83,7 +98,7 @@ Scene fill_box(const Box& b, const Values& p, double water_height) {
     for (int j = -kWallLayers; j < b.ny_wall; ++j) {
       for (int i = -kWallLayers; i < b.nx + kWallLayers; ++i) {
         const bool inside = i >= 0 && i < b.nx && j >= 0 && (b.dim == 2 || (k >= 0 && k < b.nz));
-        if (inside) continue;
+        if (inside && !b.in_obstacle(i, j, k)) continue;
         Particle q;
         q.x = site(b, i, j, k);
         q.mass = mass;
@@ -171,6 +186,51 @@ Scene build_sloshing(const Values& p) {
   return scene;
 }
 
+// The dam break with an obstacle of MARIN (Kleefsman et al. 2005, J.
+// Comput. Phys. 206:363; SPHERIC test 2, Issa and Violeau 2006), in 3-D, in
+// the experiment's coordinates: a tank 3.22 m long (x) and 1 m across (z),
+// walls 1 m high, the water 1.228 m long and 0.55 m deep across the tank's
+// width against its far end x = 3.22 m, and a box on the floor at x in
+// [0.6635, 0.8245], z in [0.2955, 0.6985], 0.161 m high. Every length is
+// rounded to whole cells of the spacing.
+namespace {
+
+Box dam_break_obstacle_box(const Values& p) {
+  const double l = p.at("spacing");
+  Box b;
+  b.dim = 3;
+  b.l = l;
+  b.nx = cells(3.22, l);
+  b.ny_wall = cells(1.0, l);
+  b.nz = cells(1.0, l);
+  b.nx_water = cells(1.228, l);
+  b.ny_water = cells(0.55, l);
+  b.nx_water = std::min(b.nx_water, b.nx);
+  b.water_from = b.nx - b.nx_water;
+  if (p.at("obstacle") != 0.0) {
+    // Its faces at the nearest cell boundaries, at least one cell each way.
+    auto at = [l](double x) { return static_cast<int>(std::clamp(std::round(x / l), 0.0, 1e8)); };
+    b.obstacle_lo = {at(0.6635), 0, at(0.2955)};
+    b.obstacle_hi = {std::max(b.obstacle_lo[0] + 1, at(0.8245)), std::max(1, at(0.161)),
+                     std::max(b.obstacle_lo[2] + 1, at(0.6985))};
+  }
+  return b;
+}
+
+}  // namespace
+
+Scene build_dam_break_obstacle(const Values& p) {
+  const Box b = dam_break_obstacle_box(p);
+  Scene scene = fill_box(b, p, b.ny_water * b.l);
+  scene.name = "dam-break-obstacle";
+  return scene;
+}
+
+double dam_break_obstacle_particles(const Values& p) {
+  const Box b = dam_break_obstacle_box(p);
+  return b.count_water() + b.count_walls() + b.count_obstacle();
+}
+
 double dam_break_particles(const Values& p) {
   const Box b = dam_break_box(p);
   return b.count_water() + b.count_walls();
@@ -184,6 +244,9 @@ namespace {
 
 SceneCounts dam_break_counts(const SceneValues& p) { return {dam_break_particles(p), 0.0}; }
 SceneCounts tank_counts(const SceneValues& p) { return {tank_particles(p), 0.0}; }
+SceneCounts dam_break_obstacle_counts(const SceneValues& p) {
+  return {dam_break_obstacle_particles(p), 0.0};
+}
 
 // The fluid scenes' shared parameters (builtin_fluids.cc).
 std::vector<ParameterSpec> fluid_params(double spacing, double alpha) {
@@ -208,6 +271,23 @@ const SceneEntry& dam_break_scene() {
          with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive)},
               fluid_params(0.005, 0.02)),
          build_dam_break, dam_break_counts, "spacing");
+  return entry;
+}
+
+const SceneEntry& dam_break_obstacle_scene() {
+  static const SceneEntry entry = scene_entry(
+      "dam-break-obstacle",
+      "MARIN's 3-D dam break onto a box (Kleefsman et al. 2005, SPHERIC test 2): water 1.228 m "
+      "long and 0.55 m deep across a tank 3.22 m x 1 m, released against a box on the floor",
+      {param("spacing", 0.05, "particle spacing l [m] (smoothing length 1.3 l)", Range::kPositive),
+       param("obstacle", 1, "1: the box on the floor, 0: none", Range::kZeroOrOne),
+       param("density", 1000, "rest density rho0 [kg/m^3]", Range::kPositive),
+       param("sound", 10, "speed of sound as a multiple of sqrt(g H), H the water's height",
+             Range::kPositive),
+       param("alpha", 0.02, "viscosity as Monaghan's alpha: nu = alpha h c / (2 (d + 2))",
+             Range::kNonNegative),
+       param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kPositive)},
+      build_dam_break_obstacle, dam_break_obstacle_counts, "spacing");
   return entry;
 }
 

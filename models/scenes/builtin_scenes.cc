@@ -19,23 +19,24 @@ namespace springlab {
 // The built-in scenes, one line each (models/core/registry.h), by file:
 // builtin_springs.cc, builtin_solids.cc, builtin_contact.cc,
 // builtin_bodies.cc, builtin_fluids.cc.
-#define SPRINGLAB_SCENES(X)            \
-  X(SceneEntry, spring_scene)          \
-  X(SceneEntry, oscillator_scene)      \
-  X(SceneEntry, chain_scene)           \
-  X(SceneEntry, cloth_scene)           \
-  X(SceneEntry, beam_scene)            \
-  X(SceneEntry, membrane_scene)        \
-  X(SceneEntry, block_scene)           \
-  X(SceneEntry, slope_scene)           \
-  X(SceneEntry, tumbling_box_scene)    \
-  X(SceneEntry, box_on_slope_scene)    \
-  X(SceneEntry, box_chain_scene)       \
-  X(SceneEntry, box_pile_scene)        \
-  X(SceneEntry, box_tower_scene)       \
-  X(SceneEntry, box_drop_scene)        \
-  X(SceneEntry, dam_break_scene)       \
-  X(SceneEntry, tank_scene)            \
+#define SPRINGLAB_SCENES(X)               \
+  X(SceneEntry, spring_scene)             \
+  X(SceneEntry, oscillator_scene)         \
+  X(SceneEntry, chain_scene)              \
+  X(SceneEntry, cloth_scene)              \
+  X(SceneEntry, beam_scene)               \
+  X(SceneEntry, membrane_scene)           \
+  X(SceneEntry, block_scene)              \
+  X(SceneEntry, slope_scene)              \
+  X(SceneEntry, tumbling_box_scene)       \
+  X(SceneEntry, box_on_slope_scene)       \
+  X(SceneEntry, box_chain_scene)          \
+  X(SceneEntry, box_pile_scene)           \
+  X(SceneEntry, box_tower_scene)          \
+  X(SceneEntry, box_drop_scene)           \
+  X(SceneEntry, dam_break_scene)          \
+  X(SceneEntry, dam_break_obstacle_scene) \
+  X(SceneEntry, tank_scene)               \
   X(SceneEntry, sloshing_scene)
 
 SPRINGLAB_REGISTRY(SceneEntry, SPRINGLAB_SCENES, scene_registry)

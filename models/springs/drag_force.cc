@@ -39,6 +39,20 @@ class DragForce final : public ForceTerm {
     diagonal_.resize(static_cast<std::size_t>(free_dofs_));
   }
 
+  // Vertex block descent (models/vertex_blocks.h): F_p = -gamma v_p,
+  // dF_p/dv_p = -gamma I.
+  bool has_vertex_blocks() const override { return true; }
+  void add_vertex_blocks(const Configuration& c, const int* particles, int count, bool,
+                         const VertexBlocks& out) const override {
+    const int d = c.dim;
+    for (int n = 0; n < count; ++n) {
+      for (int r = 0; r < d; ++r) {
+        out.f[n * d + r] -= gamma_ * c.v[particles[n] * d + r];
+        if (out.dfdv != nullptr) out.dfdv[n * d * d + r * d + r] -= gamma_;
+      }
+    }
+  }
+
   void add_jacobians(const Configuration&, double*, double* dfdv) const override {
     if (dfdv == nullptr) return;
     for (int slot : diagonal_) dfdv[slot] -= gamma_;

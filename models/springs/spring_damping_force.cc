@@ -15,6 +15,7 @@
 
 #include "models/core/element_kind.h"
 #include "models/springs/springs.h"
+#include "models/springs/vertex_pairs.h"
 
 namespace springlab {
 namespace {
@@ -54,7 +55,55 @@ class SpringDampingForce final : public ForceTerm {
     if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
   }
 
+  // Vertex block descent (models/vertex_blocks.h): particle p's dampers
+  // give F_p = -c (w.u) u and the blocks above with u = (x_p - x_o) / l,
+  // w = v_p - v_o (both flip with the ends, which leaves every formula as
+  // it is). dF_p/dx_p is not symmetric; `definite` keeps it (vbd solves
+  // with the symmetric part of its block, integrators/vbd.h).
+  bool has_vertex_blocks() const override { return true; }
+  void add_vertex_blocks(const Configuration& c, const int* particles, int count, bool,
+                         const VertexBlocks& out) const override {
+    if (vertex_.first.empty()) {
+      std::vector<std::pair<int, int>> ends;
+      for (const DamperData& s : dampers_) ends.emplace_back(s.a, s.b);
+      vertex_ = vertex_pairs(ends, free_);
+    }
+    if (dim_ == 2) add_vertex_blocks_d<2>(c, particles, count, out);
+    else add_vertex_blocks_d<3>(c, particles, count, out);
+  }
+
  private:
+  template <int D>
+  void add_vertex_blocks_d(const Configuration& c, const int* particles, int count,
+                           const VertexBlocks& out) const {
+    for (int n = 0; n < count; ++n) {
+      const int p = particles[n];
+      double* f = out.f + n * D;
+      double* dfdx = out.dfdx + n * D * D;
+      double* dfdv = out.dfdv != nullptr ? out.dfdv + n * D * D : nullptr;
+      const int end = vertex_.first[static_cast<std::size_t>(p) + 1];
+      for (int e = vertex_.first[static_cast<std::size_t>(p)]; e < end; ++e) {
+        const VertexPairs::Entry& entry = vertex_.entries[static_cast<std::size_t>(e)];
+        const DamperData s{p, entry.other, dampers_[static_cast<std::size_t>(entry.pair)].c};
+        double u[D], w[D], l;
+        if (!geometry<D>(c, s, u, w, l)) continue;
+        double wu = 0.0;
+        for (int r = 0; r < D; ++r) wu += w[r] * u[r];
+        double pw[D];
+        for (int r = 0; r < D; ++r) pw[r] = w[r] - wu * u[r];
+        for (int r = 0; r < D; ++r) {
+          f[r] -= s.c * wu * u[r];
+          for (int q = 0; q < D; ++q) {
+            const double p_rq = (r == q ? 1.0 : 0.0) - u[r] * u[q];
+            dfdx[r * D + q] -= (s.c / l) * (wu * p_rq + u[r] * pw[q]);
+            if (dfdv != nullptr) dfdv[r * D + q] -= s.c * u[r] * u[q];
+          }
+        }
+      }
+    }
+  }
+  mutable VertexPairs vertex_;  // built at the first vertex block
+
   // Unit direction and relative velocity of damper s; false when degenerate.
   template <int D>
   bool geometry(const Configuration& c, const DamperData& s, double (&u)[D], double (&w)[D],

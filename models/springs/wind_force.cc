@@ -58,6 +58,21 @@ class WindForce final : public ForceTerm {
     diagonal_.resize(static_cast<std::size_t>(free_particles_ * dim_));
   }
 
+  // Vertex block descent (models/vertex_blocks.h): F_p = c_w (w(t) - v_p),
+  // dF_p/dv_p = -c_w I.
+  bool has_vertex_blocks() const override { return true; }
+  void add_vertex_blocks(const Configuration& c, const int* particles, int count, bool,
+                         const VertexBlocks& out) const override {
+    double w[3];
+    wind_at(c.t, w);
+    for (int n = 0; n < count; ++n) {
+      for (int r = 0; r < dim_; ++r) {
+        out.f[n * dim_ + r] += wind_.coefficient * (w[r] - c.v[particles[n] * dim_ + r]);
+        if (out.dfdv != nullptr) out.dfdv[n * dim_ * dim_ + r * dim_ + r] -= wind_.coefficient;
+      }
+    }
+  }
+
   void add_jacobians(const Configuration&, double*, double* dfdv) const override {
     if (dfdv == nullptr) return;
     for (int slot : diagonal_) dfdv[slot] -= wind_.coefficient;

@@ -124,9 +124,11 @@ def main(argv=None):
     errors = []
     toc = [("integrators", "The integrators")]
     body = [attempt(errors, "integrator table", integrators_html, integrators, names)]
+    first_of_kind = {}
     for e in experiments:
         toc.append((e.name, e.title()))
-        body.append(section(e, KINDS[e.kind], ctx, errors))
+        body.append(section(e, KINDS[e.kind], ctx, errors, first_of_kind.get(e.kind)))
+        first_of_kind.setdefault(e.kind, (e.name, e.title()))
     if bench is not None:
         toc.append(("bench", "Step cost (benchmarks)"))
         body.append('<section id="bench"><h2>Step cost <small>(%s)</small></h2>\n%s</section>\n'

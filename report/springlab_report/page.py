@@ -134,9 +134,18 @@ def attempt(errors, what, fn, *args):
         return '<div class="report-error">%s failed:\n%s</div>\n' % (esc(what), esc(tb))
 
 
-def section(exp, module, ctx, errors):
+def section(exp, module, ctx, errors, first_of_kind=None):
+    """One experiment's section. `first_of_kind`: the earlier section of the
+    same kind (name, title), whose "What to look for" this one would repeat
+    word for word: it links there instead."""
     body = [note_html(esc(n)) for n in exp.notes]
-    body.append('<p class="theory"><b>What to look for.</b> %s</p>\n' % esc(module.ABOUT))
+    if first_of_kind is None:
+        body.append('<p class="theory"><b>What to look for.</b> %s</p>\n' % esc(module.ABOUT))
+    else:
+        body.append('<p class="theory"><b>What to look for.</b> The same as in '
+                    '<a href="#%s">%s</a> (the same kind of experiment, %s); this section\'s '
+                    'settings below say what differs.</p>\n'
+                    % (esc(first_of_kind[0]), esc(first_of_kind[1]), esc(exp.kind)))
     if exp.tables:
         body.append(attempt(errors, "%s (%s)" % (exp.name, exp.kind), module.render, exp, ctx))
     else:
@@ -241,6 +250,22 @@ def data_files_html(exp, files):
         ", ".join(items))
 
 
+def run_options(names, runs):
+    """Per integrator of the settings, " (key value, ...)" from its run's
+    options when the settings list one run per integrator (so that a method
+    run twice, e.g. with stiffness exact and definite, is told apart), else
+    ""."""
+    if not (isinstance(runs, list) and len(runs) == len(names) and
+            all(isinstance(r, dict) and r.get("integrator") == n for r, n in zip(runs, names))):
+        return [""] * len(names)
+    out = []
+    for r in runs:
+        options = ["%s %s" % (k, v if isinstance(v, str) else json.dumps(v))
+                   for k, v in r.items() if k != "integrator"]
+        out.append(" (%s)" % ", ".join(options) if options else "")
+    return out
+
+
 def settings_html(exp, integrators, files=None):
     s = exp.settings
     if not s:
@@ -253,8 +278,9 @@ def settings_html(exp, integrators, files=None):
         out.append("<p>%s</p>\n" % esc(desc))
     names = s.get("integrators")
     if isinstance(names, list):
-        out.append("<p><b>Integrators</b>: %s</p>\n" % ", ".join(swatch(integrators, str(n))
-                                                                for n in names))
+        out.append("<p><b>Integrators</b>: %s</p>\n" % ", ".join(
+            swatch(integrators, str(n)) + esc(options) for n, options in
+            zip(names, run_options(names, s.get("runs")))))
     simple = []
     for k, v in s.items():
         if k in ("name", "experiment", "title", "description", "integrators", "definition",

@@ -8,7 +8,8 @@
 // the frames it drew (data-frames-drawn) and, from the canvas pixels, the
 // panels that show something (data-nonempty-panels of data-panels): what
 // tests/report/check_report.py reads. `index.html#player-t=0.5` opens every
-// player paused at t = 0.5 s (for screenshots).
+// player paused at t = 0.5 s (for screenshots). A player scrolled off screen
+// pauses its clock after that first check.
 (function () {
   if (window.springlabPlayer) return;
   window.springlabPlayer = true;
@@ -280,8 +281,17 @@
     var start = /player-t=([0-9.eE+-]+)/.exec(location.hash);
     if (start) { T = Math.min(tEnd, Number(start[1])); playing = false; button.textContent = 'Play'; }
     var step = 0.04;
+    // Off screen, a player stops drawing once it has shown that it plays:
+    // the page's players would otherwise keep a laptop's CPU busy, and a
+    // headless screenshot with a time budget would never settle.
+    var onScreen = true;
+    if ('IntersectionObserver' in window) {
+      new IntersectionObserver(function (seen) {
+        onScreen = seen[seen.length - 1].isIntersecting;
+      }).observe(fig);
+    }
     setInterval(function () {
-      if (!playing) return;
+      if (!playing || (checked && !onScreen)) return;
       T += step;
       if (T > tEnd + 0.8) T = 0;
       draw();

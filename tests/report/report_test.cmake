@@ -37,4 +37,4 @@ foreach(output IN LISTS outputs)
 endforeach()
 run_step("the report in Chromium" "${PYTHON}" "${SOURCE_DIR}/tests/report/check_report.py"
          --html "${WORK_DIR}/report/index.html" --chromium "${CHROMIUM}" --expect-players
-         --max-bytes 6000000)
+         --max-bytes 6000000 --screenshot "${WORK_DIR}/screenshot.png")

@@ -28,7 +28,7 @@ from springlab_report.integrators import Integrators  # noqa: E402
 from springlab_report.kinds import KINDS  # noqa: E402
 from springlab_report.kinds.convergence import _coinciding  # noqa: E402
 from springlab_report.kinds.energy import classify  # noqa: E402
-from springlab_report.kinds import motion, spectral  # noqa: E402
+from springlab_report.kinds import motion, spectral, stability  # noqa: E402
 from springlab_report.page import marker_text  # noqa: E402
 
 INTEGRATORS = {"integrators": [
@@ -172,6 +172,18 @@ class EnergySentences(unittest.TestCase):
         self.assertIn("gain energy: symplectic-euler (+50% E_s by t = 10 s)", page)
         self.assertNotIn("oscillate without drift", page)
 
+    def test_a_second_section_of_one_kind_links_to_the_first(self):
+        t = [0.1 * k for k in range(11)]
+        energy_data(self.s, {"symplectic-euler": (t, [1.0] * len(t))})
+        second = json.loads((self.s.dir / "energy.json").read_text())
+        second["name"] = "energy-again"
+        self.s.json("energy-again.json", second)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        about = html.escape(KINDS["energy"].ABOUT, quote=True)
+        self.assertEqual(page.count(about), 1)
+        self.assertIn('The same as in <a href="#energy">', page)
+
     def test_coinciding_runs_are_said_to_coincide(self):
         t = [0.1 * k for k in range(50)]
         e = [math.exp(-x) for x in t]
@@ -300,6 +312,28 @@ class Motion(unittest.TestCase):
         self.assertIn("explicit-euler diverged at t = 0.1 s", page)
         self.assertIn("implicit-euler ran to t = 0.2 s; energy change at its last good frame "
                       "-0.2 E_s", page)
+
+
+class MotionDampingContrast(unittest.TestCase):
+    """Runs that keep the energy beside runs that damp it are told apart in
+    one sentence; none when all agree."""
+
+    def panel(self, name, change, status="completed"):
+        """A run whose energy changes by `change` E_s (E_s = 2 J)."""
+        return {"name": name, "status": status, "Es": 2.0, "energy": [1.0, 1.0 + 2.0 * change],
+                "past": [0, 0]}
+
+    def test_sentence_follows_the_energies(self):
+        panels = [self.panel("cvode-bdf", 0.001), self.panel("implicit-euler", -0.66),
+                  self.panel("xpbd", -0.58), self.panel("explicit-euler", 9, "diverged")]
+        text = motion.damping_contrast(panels)
+        self.assertEqual(text, "At this step cvode-bdf keeps the energy within 0.01 E_s while "
+                               "implicit-euler, xpbd lose 0.58 to 0.66 E_s: where their panels "
+                               "differ at one moment (one still moving, another at rest), that is "
+                               "the methods' numerical damping, not the scene")
+        # All damp (or all keep): nothing to contrast.
+        self.assertIsNone(motion.damping_contrast(panels[1:]))
+        self.assertIsNone(motion.damping_contrast(panels[:1]))
 
 
 class MotionBodies(unittest.TestCase):
@@ -675,18 +709,24 @@ class FluidKind(unittest.TestCase):
         facts = [html.unescape(f) for f in re.findall(r"<li>([^<]*)</li>", page)]
         self.assertIn("Refused at the start: projective-dynamics: fluid forces have no projective "
                       "form.", facts)
-        self.assertIn("Stopped: explicit-euler at dt = 5e-05 s diverged at t = 0.0125 s "
+        self.assertIn("Stopped: explicit-euler at 0.05 ms diverged at t = 0.0125 s "
                       "(T = 0.175).", facts)
         self.assertIn("At T = 2 Martin and Moyce measured Z = 2.35; the runs give "
-                      "symplectic-euler 2.47 (5 %), implicit-euler 2.12 (-10 %).", facts)
-        self.assertIn("The fastest front of any completed run is symplectic-euler's 1.5 m/s, "
-                      "below Ritter's bound 2√(2ga) = 2.8 m/s.", facts)
-        self.assertIn("Cost per simulated second: cheapest symplectic-euler at dt = 0.0002 s "
-                      "(8 s), dearest implicit-euler at dt = 0.001 s (16 s), 2 times as much.",
-                      facts)
+                      "symplectic-euler at 0.2 ms 2.47 (5 %), implicit-euler at 1 ms 2.12 "
+                      "(-10 %).", facts)
+        self.assertIn("Within 15 % of the measured front at T = 2: symplectic-euler at 0.2 ms "
+                      "and implicit-euler at 1 ms.", facts)
+        self.assertIn("The fastest front of any completed run, 1.5 m/s (symplectic-euler at "
+                      "0.2 ms), is below Ritter's bound 2√(2ga) = 2.8 m/s.", facts)
+        self.assertIn("Cost per simulated second: cheapest symplectic-euler at 0.2 ms (8 s), "
+                      "dearest implicit-euler at 1 ms (16 s), 2 times as much.", facts)
+        self.assertIn("Largest compression ρ/ρ₀ − 1 in any sampled state: 1.2 % "
+                      "(symplectic-euler at 0.2 ms); the weakly compressible model aims at "
+                      "about 1 %.", facts)
         self.assertIn("Energy at the end, in units of M g a (viscous work, then the integrator's "
-                      "own change E − E₀ + W_visc): implicit-euler 0.3 viscous, -0.1 numerical; "
-                      "symplectic-euler 0.2 viscous, -0.01 numerical.", facts)
+                      "own change E − E₀ + W_visc): implicit-euler at 1 ms 0.3 viscous, -0.1 "
+                      "numerical; symplectic-euler at 0.2 ms 0.2 viscous, -0.01 numerical.",
+                      facts)
         self.assertIn("Largest stable step as the speed of sound grows: symplectic-euler from "
                       "0.0018 s at c = 7 m/s to 0.0009 s at c = 14 m/s, 0.9 to 0.9 times the "
                       "acoustic mode's (ωh)*/ω_max, C = dt (c + |v|max)/h from 0.519 to "
@@ -702,33 +742,36 @@ def solver_error_data(scratch):
     m; Newton below it, XPBD above it in solver error but closer to the true
     motion."""
     scratch.json("integrators.json", INTEGRATORS)
-    cols = ["task", "case", "scene", "integrator", "variant", "dt", "step", "t", "status",
-            "solver_error", "total_error", "discretization_error", "wall_seconds", "iterations",
-            "failure"]
+    options = ["option_newton_tol", "option_solver", "option_substeps", "option_iterations",
+               "option_chebyshev", "option_rtol"]
+    cols = ["task", "case", "scene", "integrator", "variant"] + options + [
+            "dt", "step", "t", "status", "solver_error", "total_error", "discretization_error",
+            "wall_seconds", "iterations", "failure"]
     scratch.json("se.json", {"name": "se", "experiment": "solver-error", "title": "SE",
                              "dt": 0.02,
                              "tables": [{"file": "se.csv", "suffix": "", "columns": cols}]})
     rows = [",".join(cols)]
-    runs = [("implicit-euler", "newton-tol 0.01", 1e-5, 1e-3, 0.02),
-            ("xpbd", "substeps 10; iterations 1", 3e-3, 1e-4, 0.001)]
-    for task, (name, variant, se, te, wall) in enumerate(runs):
+    # The option columns say what the label says (the report reads them, not the label).
+    runs = [("implicit-euler", "newton-tol 0.01", "0.01,,,,,", 1e-5, 1e-3, 0.02),
+            ("xpbd", "substeps 10; iterations 1", ",,10,1,,", 3e-3, 1e-4, 0.001)]
+    for task, (name, variant, opts, se, te, wall) in enumerate(runs):
         for k in (0, 5):
-            rows.append("%d,0,cloth,%s,%s,0.02,%d,%r,completed,%r,%r,0.001,%r,3," % (
-                task, name, variant, k, k * 0.02, se, te, wall))
+            rows.append("%d,0,cloth,%s,%s,%s,0.02,%d,%r,completed,%r,%r,0.001,%r,3," % (
+                task, name, variant, opts, k, k * 0.02, se, te, wall))
     scratch.write("se.csv", "\n".join(rows) + "\n")
     # The whole runs: XPBD at equal cost S x N = 4, and tight Newton.
-    runs_cols = ["task", "case", "scene", "integrator", "variant", "dt", "status", "t_final",
-                 "energy_initial", "energy_lost", "max_strain", "wall_seconds_per_step",
-                 "failure"]
+    runs_cols = ["task", "case", "scene", "integrator", "variant"] + options + [
+                 "dt", "status", "t_final", "energy_initial", "energy_lost", "max_strain",
+                 "wall_seconds_per_step", "failure"]
     settings = json.loads((scratch.dir / "se.json").read_text())
     settings["tables"].append({"file": "se-runs.csv", "suffix": "runs", "columns": runs_cols})
     scratch.json("se.json", settings)
-    runs = [",".join(runs_cols), "0,0,cloth,implicit-euler,newton-tol 1e-06,0.02,completed,1,0,"
-            "1.5,0.2,0.02,"]
+    runs = [",".join(runs_cols), "0,0,cloth,implicit-euler,newton-tol 1e-06,1e-06,,,,,,0.02,"
+            "completed,1,0,1.5,0.2,0.02,"]
     for task, (S, N, lost, strain) in enumerate(((1, 4, -10.0, 1.2), (2, 2, -2.0, 0.5),
                                                  (4, 1, -0.5, 0.3)), start=1):
-        runs.append("%d,0,cloth,xpbd,substeps %d; iterations %d,0.02,completed,1,0,%r,%r,0.001,"
-                    % (task, S, N, lost, strain))
+        runs.append("%d,0,cloth,xpbd,substeps %d; iterations %d,,,%d,%d,,,0.02,completed,1,0,%r,"
+                    "%r,0.001," % (task, S, N, S, N, lost, strain))
     scratch.write("se-runs.csv", "\n".join(runs) + "\n")
 
 
@@ -1115,6 +1158,93 @@ class Reading(unittest.TestCase):
         self.s.write("a.csv", "task,x\n0,1\n")
         with self.assertRaisesRegex(DataError, r"missing column 'status'"):
             read_table(self.s.dir / "a.csv").require("status")
+
+
+class StabilityGroups(unittest.TestCase):
+    """Methods whose measured limits agree within SAME_LIMIT at every point
+    share one marker; the never-diverging ones are listed once."""
+
+    def setUp(self):
+        self.s = Scratch()
+        self.s.json("integrators.json", INTEGRATORS)
+        self.integrators = Integrators.load(self.s.dir / "integrators.json")
+
+    def tearDown(self):
+        self.s.close()
+
+    def table(self, explicit_factor):
+        cols = "scene,integrator,k,w_max,t_end,max_stable_dt,bracket_lo,bracket_hi,theory_dt,ratio"
+        rows = [cols]
+        for scene in ("oscillator", "chain"):
+            for k in (1.0, 100.0):
+                w = math.sqrt(k)
+                m = 2 / w
+                rows.append("%s,symplectic-euler,%r,%r,1,%r,%r,%r,%r,1" % (scene, k, w, m, m,
+                                                                           m * 1.001, m))
+                e = m * explicit_factor
+                rows.append("%s,explicit-euler,%r,%r,1,%r,%r,%r,,"
+                            % (scene, k, w, e, e, e * 1.001))
+                rows.append("%s,implicit-euler,%r,%r,1,10,10,10,," % (scene, k, w))
+        self.s.write("stability.csv", "\n".join(rows) + "\n")
+        return stability.limits_table(FakeExp(read_table(self.s.dir / "stability.csv")))
+
+    def test_groups_follow_the_numbers(self):
+        for factor, expected in ((1.01, [["explicit-euler", "symplectic-euler"]]),
+                                 (1.05, [["explicit-euler"], ["symplectic-euler"]])):
+            st = self.table(factor)
+            nolimit = stability.no_limit_rows(st, 10.0)
+            self.assertEqual(stability.limit_series(st, nolimit, self.integrators), expected)
+            self.assertEqual(int(nolimit.sum()), 4)  # implicit-euler, 2 scenes x 2 k
+
+    def test_free_methods_named_once_or_per_panel(self):
+        same = stability.free_text({"oscillator": ["implicit-euler"],
+                                    "chain": ["implicit-euler"], "cloth": []}, 10.0)
+        self.assertEqual(same.replace("\n", " "), "No divergence up to dt_max = 10 s on "
+                                                   "oscillator and chain: implicit-euler.")
+        apart = stability.free_text({"oscillator": ["implicit-euler", "bdf2"],
+                                     "chain": ["implicit-euler"]}, None)
+        self.assertIn("Also on oscillator: bdf2.", apart)
+        self.assertEqual(stability.free_text({"a": [], "b": []}, 1.0), "")
+
+
+class FakeExp:
+    def __init__(self, table):
+        self._table = table
+
+    def table(self, suffix=""):
+        return self._table
+
+
+class RigidStrainWindows(unittest.TestCase):
+    """The strain panel draws each window's maximum: a ramp's maximum is its
+    value at the window's right end, and an empty window is left out."""
+
+    def test_window_max_of_a_ramp(self):
+        from springlab_report.kinds.rigid import window_max
+        t = np.linspace(0.0, 4.0, 401)
+        centres, top = window_max(t, 2 * t, 4)
+        np.testing.assert_allclose(centres, [0.5, 1.5, 2.5, 3.5])
+        # windows [0,1), [1,2), [2,3), [3,4]: the last sample before each edge
+        np.testing.assert_allclose(top, [1.98, 3.98, 5.98, 8.0])
+        gap = np.array([0.0, 0.1, 3.9, 4.0])
+        centres, top = window_max(gap, gap, 4)
+        np.testing.assert_allclose(centres, [0.5, 3.5])
+
+
+class RunOptions(unittest.TestCase):
+    """A method listed twice in the settings is told apart by its run's options."""
+
+    def test_options_follow_the_runs(self):
+        from springlab_report.page import run_options
+        names = ["linear-implicit-euler", "linear-implicit-euler", "implicit-euler"]
+        runs = [{"integrator": "linear-implicit-euler", "stiffness": "exact"},
+                {"integrator": "linear-implicit-euler", "stiffness": "definite"},
+                {"integrator": "implicit-euler"}]
+        self.assertEqual(run_options(names, runs),
+                         [" (stiffness exact)", " (stiffness definite)", ""])
+        # Runs that do not line up with the names: no labels rather than wrong ones.
+        self.assertEqual(run_options(names, runs[:2]), ["", "", ""])
+        self.assertEqual(run_options(names, None), ["", "", ""])
 
 
 class Styles(unittest.TestCase):

@@ -123,12 +123,13 @@ def case_data(exp, ctx, case_index, case, positions, frames, runs):
             energy = np.array([lookup.get((float(a), bool(b)), np.nan)
                                for a, b in zip(frame_t, frame_past)])
         run = runs.get((case_index, integ), {})
+        escape = escaped(xyz, frame_t, frame_past, fixed, fluid_particles(scene, n))
         panels.append({
             "name": integ, "colour": ctx.integrators.colour(integ),
             "status": run.get("status", "completed"),
             "stopped_at": run.get("diverged_at"), "failure": run.get("failure") or "",
             "E0": run.get("energy_initial"), "Es": run.get("energy_scale"),
-            "gain": energy_gain(energy[~frame_past], run),
+            "gain": energy_gain(energy[~frame_past], run), "escape": escape,
             "t": frame_t, "past": frame_past, "energy": energy, "x": xyz})
     fluid = fluid_particles(scene, n)
     # Every k-th frame, k as small as keeps the positions within the budget
@@ -220,6 +221,44 @@ def encode_speeds(panels):
         level = np.clip(np.nan_to_num(p["speed"], nan=0.0) / max(top, 1e-300) * 255.0, 0, 255)
         p["speed"] = base64.b64encode(np.rint(level).astype(np.uint8).tobytes()).decode("ascii")
     return top
+
+
+# The sides of the walls' box a water particle can leave by, per axis.
+SIDES = (("x", "the wall at the lower x", "the wall at the upper x"),
+         ("y", "the floor", "the top of the walls"),
+         ("z", "the wall at the lower z", "the wall at the upper z"))
+
+
+def escaped(xyz, t, past, fixed, fluid):
+    """Where a fluid's water first left its walls' box (the bounding box of
+    the fixed particles at the first frame): {"t", "side"} of the first
+    good frame with a water particle outside it, or None (no fluid, no
+    walls, or the water stayed in)."""
+    if not fluid or not fixed or not len(xyz):
+        return None
+    walls = xyz[0][fixed]
+    lo, hi = walls.min(axis=0), walls.max(axis=0)
+    for f in range(len(t)):
+        if past[f]:
+            continue
+        water = xyz[f][fluid]
+        with np.errstate(invalid="ignore"):
+            below, above = water < lo, water > hi
+        for axis in range(3):
+            for outside, side in ((below, 1), (above, 2)):
+                if outside[:, axis].any():
+                    return {"t": float(t[f]), "side": SIDES[axis][side],
+                            "count": int(np.any(below | above, axis=1).sum())}
+    return None
+
+
+def escape_flag(panel):
+    """The warning for a completed run whose water left the walls' box, or ""."""
+    e = panel.get("escape")
+    if panel["status"] != "completed" or not e:
+        return ""
+    return ("water left the box through %s at t = %s s (%d particle%s): the walls no longer "
+            "hold it" % (e["side"], fmt(e["t"], 3), e["count"], "" if e["count"] == 1 else "s"))
 
 
 def energy_gain(energy, run):
@@ -323,13 +362,51 @@ def case_facts(data):
                                                         p["failure"]))
         else:
             flag = gain_flag(p)
-            facts.append("%s ran to t = %s s;%s%s" % (
+            text = "%s ran to t = %s s;%s%s" % (
                 p["name"], fmt(p["t"][-1]), change,
                 "" if not flag else " \u2014 but it completed with an energy gain of up to %s "
                 "E_s (more than %s E_s): springs, gravity and contact make no energy, so this "
                 "motion is the method's, not the scene's" % (fmt(p["gain"], 3),
-                                                               fmt(GAIN_FLAG_ES))))
+                                                               fmt(GAIN_FLAG_ES)))
+            if escape_flag(p):
+                text += " \u2014 but its %s" % escape_flag(p)
+            facts.append(text)
+    contrast = damping_contrast(data["panels"])
+    if contrast:
+        facts.append(contrast)
     return facts
+
+
+# A completed run keeps the energy when its change stays within KEEP_ES of
+# E_s, and damps it when it loses more than LOSE_ES of E_s.
+KEEP_ES = 0.01
+LOSE_ES = 0.1
+
+
+def damping_contrast(panels):
+    """A sentence when, at one step, some completed runs keep the energy and
+    others lose a good part of it: their panels then differ at one moment
+    (one body still bouncing or swinging, another at rest) for a numerical
+    reason, which the reader should be told. None otherwise."""
+    keep, lose = [], []
+    for p in panels:
+        e = [v for v, past in zip(p["energy"], p["past"]) if v is not None and not past]
+        if p["status"] != "completed" or len(e) < 2 or not p["Es"]:
+            continue
+        change = (e[-1] - e[0]) / p["Es"]
+        if abs(change) <= KEEP_ES:
+            keep.append(p["name"])
+        elif change < -LOSE_ES:
+            lose.append((p["name"], -change))
+    if not keep or not lose:
+        return None
+    lo, hi = min(c for _, c in lose), max(c for _, c in lose)
+    amount = fmt(lo, 2) if fmt(lo, 2) == fmt(hi, 2) else "%s to %s" % (fmt(lo, 2), fmt(hi, 2))
+    return ("At this step %s %s the energy within %s E_s while %s %s %s E_s: where their panels "
+            "differ at one moment (one still moving, another at rest), that is the methods' "
+            "numerical damping, not the scene" % (
+                ", ".join(keep), "keeps" if len(keep) == 1 else "keep", fmt(KEEP_ES),
+                ", ".join(n for n, _ in lose), "loses" if len(lose) == 1 else "lose", amount))
 
 
 def player_html(data):
@@ -339,7 +416,8 @@ def player_html(data):
         '<div class="player-label"><span class="sw" style="background:%s"></span>%s '
         '<span class="player-value"></span>%s</div></div>' % (
             esc(p["colour"]), esc(p["name"]),
-            '<br><span class="player-flag">%s</span>' % esc(gain_flag(p)) if gain_flag(p) else "")
+            "".join('<br><span class="player-flag">%s</span>' % esc(f)
+                    for f in (gain_flag(p), escape_flag(p)) if f))
         for p in data["panels"])
     shown = data["every"] * data["thinned"]
     thinned = ("" if data["thinned"] == 1 else

@@ -5,6 +5,8 @@ motion over the step (total error), against its cost per step, next to
 implicit Euler's own discretization error. The sentences are computed from
 the rows."""
 
+import math
+
 import numpy as np
 
 from ..data import Columns
@@ -25,17 +27,36 @@ ABOUT = (
 
 FLOOR = 1e-12
 
+# The options a run set, one column each (experiments/README.md
+# "solver-error"), empty where not set; "variant" is the same as a label.
+OPTION_NUMBERS = ("newton_tol", "substeps", "iterations", "chebyshev", "rtol")
+
+
+def option_columns():
+    return tuple("option_" + o for o in OPTION_NUMBERS)
+
+
+def options(cols, r):
+    """The options row r set: {"newton_tol": 0.01, "substeps": 10, "solver": "quasi-newton", ...}."""
+    out = {o: float(cols["option_" + o][r]) for o in OPTION_NUMBERS
+           if math.isfinite(cols["option_" + o][r])}
+    if cols["option_solver"][r]:
+        out["solver"] = cols["option_solver"][r]
+    return out
+
 
 def render(exp, ctx):
     db = Columns(exp.table(), numbers=("case", "step", "solver_error", "total_error",
-                                       "discretization_error", "wall_seconds", "iterations"),
-                 texts=("scene", "integrator", "variant", "status", "failure"))
+                                       "discretization_error", "wall_seconds", "iterations")
+                 + option_columns(),
+                 texts=("scene", "integrator", "variant", "option_solver", "status", "failure"))
     integ = ctx.integrators
     html = []
     runs = exp.table("runs")
     runs = None if runs is None else Columns(
-        runs, numbers=("case", "energy_lost", "max_strain", "wall_seconds_per_step"),
-        texts=("scene", "integrator", "variant", "status"))
+        runs, numbers=("case", "energy_lost", "max_strain", "wall_seconds_per_step")
+        + option_columns(),
+        texts=("scene", "integrator", "variant", "option_solver", "status"))
     cases = sorted({int(c) for c in db["case"]})
     for case in cases:
         rows = [r for r in range(len(db)) if int(db["case"][r]) == case]
@@ -45,13 +66,11 @@ def render(exp, ctx):
     return "".join(html)
 
 
-def substeps_iterations(variant):
-    """(S, N) of an XPBD variant "substeps S; iterations N", else None."""
-    parts = dict(p.split(" ", 1) for p in variant.split("; ") if " " in p)
-    try:
-        return int(parts["substeps"]), int(parts["iterations"])
-    except (KeyError, ValueError):
-        return None
+def substeps_iterations(opts):
+    """(S, N) of a run that set both substeps S and iterations N, else None."""
+    if "substeps" in opts and "iterations" in opts:
+        return int(opts["substeps"]), int(opts["iterations"])
+    return None
 
 
 def small_steps_figure(exp, ctx, db, rows, runs, case, integ):
@@ -63,15 +82,15 @@ def small_steps_figure(exp, ctx, db, rows, runs, case, integ):
     one_step = {(e["name"], e["variant"]): e for e in summaries(db, rows) if e["completed"]}
     groups = {}
     for (name, variant), r in whole.items():
-        sn = substeps_iterations(variant)
+        sn = substeps_iterations(options(runs, r))
         if sn is not None:
             groups.setdefault((name, sn[0] * sn[1]), []).append((sn[0], sn[1], r, variant))
     groups = {k: sorted(v) for k, v in groups.items() if len(v) >= 3}
     if not groups:
         return ""
     # The tightest Newton run: the reference lines.
-    newton = [(float(v.split(" ")[1]), r) for (n, v), r in whole.items()
-              if n == "implicit-euler" and v.startswith("newton-tol ") and ";" not in v]
+    newton = [(options(runs, r)["newton_tol"], r) for (n, v), r in whole.items()
+              if n == "implicit-euler" and set(options(runs, r)) == {"newton_tol"}]
     ref = min(newton)[1] if newton else None
     fig = new_figure(13.5, 4.2)
     axes = fig.subplots(1, 3)
@@ -137,7 +156,8 @@ def summaries(db, rows):
     out = []
     for (name, variant), idx in groups.items():
         ok = [r for r in idx if db["status"][r] == "completed"]
-        entry = {"name": name, "variant": variant, "samples": len(idx), "completed": len(ok)}
+        entry = {"name": name, "variant": variant, "options": options(db, idx[0]),
+                 "samples": len(idx), "completed": len(ok)}
         if ok:
             for col in ("solver_error", "total_error", "wall_seconds", "iterations"):
                 entry[col] = float(np.median([db[col][r] for r in ok]))
@@ -154,9 +174,10 @@ def label(e):
 def family(e):
     """Variants drawn joined by one line: one integrator with one solver
     (quasi-Newton, Chebyshev acceleration: lines of their own)."""
-    for extra in ("quasi-newton", "chebyshev"):
-        if extra in e["variant"]:
-            return e["name"] + " " + extra
+    if e["options"].get("solver") == "quasi-newton":
+        return e["name"] + " quasi-newton"
+    if "chebyshev" in e["options"]:
+        return e["name"] + " chebyshev"
     return e["name"]
 
 
@@ -166,12 +187,17 @@ def family(e):
 LABELS = 12
 
 
-def short_variant(variant):
-    text = variant.replace("newton-tol ", "tol ").replace("iterations ", "N=").replace(
-        "substeps ", "S=")
-    if text.endswith("; quasi-newton"):
-        text = "QN " + text[:-len("; quasi-newton")]
-    return text
+def short_variant(opts):
+    """A point's label from its options: "tol 0.01", "QN tol 0.01", "S=10; N=1"."""
+    parts = []
+    for key, text in (("newton_tol", "tol %s"), ("substeps", "S=%s"), ("iterations", "N=%s"),
+                      ("chebyshev", "chebyshev %s"), ("rtol", "rtol %s")):
+        if key in opts:
+            parts.append(text % fmt(opts[key], 3))
+    if opts.get("solver") == "newton":
+        parts.append("newton")
+    text = "; ".join(parts)
+    return "QN " + text if opts.get("solver") == "quasi-newton" else text
 
 
 def label_order(points):
@@ -192,6 +218,75 @@ def label_order(points):
     return front + ends
 
 
+def cheapest_ranges(done):
+    """Which method is cheapest at which solver error (the lower envelope of
+    the left panel), computed from the medians: the variants none is both
+    cheaper and closer than (the front), cost ascending and so error
+    descending; the k-th is the cheapest way to reach any error from its own
+    up to the (k-1)-th's. Consecutive variants of one method (family) make
+    one range: [{"family", "name", "hi" (None: above every error), "lo",
+    "entries"}], from the largest errors to the smallest."""
+    front, best = [], float("inf")
+    for e in sorted(done, key=lambda e: (e["wall_seconds"], e["solver_error"])):
+        if e["solver_error"] < best:
+            front.append(e)
+            best = e["solver_error"]
+    ranges = []
+    for k, e in enumerate(front):
+        hi = front[k - 1]["solver_error"] if k else None
+        if ranges and ranges[-1]["family"] == family(e):
+            ranges[-1]["lo"] = e["solver_error"]
+            ranges[-1]["entries"].append(e)
+        else:
+            ranges.append({"family": family(e), "name": e["name"], "hi": hi,
+                           "lo": e["solver_error"], "entries": [e]})
+    return ranges
+
+
+def cheapest_sentence(ranges):
+    parts = []
+    for r in ranges:
+        first, last = r["entries"][0], r["entries"][-1]
+        where = ("%s m and above" % fmt(r["lo"], 2) if r["hi"] is None
+                 else "%s to %s m" % (fmt(r["hi"], 2), fmt(r["lo"], 2)))
+        how = "%s, %s ms" % (first["variant"] or "defaults", fmt(first["wall_seconds"] * 1e3, 2))
+        if last is not first:
+            how += " to %s, %s ms" % (last["variant"] or "defaults",
+                                      fmt(last["wall_seconds"] * 1e3, 2))
+        parts.append("%s: %s (%s)" % (where, r["family"], how))
+    return ("Cheapest for each solver error (the lower envelope of the left panel: its grey "
+            "staircase and the bands at its right edge, in the cheapest method's colour): %s; no "
+            "run comes closer than %s m." % ("; ".join(parts), fmt(ranges[-1]["lo"], 2)))
+
+
+# A band at least this many decades tall is labelled with its method.
+BAND_LABEL_DECADES = 0.3
+
+
+def draw_cheapest(ax, ranges, integ, disc):
+    """The lower envelope as a grey staircase (cost against error) and, at the
+    axes' right edge, a band per range in its method's colour, labelled where
+    it is tall enough (and clear of the discretization error's line)."""
+    from matplotlib.transforms import blended_transform_factory
+    entries = [e for r in ranges for e in r["entries"]]
+    xs = [e["wall_seconds"] * 1e3 for e in entries]
+    ys = [max(e["solver_error"], FLOOR) for e in entries]
+    ax.step(xs, ys, where="post", color="0.55", lw=2.4, alpha=0.35, zorder=0)
+    top = ax.get_ylim()[1]
+    edge = blended_transform_factory(ax.transAxes, ax.transData)
+    for r in ranges:
+        hi = top if r["hi"] is None else r["hi"]
+        lo = max(r["lo"], FLOOR)
+        colour = integ.style(r["name"])["color"]
+        ax.axhspan(lo, hi, xmin=0.975, xmax=1.0, color=colour, alpha=0.85, lw=0)
+        middle = math.sqrt(lo * hi)
+        if (math.log10(hi / lo) >= BAND_LABEL_DECADES and
+                abs(math.log10(middle / disc)) > 0.15):
+            ax.text(0.965, middle, r["family"], transform=edge, ha="right", va="center",
+                    fontsize=8, color=colour, fontweight="bold",
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+
+
 def case_figure(exp, ctx, db, rows, case, integ):
     disc = float(np.median([db["discretization_error"][r] for r in rows
                             if np.isfinite(db["discretization_error"][r])]))
@@ -205,6 +300,10 @@ def case_figure(exp, ctx, db, rows, case, integ):
         if e["completed"]:
             families.setdefault(family(e), []).append(e)
     labelled = []
+    # Adaptive methods solve the ODE, not the implicit Euler step: their
+    # distance to that step is its own error, not a solver error.
+    cheapest = cheapest_ranges([e for e in entries if e["completed"] and
+                                not integ.adaptive(e["name"])])
     for ax, col, title in ((axes[0], "solver_error", "distance to the implicit Euler step"),
                            (axes[1], "total_error", "distance to the true motion")):
         points = []
@@ -219,12 +318,14 @@ def case_figure(exp, ctx, db, rows, case, integ):
             ax.plot(xs, ys, ms=7, mfc="none", mew=1.4, lw=1.1, label=fam, **style)
             for e, x, y in zip(members, xs, ys):
                 if e["variant"]:
-                    points.append((x, y, short_variant(e["variant"]), style["color"], fam))
+                    points.append((x, y, short_variant(e["options"]), style["color"], fam))
         ax.axhline(disc, color="0.35", lw=1.2, ls="--")
         ax.text(0.99, disc, "implicit Euler's discretization error per step ", va="top",
                 ha="right", fontsize=7.5, color="0.3", transform=ax.get_yaxis_transform())
         ax.set_xscale("log")
         ax.set_yscale("log")
+        if col == "solver_error" and cheapest:
+            draw_cheapest(ax, cheapest, integ, disc)
         ax.set_xlabel("wall time per step [ms] (median)")
         ax.set_ylabel("max position error after one step [m] (median)")
         ax.set_title("%s — %s" % (titled, title), loc="left", fontweight="bold", fontsize=10)
@@ -253,6 +354,8 @@ def case_figure(exp, ctx, db, rows, case, integ):
         return "; ".join("%s %s ms (%s m)" % (label(e), fmt(e["wall_seconds"] * 1e3, 3),
                                               fmt(e[column], 2)) for e in chosen)
 
+    if cheapest:
+        facts.append(cheapest_sentence(cheapest))
     if below:
         facts.append("Solver error below it (as good as solving the step exactly), cheapest "
                      "first: %s." % costs(below, "solver_error"))

@@ -4,6 +4,7 @@ bisection, next to the limit theory gives from w_max; and a map of
 final/initial energy over (dt, k)."""
 
 import math
+import textwrap
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -142,14 +143,63 @@ def no_limit_rows(st, dt_max):
     return searched_to_max(st, dt_max) & np.isnan(st["theory_dt"])
 
 
+# Methods whose measured limits differ by less than this fraction at every
+# swept value are drawn as one series (on a slide, nine markers on one point
+# read as a smudge; the table keeps each method's own numbers).
+SAME_LIMIT = 0.02
+
+
+def limit_series(st, nolimit, integrators):
+    """The methods with a measured limit, grouped: each group's methods were
+    measured at the same values of the swept parameter on every scene, with
+    limits within SAME_LIMIT of each other. Returns [[name, ...], ...] in the
+    registry's order."""
+    points = {}
+    for (scene, name), idx in st.groups("scene", "integrator").items():
+        lim = idx[~nolimit[idx]]
+        if len(lim):
+            points.setdefault(name, {})[scene] = dict(zip(st["k"][lim].tolist(),
+                                                          st["max_stable_dt"][lim].tolist()))
+
+    def same(a, b):
+        if points[a].keys() != points[b].keys():
+            return False
+        for scene, pa in points[a].items():
+            pb = points[b][scene]
+            if pa.keys() != pb.keys():
+                return False
+            for k, m in pa.items():
+                n = pb[k]
+                if not (finite(m) and finite(n) and m > 0 and n > 0) or \
+                        abs(m / n - 1) > SAME_LIMIT:
+                    return False
+        return True
+
+    groups = []
+    for name in integrators.sort(points):
+        for g in groups:
+            if all(same(name, other) for other in g):
+                g.append(name)
+                break
+        else:
+            groups.append([name])
+    return groups
+
+
 def stability_figure(exp, integrators, figs):
     st = limits_table(exp)
     dt_max = stability_dt_max(exp)
     nolimit = no_limit_rows(st, dt_max)
     scenes = st.groups("scene")
-    fig = new_figure(6.0 * len(scenes) + 2.4, 5.0)
-    axes = fig.subplots(1, len(scenes), squeeze=False)[0]
-    for col, (ax, ((scene,), idx)) in enumerate(zip(axes, scenes.items())):
+    groups = limit_series(st, nolimit, integrators)
+    group_of = {name: g for g in groups for name in g}
+    fig = new_figure(5.2 * len(scenes) + 3.2, 4.6)
+    axes = fig.subplots(1, len(scenes) + 1, squeeze=False,
+                        gridspec_kw={"width_ratios": [5.2] * len(scenes) + [3.2]})[0]
+    side = axes[-1]
+    handles = {}
+    free_by_scene = {}
+    for ax, ((scene,), idx) in zip(axes, scenes.items()):
         by_int = {}
         for r in idx:
             by_int.setdefault(st["integrator"][r], []).append(r)
@@ -160,22 +210,25 @@ def stability_figure(exp, integrators, figs):
             if len(lim) == 0:
                 free.append(integ)
                 continue
+            if (~nolimit[rows]).sum() < len(rows):
+                ks = ", ".join(fmt(x) for x in st["k"][rows[nolimit[rows]]])
+                free.append("%s (only at %s = %s)" % (integ, swept_parameter(exp, scene), ks))
+            group = group_of[integ]
+            if group[0] != integ:
+                continue  # drawn once, as its group's first method
             lim = lim[np.argsort(st["k"][lim], kind="stable")]
-            k = st["k"][lim]
-            m = st["max_stable_dt"][lim]
-            th = st["theory_dt"][lim]
+            k, m, th = st["k"][lim], st["max_stable_dt"][lim], st["theory_dt"][lim]
             c = integrators.colour(integ)
             ok = np.isfinite(m) & (m > 0)
             okt = np.isfinite(th) & (th > 0)
-            marker = integrators.marker(integ)
-            ax.plot(k[ok], m[ok], marker=marker, ms=9, mfc="none", mew=1.8, color=c, ls="none",
-                    label=integ + ("" if okt.any() else "  (no theory)"), zorder=3)
+            label = " = ".join(group) + ("" if okt.any() else "  (no theory)")
+            line, = ax.plot(k[ok], m[ok], marker=integrators.marker(integ), ms=9, mfc="none",
+                            mew=1.8, color=c, ls="none", zorder=3)
+            handles.setdefault(label, line)
             if okt.any():
                 ax.plot(k[okt], th[okt], color=c, ls="--", lw=1.4, alpha=0.9, zorder=2,
                         marker="_" if okt.sum() == 1 else None, ms=16, mew=1.5)
-            if (~nolimit[rows]).sum() < len(rows):
-                ks = ", ".join(fmt(x) for x in st["k"][rows[nolimit[rows]]])
-                free.append("%s (only at k = %s)" % (integ, ks))
+        free_by_scene[scene] = free
         log_log(ax, "no integrator with a step limit on this scene")
         parameter = swept_parameter(exp, scene)
         ax.set_xlabel(PARAMETER_LABELS.get(parameter, parameter))
@@ -183,24 +236,49 @@ def stability_figure(exp, integrators, figs):
         ax.set_title(scene, loc="left", fontweight="bold")
         ax.grid(True, which="major", alpha=0.3)
         ax.grid(True, which="minor", alpha=0.1)
-        handles, labels = ax.get_legend_handles_labels()
-        handles += [Line2D([], [], color="0.2", marker="o", mfc="none", ls="none"),
-                    Line2D([], [], color="0.2", ls="--")]
-        labels += ["measured (bisection)", "theory from w_max"]
-        ax.legend(handles, labels, loc="upper right", fontsize=8, framealpha=0.9,
-                  handlelength=2.6)
-        if free:
-            top = ("dt_max = %s s" % fmt(dt_max)) if dt_max else "the largest step searched"
-            ax.text(0.02, 0.02, "No divergence up to %s:\n" % top
-                    + "\n".join("  " + f for f in free),
-                    transform=ax.transAxes, fontsize=8, va="bottom", ha="left",
-                    bbox=dict(facecolor="white", edgecolor="0.8", alpha=0.9))
+    # The side column: one legend for every panel (a method keeps its colour
+    # and marker across panels), then the methods that never diverged.
+    side.axis("off")
+    labels = list(handles)
+    lines = [handles[x] for x in labels]
+    lines += [Line2D([], [], color="0.2", marker="o", mfc="none", ls="none"),
+              Line2D([], [], color="0.2", ls="--")]
+    labels += ["measured (bisection)", "theory from w_max"]
+    side.legend(lines, labels, loc="upper left", fontsize=8, frameon=False, handlelength=2.6,
+                borderaxespad=0)
+    text = free_text(free_by_scene, dt_max)
+    if text:
+        side.text(0, 0, text, transform=side.transAxes, fontsize=8, va="bottom", ha="left")
     saved = figs.save(fig, exp.name + ".png")
     return figure_html(saved, "stability limit against stiffness", esc(
         "Largest stable step found by bisection (hollow markers) against the theoretical limit "
         "from the largest eigenfrequency w_max of the initial state (dashed, same colour). "
-        "Methods that never diverged up to the largest step searched are listed in the "
-        "panel instead of being drawn."))
+        "Methods whose measured limits agree within %d %% at every point share one marker "
+        "(their names joined by '='); the table below has each one's numbers. Methods that "
+        "never diverged up to the largest step searched are listed beside the panels instead "
+        "of being drawn." % round(100 * SAME_LIMIT)))
+
+
+def free_text(free_by_scene, dt_max, width=44):
+    """The methods without a limit, wrapped for the side column: those that
+    never diverged on any panel, then the panels' own extra ones."""
+    if not any(free_by_scene.values()):
+        return ""
+    top = ("dt_max = %s s" % fmt(dt_max)) if dt_max else "the largest step searched"
+    having = [scene for scene, free in free_by_scene.items() if free]
+    lists = [free_by_scene[scene] for scene in having]
+    common = [f for f in lists[0] if all(f in other for other in lists[1:])]
+    where = "" if len(free_by_scene) == 1 else " on %s" % " and ".join(
+        [", ".join(having[:-1]), having[-1]] if len(having) > 1 else having)
+    out = []
+    if common:
+        out.append("No divergence up to %s%s: %s." % (top, where, ", ".join(common)))
+    for scene, free in free_by_scene.items():
+        extra = [f for f in free if f not in common]
+        if extra:
+            out.append("%s on %s: %s." % ("Also" if common else
+                                          "No divergence up to %s" % top, scene, ", ".join(extra)))
+    return "\n\n".join(textwrap.fill(x, width, break_on_hyphens=False) for x in out)
 
 
 def stability_table(exp, integrators):
