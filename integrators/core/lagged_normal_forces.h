@@ -1,0 +1,25 @@
+#pragma once
+
+#include "models/core/mechanical_system.h"
+
+namespace springlab {
+
+// Friction's normal forces held at x (the step's or substep's start) while
+// the step is solved, and released when it ends, on every path out
+// (MechanicalSystem::lag_normal_forces): friction then derives from a
+// dissipation potential, so an implicit step minimizes an incremental
+// potential. Used by Newton's steps and by vertex block descent.
+class LaggedNormalForces {
+ public:
+  LaggedNormalForces(const MechanicalSystem& system, const Vector& x) : system_(system) {
+    system_.lag_normal_forces(&x);
+  }
+  ~LaggedNormalForces() { system_.lag_normal_forces(nullptr); }
+  LaggedNormalForces(const LaggedNormalForces&) = delete;
+  LaggedNormalForces& operator=(const LaggedNormalForces&) = delete;
+
+ private:
+  const MechanicalSystem& system_;
+};
+
+}  // namespace springlab
