@@ -99,9 +99,9 @@ std::vector<std::pair<std::string, std::string>> split_parameters(
   return pairs;
 }
 
-std::string builtin_list() {
-  std::string names;
-  for (const BuiltinScene& s : builtin_scenes()) names += (names.empty() ? "" : ", ") + s.name;
+std::vector<std::string> builtin_names() {
+  std::vector<std::string> names;
+  for (const BuiltinScene& s : builtin_scenes()) names.push_back(s.name);
   return names;
 }
 
@@ -784,14 +784,14 @@ Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>
   if (is_builtin_scene(scene_arg)) return make_builtin_scene(scene_arg, split_parameters(parameters));
   const std::string why = from_stdin || error == ENOENT ? "no such scene file or built-in scene"
                                                         : std::string("cannot open (") + std::strerror(error) + ")";
-  std::vector<std::string> names;
-  for (const BuiltinScene& s : builtin_scenes()) names.push_back(s.name);
+  const std::vector<std::string> names = builtin_names();
   // A name like a built-in's, not a path: say which one it may be.
   const std::string like = scene_arg.find('/') == std::string::npos && !from_stdin
                                ? did_you_mean(scene_arg, names)
                                : std::string();
-  throw SceneError(printable(scene_arg) + ": " + why + like + " (built-in scenes: " +
-                   builtin_list() + ")");
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw SceneError(printable(scene_arg) + ": " + why + like + " (built-in scenes: " + list + ")");
 }
 
 RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,
@@ -947,10 +947,7 @@ int run_cli(int argc, char** argv) {
     }
     if (*stability) return command_stability(stability_options, stability_settings);
     if (*scene) {
-      if (!is_builtin_scene(scene_name)) {
-        throw SceneError("unknown built-in scene '" + printable(scene_name) +
-                         "' (built-in scenes: " + builtin_list() + ")");
-      }
+      // An unknown name: make_builtin_scene's message, with "did you mean".
       write_stdout(
           scene_to_json(make_builtin_scene(scene_name, split_parameters(scene_parameters))));
       return 0;

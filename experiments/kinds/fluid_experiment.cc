@@ -35,8 +35,6 @@
 // fluid_gauges.h), as the last task.
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -48,6 +46,7 @@
 #include "experiments/kinds/experiment.h"
 #include "experiments/kinds/experiment_support.h"
 #include "experiments/kinds/fluid_gauges.h"
+#include "experiments/kinds/reference_file.h"
 #include "models/fluids/fluids.h"
 #include "models/model/energy_layout.h"
 #include "models/springs/gravity.h"
@@ -62,25 +61,12 @@ struct Reference {
 };
 
 Reference read_reference(const DefinitionObject& d) {
+  const ReferenceLines lines = read_reference_lines(d);
   Reference r;
-  r.file = d.string("reference");
-  const std::filesystem::path path = std::filesystem::path(d.file()).parent_path() / r.file;
-  std::ifstream in(path);
-  if (!in) d.fail("reference", "cannot read '" + r.file + "' next to the definition");
-  std::string line;
-  int number = 0;
+  r.file = lines.file;
+  r.source = lines.source;
   bool header = false;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty()) continue;
-    if (line[0] == '#') {
-      const std::size_t start = line.find_first_not_of("# ");
-      if (start != std::string::npos) {
-        if (!r.source.empty()) r.source.push_back(' ');
-        r.source.append(line, start, std::string::npos);
-      }
-      continue;
-    }
+  for (const auto& [number, line] : lines.lines) {
     if (!header) {
       if (line != "T,Z") d.fail("reference", r.file + " line " + std::to_string(number) +
                                                  ": the header must be T,Z");

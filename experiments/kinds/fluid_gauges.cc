@@ -2,14 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <optional>
 #include <sstream>
 
 #include <time.h>
 
 #include "experiments/kinds/experiment_support.h"
+#include "experiments/kinds/reference_file.h"
 #include "experiments/driver/simulation.h"
 #include "models/model/model.h"
 #include "models/fluids/fluids.h"
@@ -21,27 +20,14 @@ namespace {
 // The reference CSV: '#' lines (its source), the header "t,<names>", rows
 // of numbers, t increasing; every gauge needs a column.
 GaugeReference read_gauge_reference(const DefinitionObject& d, const std::vector<Gauge>& gauges) {
+  const ReferenceLines lines = read_reference_lines(d);
   GaugeReference r;
-  r.file = d.string("reference");
-  const std::filesystem::path path = std::filesystem::path(d.file()).parent_path() / r.file;
-  std::ifstream in(path);
-  if (!in) d.fail("reference", "cannot read '" + r.file + "' next to the definition");
-  std::string line;
-  int number = 0;
+  r.file = lines.file;
+  r.source = lines.source;
   std::vector<std::string> header;
   std::vector<int> column(gauges.size(), -1);
   r.height.resize(gauges.size());
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty()) continue;
-    if (line[0] == '#') {
-      const std::size_t start = line.find_first_not_of("# ");
-      if (start != std::string::npos) {
-        if (!r.source.empty()) r.source.push_back(' ');
-        r.source.append(line, start, std::string::npos);
-      }
-      continue;
-    }
+  for (const auto& [number, line] : lines.lines) {
     std::vector<std::string> fields;
     std::istringstream split(line);
     for (std::string field; std::getline(split, field, ',');) fields.push_back(field);

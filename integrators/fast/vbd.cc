@@ -7,6 +7,7 @@
 #include <string>
 
 #include "integrators/core/integrator_entry.h"
+#include "integrators/core/lagged_normal_forces.h"
 #include "models/core/fast_solver_views.h"
 
 namespace springlab {
@@ -15,21 +16,6 @@ namespace {
 // Particles whose blocks are evaluated together (one colour's, a chunk at a
 // time: their blocks stay in the first-level cache until solved).
 constexpr int kChunk = 64;
-
-// Friction's normal forces from the substep's start while it is solved
-// (MechanicalSystem::lag_normal_forces), as Newton's step lags them.
-class LagNormalForces {
- public:
-  LagNormalForces(const MechanicalSystem& system, const Vector& x) : system_(system) {
-    system_.lag_normal_forces(&x, nullptr, 0.0);
-  }
-  ~LagNormalForces() { system_.lag_normal_forces(nullptr, nullptr, 0.0); }
-  LagNormalForces(const LagNormalForces&) = delete;
-  LagNormalForces& operator=(const LagNormalForces&) = delete;
-
- private:
-  const MechanicalSystem& system_;
-};
 
 }  // namespace
 
@@ -96,7 +82,7 @@ void Vbd::substep(double t, double h) {
   x_n_ = x_;
   v_n_ = v_;
   // (Only friction lags; lagging copies the state.)
-  std::optional<LagNormalForces> lag;
+  std::optional<LaggedNormalForces> lag;
   if (system().velocity_dependence() == VelocityDependence::kNonlinear) lag.emplace(system(), x_n_);
   y_ = x_n_ + h * v_n_;
   initial_guess(h);

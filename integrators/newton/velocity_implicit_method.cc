@@ -5,28 +5,13 @@
 #include <limits>
 #include <sstream>
 
+#include "integrators/core/lagged_normal_forces.h"
+
 namespace springlab {
 namespace {
 
 // Relative residual of the one linear solve of a linearized step.
 constexpr double kLinearRtol = 1e-6;
-
-// Friction's normal forces from the step's start while the step is solved
-// (MechanicalSystem::lag_normal_forces): friction then derives from a
-// dissipation potential, and Newton minimizes.
-class LagNormalForces {
- public:
-  LagNormalForces(const MechanicalSystem& system, const Vector& x, const Vector& v, double h)
-      : system_(system) {
-    system_.lag_normal_forces(&x, &v, h);
-  }
-  ~LagNormalForces() { system_.lag_normal_forces(nullptr, nullptr, 0.0); }
-  LagNormalForces(const LagNormalForces&) = delete;
-  LagNormalForces& operator=(const LagNormalForces&) = delete;
-
- private:
-  const MechanicalSystem& system_;
-};
 
 }  // namespace
 
@@ -55,7 +40,7 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const
 
 StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplicitScheme& s,
                                                   Vector& v, bool quasi) {
-  const LagNormalForces lag(system(), x_, v_, h);
+  const LaggedNormalForces lag(system(), x_, &v_, h);
   step_.begin(t_, x_, v_, h, s);
   const bool lbfgs = quasi && system().derives_from_potentials();
   check_.begin(step_, options().newton_tol);

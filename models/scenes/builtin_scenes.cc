@@ -10,6 +10,7 @@
 
 #include "models/core/decimal_text.h"
 #include "models/core/registry.h"
+#include "models/core/scene.h"  // printable
 #include "models/model/scene_file.h"
 #include "models/springs/springs.h"  // kMaxSceneSprings
 #include "models/scenes/scene_entry.h"
@@ -150,7 +151,9 @@ bool is_builtin_scene(const std::string& name) { return scene_registry().find(na
 Scene make_builtin_scene(const std::string& name,
                          const std::vector<std::pair<std::string, std::string>>& overrides) {
   const SceneEntry* entry = scene_registry().find(name);
-  if (entry == nullptr) throw SceneError(scene_registry().unknown("built-in scene", name));
+  if (entry == nullptr) {
+    throw SceneError(scene_registry().unknown("built-in scene", printable(name)));
+  }
   const std::string label = "scene '" + name + "'";
   SceneValues values;
   for (const ParameterSpec& spec : entry->specs)

@@ -143,7 +143,8 @@ def main(argv=None):
              "lists what the data shows (every such sentence is computed from the data), and the "
              "scene and settings that produced it.</p>\n" % esc(data_dir.resolve().name))
     intro += lab_html(args.lab, outdir, notes)
-    html = page("springlab — integrators on mass-spring systems", intro, notes, toc, body, errors)
+    html = page("springlab — time integrators on springs, solids, rigid bodies and fluids", intro,
+                notes, toc, body, errors)
     tmp = outdir / "index.html.tmp"
     tmp.write_text(html, encoding="utf-8")
     os.replace(tmp, outdir / "index.html")

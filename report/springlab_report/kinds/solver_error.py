@@ -37,7 +37,7 @@ def option_columns():
 
 
 def options(cols, r):
-    """The options row r set: {"newton_tol": 0.01, "substeps": 10, "solver": "quasi-newton", ...}."""
+    """The options row r set, e.g. {"newton_tol": 0.01, "solver": "quasi-newton"}."""
     out = {o: float(cols["option_" + o][r]) for o in OPTION_NUMBERS
            if math.isfinite(cols["option_" + o][r])}
     if cols["option_solver"][r]:
