@@ -108,8 +108,9 @@ INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin, ::testing::ValuesIn(builtin_scen
 
 TEST(BuiltinScenesTest, AreTheSpecsSortedByName) {
   EXPECT_EQ(names_of(builtin_scenes()),
-            (std::vector<std::string>{"beam", "block", "box-chain", "box-on-slope", "box-pile",
-                                      "chain", "cloth", "dam-break", "dam-break-obstacle",
+            (std::vector<std::string>{"beam", "block", "box-chain", "box-drop", "box-on-slope",
+                                      "box-pile", "box-tower", "chain", "cloth", "dam-break",
+                                      "dam-break-obstacle",
                                       "membrane", "oscillator", "slope", "sloshing", "spring",
                                       "tank", "tumbling-box"}));
   EXPECT_FALSE(is_builtin_scene("xyz"));
@@ -141,9 +142,9 @@ TEST(BuiltinScenesTest, ParameterListsMatchTheSpec) {
 
 TEST(BuiltinScenesTest, ExactMessages) {
   EXPECT_EQ(build_error("xyz", {}),
-            "unknown built-in scene 'xyz' (built-in scenes: beam, block, box-chain, box-on-slope, "
-            "box-pile, chain, cloth, dam-break, dam-break-obstacle, membrane, oscillator, slope, "
-            "sloshing, spring, tank, tumbling-box)");
+            "unknown built-in scene 'xyz' (built-in scenes: beam, block, box-chain, box-drop, "
+            "box-on-slope, box-pile, box-tower, chain, cloth, dam-break, dam-break-obstacle, "
+            "membrane, oscillator, slope, sloshing, spring, tank, tumbling-box)");
   EXPECT_EQ(build_error("chain", {{"foo", "1"}}),
             "scene 'chain': unknown parameter 'foo' (parameters: n, k, mass, length, drag, g, "
             "horizontal, stretch)");

@@ -100,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "value - unexpected end of input; expected '[', '{', or a literal"},
         Refusal{"OverLongName", run_args("rk4", {}, kLong),
                 std::string(100, 'a') + "... (5000 bytes): cannot open (File name too long) "
-                                        "(built-in scenes: beam, block, box-chain, box-on-slope, box-pile, chain, cloth, dam-break, dam-break-obstacle, membrane, oscillator, slope, sloshing, spring, tank, tumbling-box)"},
+                                        "(built-in scenes: beam, block, box-chain, box-drop, box-on-slope, box-pile, box-tower, chain, cloth, dam-break, dam-break-obstacle, membrane, oscillator, slope, sloshing, spring, tank, tumbling-box)"},
         Refusal{"ParameterTwice", run_args("rk4", {"-p", "k=3", "-p", "k=4"}), "-p k: given twice (3 and 4)"},
         // -p takes one value: the scene after it is not swallowed.
         Refusal{"ParameterTakesOneValue",

@@ -153,7 +153,7 @@ TEST(Contact, LaggedFrictionIsTheGradientOfItsDissipationPotential) {
       const Vector x = model.initial_positions(), v = model.initial_velocities();
       Vector f_live;
       model.force(0.0, x, v, f_live);
-      model.lag_normal_forces(&x);
+      model.lag_normal_forces(&x, &v, 0.01);
       EXPECT_TRUE(model.derives_from_potentials());
       EXPECT_TRUE(model.jacobian_symmetric());
       Vector f;
@@ -177,7 +177,7 @@ TEST(Contact, LaggedFrictionIsTheGradientOfItsDissipationPotential) {
         EXPECT_NEAR(f[k], -dV - dW, 1e-6 * (1.0 + std::abs(f[k])))
             << dim << "-D, seed " << seed << ", coordinate " << k;
       }
-      model.lag_normal_forces(nullptr);
+      model.lag_normal_forces(nullptr, nullptr, 0.0);
       EXPECT_FALSE(model.derives_from_potentials());
       EXPECT_FALSE(model.jacobian_symmetric());
     }

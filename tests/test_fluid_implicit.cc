@@ -102,7 +102,7 @@ TEST(FluidViscosity, LaggedIsTheGradientOfItsDissipationPotential) {
     const Vector x = model.initial_positions(), v = model.initial_velocities();
     Vector f_live;
     model.force(0.0, x, v, f_live);
-    model.lag_normal_forces(&x);
+    model.lag_normal_forces(&x, nullptr, 0.0);
     EXPECT_TRUE(model.derives_from_potentials());
     EXPECT_TRUE(model.jacobian_symmetric());
     Vector f;
@@ -134,7 +134,7 @@ TEST(FluidViscosity, LaggedIsTheGradientOfItsDissipationPotential) {
     EXPECT_LT((Kv - Kv.transpose()).norm(), 1e-12 * (1.0 + Kv.norm()));
     EXPECT_LT((Kx - Kx.transpose()).norm(), 1e-12 * (1.0 + Kx.norm()));
     EXPECT_GT(Kv.norm(), 0.0);
-    model.lag_normal_forces(nullptr);
+    model.lag_normal_forces(nullptr, nullptr, 0.0);
     EXPECT_FALSE(model.derives_from_potentials());
     model.force(0.0, x, v, f);
     EXPECT_LT((f - f_live).norm(), 1e-12 * (1.0 + f.norm()));

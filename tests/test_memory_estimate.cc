@@ -9,12 +9,15 @@
 
 #include <cstdlib>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "experiments/driver/memory_check.h"
 #include "experiments/driver/simulation.h"
 #include "models/bodies/bodies.h"
-#include "models/bodies/body_pairs.h"
+#include "models/bodies/body_contacts.h"
+#include "models/bodies/body_pair_blocks.h"
+#include "models/contact/contact.h"
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
 #include "models/model/model_memory.h"
@@ -48,24 +51,30 @@ TEST(MemoryEstimate, OnlyAMethodThatAsksForAJacobianBuildsThePattern) {
   }
 }
 
-// The body-body kinds count the pairs BodyPairs makes (each body against
-// each box, not two fixed ones, not two joined), 64 blocks each, without
-// making them: on the hinged chain (joints) and the pile (a fixed ground).
+// The body-body kinds count the pairs their terms declare at the start
+// (BodyPairBlocks::first_pairs: every pair that may meet up to 16 bodies,
+// not two fixed ones, not two joined; beyond, the pairs near each other),
+// 64 blocks each, without making the model: on the hinged chain (joints),
+// the pile (a fixed ground) and a chain of 40 (the broad phase's pairs).
 TEST(MemoryEstimate, BodyPairsAreCountedAsTheModelMakesThem) {
-  for (const char* name : {"box-chain", "box-pile"}) {
-    SCOPED_TRACE(name);
-    const Scene scene = make_builtin_scene(name, {{"n", "6"}});
-    const BodyPairs pairs(scene, body_layout(scene, 0));
-    ASSERT_GT(pairs.pairs().size(), 0u);
+  for (const auto& [name, n] : {std::pair<const char*, const char*>{"box-chain", "6"},
+                                {"box-pile", "6"}, {"box-chain", "40"}}) {
+    SCOPED_TRACE(std::string(name) + " n=" + n);
+    const Scene scene = make_builtin_scene(name, {{"n", n}});
+    BodyContactFinder finder(scene, body_layout(scene, 0));
+    finder.place(nullptr);
+    bool fixed = false;
+    const std::size_t pairs =
+        BodyPairBlocks::first_pairs(finder, scene.get<Contact>().distance_or_default(), fixed).size();
+    EXPECT_EQ(fixed, scene.get<Bodies>().size() <= 16u);
+    if (fixed) EXPECT_GT(pairs, 0u);
     const MemoryEstimate e = estimate_model_memory(scene);
     int terms = 0;
     for (const MemoryPart& part : e.parts) {
       if (part.what.find("pairs of bodies") == std::string::npos) continue;
       ++terms;
-      EXPECT_DOUBLE_EQ(part.pattern_blocks, 64.0 * static_cast<double>(pairs.pairs().size()))
-          << part.what;
-      EXPECT_NE(part.what.find(std::to_string(pairs.pairs().size()) + " pairs of bodies"),
-                std::string::npos)
+      EXPECT_DOUBLE_EQ(part.pattern_blocks, 64.0 * static_cast<double>(pairs)) << part.what;
+      EXPECT_NE(part.what.find(std::to_string(pairs) + " pairs of bodies"), std::string::npos)
           << part.what;
     }
     EXPECT_GE(terms, 1);
@@ -73,31 +82,33 @@ TEST(MemoryEstimate, BodyPairsAreCountedAsTheModelMakesThem) {
 }
 
 // The check's lines: the estimate, its largest part in the scene's words,
-// the limit; and nothing where the limit is ample.
+// the limit; and nothing where the limit is ample. A pile of 16 boxes
+// declares every pair of them (120 pairs, 64 blocks each): what a Jacobian
+// adds to the model.
 TEST(MemoryEstimate, RefusalsNameWhatWeighsMost) {
-  const Scene scene = make_builtin_scene("box-chain", {{"n", "100"}});
-  EXPECT_NO_THROW(check_scene_memory(scene, "box-chain", 1e12));
+  const Scene scene = make_builtin_scene("box-pile", {{"n", "16"}});
+  EXPECT_NO_THROW(check_scene_memory(scene, "box-pile", 1e12));
   try {
-    check_scene_memory(scene, "box-chain", 1e5);
+    check_scene_memory(scene, "box-pile", 1e4);
     FAIL() << "not refused";
   } catch (const MemoryRefused& e) {
     const std::string what = e.what();
-    EXPECT_EQ(what.rfind("box-chain: the model would need about ", 0), 0u) << what;
-    EXPECT_NE(what.find("for its 100 bodies ("), std::string::npos) << what;
-    EXPECT_NE(what.find("more than the 100 KB this process may use: make the scene smaller"),
+    EXPECT_EQ(what.rfind("box-pile: the model would need about ", 0), 0u) << what;
+    EXPECT_NE(what.find("for its 16 bodies ("), std::string::npos) << what;
+    EXPECT_NE(what.find("more than the 10 KB this process may use: make the scene smaller"),
               std::string::npos)
         << what;
   }
   const Model model(scene);
   const double explicit_bytes = estimate_model_memory(scene).bytes(false);
   // Symplectic Euler assembles nothing: no limit above the model refuses it.
-  EXPECT_NO_THROW(check_jacobian_memory(model, "symplectic-euler", "box-chain", 0.0));
+  EXPECT_NO_THROW(check_jacobian_memory(model, "symplectic-euler", "box-pile", 0.0));
   try {
-    check_jacobian_memory(model, "implicit-euler", "box-chain", 10.0 * explicit_bytes);
+    check_jacobian_memory(model, "implicit-euler", "box-pile", 1.01 * explicit_bytes);
     FAIL() << "not refused";
   } catch (const MemoryRefused& e) {
     const std::string what = e.what();
-    EXPECT_EQ(what.rfind("--integrator implicit-euler: box-chain's model and Jacobian pattern "
+    EXPECT_EQ(what.rfind("--integrator implicit-euler: box-pile's model and Jacobian pattern "
                          "would need about ",
                          0),
               0u)
@@ -141,20 +152,23 @@ class MemoryLimitsEstimate : public ::testing::Test {
   TempDir temp_;
 };
 
-// Issue 46.5 scaled down: 300 boxes with implicit Euler would build a
-// pattern of 89102 body pairs (about 1.6 GB); under a 1 GB limit it is
-// refused before the model builds it, naming the bodies and their pairs.
-// The same scene with symplectic Euler runs within the limit.
-TEST_F(MemoryLimitsEstimate, BodyPairsOverTheLimitAreRefusedWhereAJacobianIsAssembled) {
-  std::vector<std::string> args = {"run", "box-chain", "-p", "n=300", "--integrator",
-                                   "implicit-euler", "--dt", "1e-5", "--t-end", "1e-5"};
-  expect_refused(args, run_limited(args, 1e9),
-                 "--integrator implicit-euler: box-chain's model and Jacobian pattern would need "
-                 "about ",
-                 {"of it for its 300 bodies (89102 pairs of bodies for contact)",
-                  "this process may use: make the scene smaller, or use a method that assembles no "
-                  "Jacobian"});
-  args[5] = "symplectic-euler";
+// Issue 46.5 scaled down: 300 boxes with implicit Euler once built a
+// pattern of every pair of bodies (89102 pairs, about 1.6 GB) and were
+// refused under a 1 GB limit; the pairs now come from a broad phase
+// (body_contacts.h), so the chain's estimate names only the pairs near each
+// other at the start (none: its neighbours are joined) and it runs within
+// the limit.
+TEST_F(MemoryLimitsEstimate, ThreeHundredBodiesRunWithinTheLimitWhereAJacobianIsAssembled) {
+  const Scene scene = make_builtin_scene("box-chain", {{"n", "300"}});
+  const MemoryEstimate e = estimate_model_memory(scene);
+  for (const MemoryPart& part : e.parts) {
+    if (part.what.find("pairs of bodies") != std::string::npos) {
+      EXPECT_NE(part.what.find("(0 pairs of bodies"), std::string::npos) << part.what;
+    }
+  }
+  EXPECT_LT(e.bytes(true), 1e8);
+  const std::vector<std::string> args = {"run", "box-chain", "-p", "n=300", "--integrator",
+                                         "implicit-euler", "--dt", "1e-5", "--t-end", "1e-5"};
   const ProcessResult r = run_limited(args, 1e9);
   ASSERT_TRUE(r.exited) << describe(args, r);
   EXPECT_EQ(r.status, 0) << describe(args, r);

@@ -131,5 +131,38 @@ TEST(RigidExperiment, ErrorFallsAsKappaGrowsAndTheStepLimitFollowsTheRigidityMod
   EXPECT_LT(measured, 1.3 * 2.0 / w_formula);
 }
 
+// The pile part (issue 49): box-pile with two boxes under implicit Euler at
+// 1/60 s and BDF2 at 5 ms for 1 s. Each case is one task after the rigid
+// ones; its rows sample the top box's height and the energy every 0.05 s
+// (and at t_end), its summary says the run completed with the bodies apart
+// (smallest gap > 0, within the barrier's 1 mm) and the top box resting on
+// the bottom one (its centre between 0.13 and 0.15 m: 0.1 + 0.04, the two
+// heights, plus the gaps).
+TEST(RigidExperiment, ThePileRowsFollowTheTopBoxAndItsGaps) {
+  Json d = small_definition();
+  d["pile"] = {{"scene", "box-pile"}, {"parameters", {{"n", 2}}}, {"t_end", 1.0},
+               {"sample", 0.05},
+               {"cases", {{{"integrator", "implicit-euler"}, {"dt", 1.0 / 60.0}},
+                          {{"integrator", "bdf2"}, {"dt", 5e-3}}}}};
+  const LoadedExperiment e = parse_definition(d);
+  ASSERT_EQ(e.experiment->task_count(), 1u + 2u + 2u + 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto tables = task_rows(e, 5 + k);
+    ASSERT_EQ(tables[5].size(), 1u);
+    const auto& run = tables[5][0];
+    EXPECT_EQ(run.at("status"), "completed") << run.at("failure");
+    const double gap = std::stod(run.at("smallest_gap"));
+    EXPECT_GT(gap, 0.0);
+    EXPECT_LT(gap, 1e-3);
+    const double top = std::stod(run.at("top_height_final"));
+    EXPECT_GT(top, 0.13);
+    EXPECT_LT(top, 0.15);
+    EXPECT_GE(tables[4].size(), 10u);
+    EXPECT_LE(tables[4].size(), 22u);
+    EXPECT_EQ(tables[4].back().at("t"), "1");
+    EXPECT_NEAR(std::stod(tables[4].back().at("top_height")), top, 1e-12);
+  }
+}
+
 }  // namespace
 }  // namespace springlab

@@ -57,6 +57,8 @@ CASES = [
     ("tumbling-box", "tumbling-box", [], "0.01", "0.2"),
     ("box-on-slope", "box-on-slope", ["speed=0.5"], "0.01", "0.2"),
     ("box-pile", "box-pile", ["n=2"], "0.01", "0.2"),
+    ("box-tower", "box-tower", ["n=3"], "0.01", "0.2"),
+    ("box-drop", "box-drop", ["n=4", "columns=2", "width=0.4"], "0.01", "0.2"),
     ("box-chain", "box-chain", ["n=2"], "0.005", "0.05"),
     ("dam-break", "dam-break", ["spacing=0.025"], "0.002", "0.02"),
     ("dam-break-obstacle", "dam-break-obstacle", ["spacing=0.25"], "0.005", "0.05"),

@@ -65,6 +65,7 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   }
   const SparseMatrix& jacobian_pattern() const override { return model_.jacobian_pattern(); }
   bool pattern_varies() const override { return model_.pattern_varies(); }
+  std::string pattern_change() const override { return model_.pattern_change(); }
   long pattern_version() const override { return model_.pattern_version(); }
   bool jacobian_symmetric() const override { return model_.jacobian_symmetric(); }
   VelocityDependence velocity_dependence() const override {
@@ -74,7 +75,9 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   double admissible_fraction(const Vector& x, const Vector& dx) const override {
     return model_.admissible_fraction(x, dx);
   }
-  void lag_normal_forces(const Vector* x_lag) const override { model_.lag_normal_forces(x_lag); }
+  void lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const override {
+    model_.lag_normal_forces(x_lag, v_lag, h);
+  }
   const FastSolverViews* fast_solver_views() const override { return this; }
 
   // FastSolverViews: the model's, with the spring among the external forces.

@@ -14,6 +14,15 @@
   const PLOT_SAMPLES = 600;              // energy samples kept per panel
   const VIEW_W = 440, VIEW_H = 360, PLOT_H = 90;
   const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
+  // Where a scene chosen from the menu starts (the rest keep the current
+  // dt and methods): the box scenes at a frame step under implicit Euler,
+  // whose contacts between bodies hold there (docs/physics.md "Contact
+  // between bodies"), beside BDF2.
+  const SCENE_STARTS = {
+    "box-pile": { dt: 1 / 60, integrators: ["implicit-euler", "bdf2"] },
+    "box-tower": { dt: 1 / 60, integrators: ["implicit-euler", "bdf2"] },
+    "box-drop": { dt: 1 / 60, integrators: ["implicit-euler", "symplectic-euler"] },
+  };
 
   let M = null;           // the WebAssembly module
   let catalog = null;     // lab_list(): methods and scenes of this build
@@ -525,7 +534,18 @@
   function wireControls() {
     const sceneSel = $("scene");
     for (const s of catalog.scenes) sceneSel.add(new Option(s.name, s.name, false, s.name === lab.scene));
-    sceneSel.onchange = () => { lab.scene = sceneSel.value; lab.params = {}; showSceneParams(); makePanels(); };
+    sceneSel.onchange = () => {
+      lab.scene = sceneSel.value;
+      lab.params = {};
+      const start = SCENE_STARTS[lab.scene];
+      if (start) {
+        lab.integrators = start.integrators.slice();
+        $("panel-count").value = String(lab.integrators.length);
+        setDt(start.dt);
+      }
+      showSceneParams();
+      makePanels();
+    };
     showSceneParams();
     $("apply").onclick = () => { lab.params = readSceneParams(); makePanels(); };
     $("dt-slider").oninput = (ev) => setDt(sliderToDt(Number(ev.target.value)));

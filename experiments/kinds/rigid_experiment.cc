@@ -15,6 +15,13 @@
 //   - one per kappa: `kappa_integrator` at the small step `kappa_dt` to
 //     `kappa_t_end`: the largest |A - R_ref|_F, the largest strain and the
 //     flip period's error against the reference's;
+//   - one per case of the optional "pile" (a scene of bodies meeting
+//     bodies, box-pile by default, under an integrator at a step, as the
+//     definition lists them): a row every `sample` seconds with the top body's
+//     height (its centre's y: the scene's last body), the energy, kinetic
+//     energy and the smallest gap between two bodies' surfaces, and a
+//     summary row (status, Newton iterations per step, the final height
+//     and energy, the smallest gap over the run);
 //   - one per (kappa, limit integrator): the largest stable step
 //     (find_max_stable_dt, stability.h) beside the theory: the rigidity's
 //     fastest mode. Around A = I, E = kappa V |A^T A - I|^2 is
@@ -37,6 +44,8 @@
 #include "models/bodies/bodies.h"
 #include "models/model/modal_analysis.h"
 #include "models/model/energy_layout.h"
+#include "models/bodies/body_contacts.h"
+#include "models/scenes/builtin_scenes.h"
 
 namespace springlab {
 namespace {
@@ -168,13 +177,63 @@ std::optional<double> error_of(const std::optional<double>& period,
   return (*period - *reference) / *reference;
 }
 
+// Watches a run of the pile at every step: the top body's height, the
+// energy and the smallest gap between bodies (within 0.1 m), with a row
+// at every state at least `sample` seconds after the last row's (and at
+// t_end).
+class PileWatch final : public Observer {
+ public:
+  PileWatch(const Model& model, double t_end, double sample, std::string prefix,
+            std::vector<std::string>& rows)
+      : model_(model), layout_(body_layout(model.scene(), model.free_particle_count())),
+        finder_(model.scene(), layout_),
+        energies_(model.energies(model.initial_positions(), model.initial_velocities())),
+        t_end_(t_end), sample_(sample), prefix_(std::move(prefix)), rows_(rows) {}
+
+  void observe(double t, const Vector& x, const Vector& v) override {
+    // (The bodies' unknowns are in x, after the free particles.)
+    finder_.place(x.data());
+    std::vector<BodyContact> contacts;
+    finder_.all_contacts(0.1, contacts);
+    double gap = INFINITY;
+    for (const BodyContact& k : contacts) gap = std::min(gap, k.d);
+    smallest_gap = std::min(smallest_gap, gap);
+    const std::size_t top = layout_.bodies.size() - 1;
+    top_height = body_state(layout_.bodies[top], layout_.first[top], x.data(), v.data()).p.y();
+    model_.energies(x, v, energies_);
+    energy = energies_.total();
+    if (t >= next_ || t == t_end_) {
+      next_ = t + sample_ * (1.0 - 1e-9);
+      Row row;
+      row.raw(prefix_).add(t).add(top_height).add(energy).add(energies_.kinetic());
+      if (std::isfinite(gap)) {
+        row.add(gap);
+      } else {
+        row.add_empty();
+      }
+      rows_.push_back(row.str());
+    }
+  }
+
+  double smallest_gap = INFINITY, top_height = 0.0, energy = 0.0;
+
+ private:
+  const Model& model_;
+  BodyLayout layout_;
+  BodyContactFinder finder_;
+  Energies energies_;
+  double t_end_, sample_, next_ = 0.0;
+  std::string prefix_;
+  std::vector<std::string>& rows_;
+};
+
 class RigidExperiment final : public Experiment {
  public:
   explicit RigidExperiment(const DefinitionObject& d) {
     d.allow_only({"experiment", "name", "title", "description", "integrators", "rtol", "atol",
                   "newton_tol", "scene", "parameters", "dt", "t_end", "every", "reference_step",
                   "kappa", "kappa_integrator", "kappa_dt", "kappa_t_end", "limit_integrators",
-                  "limit_periods", "limit_rel_tol"});
+                  "limit_periods", "limit_rel_tol", "pile"});
     options_ = definition_options(d);
     integrators_ = definition_integrators(d, "integrators", "fixed-step");
     dt_ = d.positive("dt");
@@ -214,6 +273,7 @@ class RigidExperiment final : public Experiment {
       }
       limit_rel_tol_ = d.positive("limit_rel_tol", 1e-2);
     }
+    if (d.has("pile")) read_pile(d.object("pile"));
     const double steps = static_cast<double>(make_time_grid(dt_, t_end_).steps);
     check_task_count(d, "integrators", static_cast<double>(task_count()));
     check_output_rows(d, "integrators",
@@ -232,17 +292,26 @@ class RigidExperiment final : public Experiment {
                        "orientation_error_max", "energy_drift_max", "momentum_drift_max",
                        "flip_period", "reference_flip_period", "period_error"}},
             {"limits", {"kappa", "integrator", "w_formula", "w_max", "dt_theory",
-                        "dt_max_stable", "lo", "hi", "ratio", "outcome"}}};
+                        "dt_max_stable", "lo", "hi", "ratio", "outcome"}},
+            {"pile", {"integrator", "dt", "t", "top_height", "energy", "kinetic",
+                      "smallest_gap"}},
+            {"pile_runs", {"integrator", "dt", "status", "diverged_at", "steps",
+                           "newton_per_step", "top_height_final", "energy_initial",
+                           "energy_final", "smallest_gap", "wall_seconds", "failure"}}};
   }
 
   std::size_t task_count() const override {
-    return integrators_.size() + kappa_.size() * (1 + limit_integrators_.size());
+    return integrators_.size() + kappa_.size() * (1 + limit_integrators_.size()) +
+           pile_cases_.size();
   }
 
   TaskOutput run_task(std::size_t index) const override {
     TaskOutput out;
-    out.rows.resize(4);
-    if (index < integrators_.size()) {
+    out.rows.resize(6);
+    const std::size_t rigid_tasks = task_count() - pile_cases_.size();
+    if (index >= rigid_tasks) {
+      run_pile(pile_cases_[index - rigid_tasks], out);
+    } else if (index < integrators_.size()) {
       run_main(integrators_[index], out);
     } else if (index < integrators_.size() + kappa_.size()) {
       run_kappa(index - integrators_.size(), out);
@@ -267,7 +336,8 @@ class RigidExperiment final : public Experiment {
                       {"omega_body", {f.w_body[0], f.w_body[1], f.w_body[2]}}}},
             {"kappa", kappa_}, {"kappa_integrator", kappa_integrator_}, {"kappa_dt", kappa_dt_},
             {"kappa_t_end", kappa_t_end_}, {"limit_integrators", limit_integrators_},
-            {"limit_periods", limit_periods_}, {"limit_rel_tol", limit_rel_tol_}};
+            {"limit_periods", limit_periods_}, {"limit_rel_tol", limit_rel_tol_},
+            {"pile", pile_json()}};
   }
 
  private:
@@ -344,6 +414,51 @@ class RigidExperiment final : public Experiment {
     out.rows[3].push_back(row.add(outcome).str());
   }
 
+  // The pile: {"scene", "parameters", "cases": [{"integrator", "dt"}, ...],
+  // "t_end", "sample"}.
+  struct PileCase {
+    std::string integrator;
+    double dt = 0.0;
+  };
+  void read_pile(const DefinitionObject& p) {
+    p.allow_only({"scene", "parameters", "cases", "t_end", "sample"});
+    pile_scene_ = definition_scene(p);
+    if (pile_scene_.get<Bodies>().size() < 2) p.fail("scene", "needs two bodies or more");
+    pile_t_end_ = p.positive("t_end");
+    pile_sample_ = p.positive("sample", 0.02);
+    for (const DefinitionObject& c : p.objects("cases")) {
+      c.allow_only({"integrator", "dt"});
+      PileCase pc{definition_integrator(c, "integrator"), c.positive("dt")};
+      check_time_grid(c, "dt", pc.dt, pile_t_end_);
+      pile_cases_.push_back(pc);
+    }
+  }
+  nlohmann::json pile_json() const {
+    if (pile_cases_.empty()) return nullptr;
+    nlohmann::json cases = nlohmann::json::array();
+    for (const PileCase& c : pile_cases_) cases.push_back({{"integrator", c.integrator}, {"dt", c.dt}});
+    return {{"scene", scene_as_json(pile_scene_)}, {"t_end", pile_t_end_},
+            {"sample", pile_sample_}, {"cases", cases},
+            {"bodies", pile_scene_.get<Bodies>().size()}};
+  }
+  void run_pile(const PileCase& c, TaskOutput& out) const {
+    const Model model(pile_scene_);
+    const std::string prefix = Row().add(c.integrator).add(c.dt).str();
+    PileWatch watch(model, pile_t_end_, pile_sample_, prefix, out.rows[4]);
+    const RunResult r = simulate(model, settings_for(c.integrator, c.dt, pile_t_end_), {&watch});
+    const double steps = static_cast<double>(r.stats.steps);
+    Row row;
+    row.raw(prefix).add(to_string(r.status)).add(r.diverged_at).add(r.stats.steps)
+        .add(steps > 0.0 ? static_cast<double>(r.stats.newton_iterations) / steps : 0.0)
+        .add(watch.top_height).add(r.energy_initial).add(watch.energy);
+    if (std::isfinite(watch.smallest_gap)) {
+      row.add(watch.smallest_gap);
+    } else {
+      row.add_empty();
+    }
+    out.rows[5].push_back(row.add(r.wall_seconds).add(r.failure).str());
+  }
+
   // The reference's steps to `t_end` (each run's watch advances its own
   // reference that far): over the cap of steps per run, refused at load.
   void check_reference_steps(const DefinitionObject& d, double t_end, const char* over) const {
@@ -357,6 +472,10 @@ class RigidExperiment final : public Experiment {
 
   IntegratorOptions options_;
   std::vector<std::string> integrators_, limit_integrators_;
+  Scene pile_scene_;
+  std::vector<PileCase> pile_cases_;
+  double pile_t_end_ = 0.0;
+  double pile_sample_ = 0.02;
   double dt_ = 0.0, t_end_ = 0.0, reference_step_ = 1e-5;
   int every_ = 1;
   Scene scene_;

@@ -8,13 +8,17 @@ namespace springlab {
 // the step is solved, and released when it ends, on every path out
 // (MechanicalSystem::lag_normal_forces): friction then derives from a
 // dissipation potential, so an implicit step minimizes an incremental
-// potential. Used by Newton's steps and by vertex block descent.
+// potential. Newton's steps also pass the start velocity v and the step h
+// (the bodies' contact set is found along x + h v); vertex block descent
+// passes x alone. Used by Newton's steps and by vertex block descent.
 class LaggedNormalForces {
  public:
-  LaggedNormalForces(const MechanicalSystem& system, const Vector& x) : system_(system) {
-    system_.lag_normal_forces(&x);
+  LaggedNormalForces(const MechanicalSystem& system, const Vector& x, const Vector* v = nullptr,
+                     double h = 0.0)
+      : system_(system) {
+    system_.lag_normal_forces(&x, v, h);
   }
-  ~LaggedNormalForces() { system_.lag_normal_forces(nullptr); }
+  ~LaggedNormalForces() { system_.lag_normal_forces(nullptr, nullptr, 0.0); }
   LaggedNormalForces(const LaggedNormalForces&) = delete;
   LaggedNormalForces& operator=(const LaggedNormalForces&) = delete;
 

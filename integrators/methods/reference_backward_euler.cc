@@ -29,7 +29,7 @@ ReferenceStepResult reference_backward_euler_step(const MechanicalSystem& system
                                                   double h, double tol, int max_iterations,
                                                   Vector& x, Vector& v) {
   ReferenceStepResult result;
-  system.lag_normal_forces(&x);
+  system.lag_normal_forces(&x, &v, h);
   const Vector v_n = v;
   const double t1 = t + h;
   Vector f, r, dv, x1;
@@ -52,7 +52,7 @@ ReferenceStepResult reference_backward_euler_step(const MechanicalSystem& system
       break;
     }
   }
-  system.lag_normal_forces(nullptr);
+  system.lag_normal_forces(nullptr, nullptr, 0.0);
   if (!result.ok && result.message.empty()) result.message = "no convergence";
   if (result.ok) x += h * v;
   return result;

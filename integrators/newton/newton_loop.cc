@@ -95,6 +95,7 @@ void NewtonLoop::start(NewtonProblem& problem, Vector& v) {
   // The start leaves the states where the forces are defined (a barrier's
   // gap closed, an element inverted): the problem's other start.
   if (!r_.allFinite() && problem.fallback_start(v)) problem.residual(v, r_);
+  if (!r_.allFinite() && problem.accepted_start(v)) problem.residual(v, r_);
   magnitude_ = 0.0;
   search_->reset();
   phi_ = mode_.minimize ? problem.potential(v, magnitude_) : 0.0;

@@ -28,6 +28,10 @@ class NewtonProblem {
   // Another start, where r(start()) is not finite (a state with no
   // energy); false when there is none.
   virtual bool fallback_start(Vector& v) const = 0;
+  // A start whose state is the one the last step accepted, where the
+  // fallback's is not either (BDF2's extrapolated stage through a
+  // barrier's gap); false when there is none.
+  virtual bool accepted_start(Vector& /*v*/) const { return false; }
 
   // r(v). potential(), matrix() and allowed() then refer to this v.
   virtual void residual(const Vector& v, Vector& r) = 0;

@@ -204,6 +204,7 @@ bool Lbfgs::solve(VelocityStep& step, const CountedModel& model, const Vector& i
   if (!r_.allFinite() && step.fallback_start(v)) {
     step.residual(v, r_);  // as Newton: a state the last step accepted
   }
+  if (!r_.allFinite() && step.accepted_start(v)) step.residual(v, r_);
   double magnitude = 0.0;
   magnitude_try_ = 0.0;
   double phi = step.potential(v, magnitude);

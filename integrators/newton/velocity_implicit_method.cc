@@ -40,7 +40,7 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const
 
 StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplicitScheme& s,
                                                   Vector& v, bool quasi) {
-  const LaggedNormalForces lag(system(), x_);
+  const LaggedNormalForces lag(system(), x_, &v_, h);
   step_.begin(t_, x_, v_, h, s);
   const bool lbfgs = quasi && system().derives_from_potentials();
   check_.begin(step_, options().newton_tol);

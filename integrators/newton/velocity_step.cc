@@ -49,6 +49,12 @@ bool VelocityStep::fallback_start(Vector& v) const {
   return true;
 }
 
+bool VelocityStep::accepted_start(Vector& v) const {
+  if (!(s_.b > 0.0) || s_.x_offset == nullptr) return false;
+  v = (-s_.a / s_.b) * *v_ - (1.0 / (h_ * s_.b)) * *s_.x_offset;
+  return true;
+}
+
 bool VelocityStep::has_potential() const {
   return model_->system().derives_from_potentials() && s_.b > 0.0 && s_.c > 0.0;
 }

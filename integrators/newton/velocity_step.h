@@ -78,6 +78,9 @@ class VelocityStep final : public NewtonProblem {
   // The v that keeps the stage at x_n, a v_n + b v = 0: a state the last
   // step accepted (where v_n leaves the states with an energy).
   bool fallback_start(Vector& v) const override;
+  // With an offset x_o (BDF2's extrapolation) the fallback's stage is
+  // x_n + x_o; this one's is x_n itself: h (a v_n + b v) + x_o = 0.
+  bool accepted_start(Vector& v) const override;
   void residual(const Vector& v, Vector& r) override;
   bool has_potential() const override;
   double potential(const Vector& v, double& magnitude) override;

@@ -126,10 +126,10 @@ StepResult SundialsIntegrator::do_initialize() {
     // Its Newton matrix (first_order_jacobian.h) and KLU's analysis keep
     // the pattern of the first step.
     return StepResult::failure(
-        name() + ": this system's Jacobian pattern changes as its particles change neighbours "
-                 "(a fluid), and SUNDIALS' Newton matrices keep the pattern of the first step: "
-                 "use arkode-erk (adaptive, explicit), or implicit-euler, bdf2 or another "
-                 "implicit method of springlab's own");
+        name() + ": this system's Jacobian pattern changes as " + system().pattern_change() +
+        ", and SUNDIALS' Newton matrices keep the pattern of the first step: "
+        "use arkode-erk (adaptive, explicit), or implicit-euler, bdf2 or another "
+        "implicit method of springlab's own");
   }
   step_limit_ = sundials_step_limit(options(), 2 * n());
   try {

@@ -1,43 +1,65 @@
 // Contact between rigid bodies (docs/physics.md "Contact between bodies"):
-// the surface vertices of each body against every other body that is a box
-// (shape "box"), with the planes' penalty phi(d) = k_c/2 min(d, 0)^2
-// (models/contact/contact_potential.h) on the gap d through the face of the box
-// that faces the other body's centre (the geometry: body_pairs.h). An
-// element kind with no scene key of its own; it acts when the scene's
-// contact model is the penalty (the default). Friction between bodies is
-// body_body_friction.cc.
+// any two bodies (boxes, cylinders, closed meshes) meet through the
+// distances of their surfaces' pieces (body_contacts.h: each vertex against
+// the other surface, each feature edge against the other's), with the
+// scene's contact model on each contact's gap d:
+//   barrier:  phi(d) = kappa b(d), b = -(d - dhat)^2 ln(d / dhat) on (0, dhat)
+//             (IPC, Li et al. 2020), +infinity at d <= 0;
+//   penalty:  phi(d) = k_c/2 (delta - d)^2 on [0, delta), delta the contact
+//             distance (a skin), +infinity at d < 0 (contact_potential.h).
+// An element kind with no scene key of its own, energy column `contact`.
+// Friction between bodies is body_body_friction.cc.
 //
-// d is a quadratic polynomial of the pair's unknowns, with the gradient of
-// body_pairs.h and Hessian blocks d2d/dq_alpha da_i = s w_alpha I (alpha
-// one of a's unknowns, w = (1, X)), d2d/dp_b da_i = -s I, d2d/da_i2 =
-// -2 h_i I. The force is -phi'(d) grad d and its Jacobian
-// -(phi''(d) grad d grad d^T + phi'(d) hess d); Newton's definite part
-// keeps the first, semidefinite, term (Gauss-Newton).
+// Two ways of evaluating it:
+//   - Live (explicit methods, energies, outputs): the contacts found at the
+//     evaluated state itself, each gap its pieces' distance D. The energy
+//     sum phi(D) is continuous (a contact enters at D = dhat or delta, where
+//     phi = 0); the force -phi'(D) grad D with grad D = w_u n
+//     (body_contacts.h); the Jacobian -(phi'' grad D grad D^T + phi'
+//     hess D), hess D through the closest points' motion
+//     (BodyContactFinder::derivatives).
+//   - Within an implicit step (ForceTerm::lag): the contacts found at the
+//     step's start, each kept as two material points and a frozen normal
+//     (Lan et al. 2022, Affine Body Dynamics, sec. 5), so that its gap
+//     d = n . (x_a - x_b) is linear in the pair's 24 unknowns: the energy's
+//     Hessian phi'' grad d grad d^T is positive semidefinite and the exact
+//     one, and the step that closes a gap has a closed form (the line
+//     search's cap, admissible_fraction). The contacts are searched as far
+//     as each body can move in the step at its start velocity
+//     (BodyContactFinder::step_contacts), so that a gap that closes within
+//     the step is among them.
+// In both, a state where the surfaces interpenetrate (an edge through a
+// triangle, a body inside another: BodyContactFinder::overlap) or a gap
+// closes has infinite energy: the line search never accepts it, and an
+// explicit method that steps there ends diverged, saying which bodies.
 //
-// d is invariant under translating and rotating everything (x, p, a_i ->
-// Q x + t, ...), and so is the face choice, so the pair force conserves
-// the total linear and angular momentum. The force jumps where the face
-// switches (two |Z_i| / h_i equal: a's centre over b's edge) and where a
-// vertex through the face leaves it sideways (|Y_k| = h_k).
+// Which pairs of bodies are looked at: a broad phase (sweep and prune), and
+// the Jacobian's blocks are every pair's up to 16 bodies, beyond that they
+// follow the pairs near each other (ForceTerm::pattern_varies;
+// body_pair_blocks.h): time and memory grow with the bodies and their
+// contacts, not with the square of the bodies.
 //
-// Left out, and said so in the docs: a cylinder or mesh as the body pushed
-// into (only their vertices push into boxes); edge-edge crossings with no
-// vertex inside; the barrier model (with it bodies do not meet each other).
+// The gap is unchanged by translating and rotating both bodies together
+// (it is a distance, or n . (x_a - x_b) with n turned alike), so the pair
+// force conserves the total linear and angular momentum.
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
-#include <set>
+#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "models/bodies/bodies.h"
-#include "models/bodies/body_pairs.h"
+#include "models/bodies/body_contacts.h"
+#include "models/bodies/body_pair_blocks.h"
 #include "models/contact/contact.h"
 #include "models/contact/contact_potential.h"
 #include "models/core/element_kind.h"
+#include "models/springs/gravity.h"
 
 namespace springlab {
 
@@ -47,13 +69,25 @@ void add_random_body_with(Scene& scene, std::mt19937& rng, RandomStates states, 
 
 namespace {
 
+// w_u of the gap's gradient dd/dq_u = w_u n: (1, X_a, -1, -X_b).
+std::array<double, 8> gap_weights(const BodyContact& k) {
+  return {1.0, k.Xa.x(), k.Xa.y(), k.Xa.z(), -1.0, -k.Xb.x(), -k.Xb.y(), -k.Xb.z()};
+}
+
 class BodyBodyContactForce final : public ForceTerm {
  public:
-  BodyBodyContactForce(const Scene& scene, const BodyLayout& layout, const Contact& contact)
-      : pairs_(scene, layout), law_(contact) {}
+  BodyBodyContactForce(const Scene& scene, const BodyLayout& layout, const ParticleOrder& order)
+      : finder_(scene, layout), law_(scene.get<Contact>()),
+        g_(scene.get<Gravity>().acceleration.norm()),
+        begin_(3 * static_cast<std::size_t>(order.free_particles)),
+        count_(3 * static_cast<std::size_t>(order.body_particles)) {
+    finder_.place(nullptr);
+    blocks_.set(BodyPairBlocks::first_pairs(finder_, law_.distance, fixed_pattern_));
+  }
 
   std::string_view name() const override { return "body-body contact"; }
   bool conservative() const override { return true; }
+  bool forbids_states() const override { return true; }
   bool projective_elements(std::vector<ProjectiveElement>&, Refusal& why) const override {
     why.text = "contact between rigid bodies has no projective form; use implicit-euler or another "
           "Newton method";
@@ -61,26 +95,91 @@ class BodyBodyContactForce final : public ForceTerm {
   }
 
   double potential_energy(const Configuration& c) const override {
+    const std::vector<BodyContact>& contacts = current(c.x);
     double sum = 0.0;
-    for_each_touch(c, [&](const BodyPairs::Touch&, const ContactPhi& phi) { sum += phi.value; });
+    for (const BodyContact& k : contacts) {
+      const double d = gap(k, c.x);
+      if (law_.forbidden_between_bodies(d)) return std::numeric_limits<double>::infinity();
+      sum += law_.between_bodies(d).value;
+    }
+    if (overlap(c.x).found()) return std::numeric_limits<double>::infinity();
     return sum;
   }
 
   void add_force(const Configuration& c, double* f) const override {
-    for_each_touch(c, [&](const BodyPairs::Touch& t, const ContactPhi& phi) {
-      const auto grad = pairs_.gap_gradient(t);
-      const auto& index = pairs_.pairs()[t.pair].index;
+    for (const BodyContact& k : current(c.x)) {
+      const ContactPhi phi = law_.between_bodies(gap(k, c.x));
+      // Live, no force where the gap has closed (phi' is NaN there): an
+      // explicit step that lands there ends with the interpenetration named
+      // (forbidden_state), not with a NaN. Within an implicit step the NaN
+      // stays: the line search rejects such a trial at once.
+      if (phi.slope == 0.0 || (!lagged_ && std::isnan(phi.slope))) continue;
+      const std::array<int, 8> index = BodyPairBlocks::unknowns(finder_, k.a, k.b);
+      const std::array<double, 8> w = gap_weights(k);
       for (std::size_t u = 0; u < 8; ++u) {
         if (index[u] < 0) continue;
-        for (int r = 0; r < 3; ++r) f[3 * index[u] + r] -= phi.slope * grad[u][r];
+        for (int r = 0; r < 3; ++r) f[3 * index[u] + r] -= phi.slope * w[u] * k.n[r];
       }
-    });
+    }
   }
 
-  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    pairs_.declare_blocks(builder);
+  std::string forbidden_state(const Configuration& c) const override {
+    std::ostringstream why;
+    for (const BodyContact& k : current(c.x)) {
+      const double d = gap(k, c.x);
+      if (law_.forbidden_between_bodies(d)) {
+        why << "body " << k.a << " and body " << k.b << " met (gap " << d << " m), where "
+            << (law_.model == ContactModel::kBarrier ? "the barrier's" : "contact's")
+            << " energy is infinite";
+        return why.str();
+      }
+    }
+    const BodyOverlap o = overlap(c.x);
+    if (o.found()) return o.text() + ": bodies may not interpenetrate";
+    return {};
   }
-  void bind_jacobian(const SparseMatrix& pattern) override { slots_ = pairs_.find_slots(pattern); }
+
+  double admissible_fraction(const Configuration& c, const double* dx) const override {
+    double fraction = std::numeric_limits<double>::infinity();
+    for (const BodyContact& k : current(c.x)) {
+      const double approach = rate(k, dx);
+      if (approach < 0.0) fraction = std::min(fraction, gap(k, c.x) / -approach);
+    }
+    return std::max(fraction, 0.0);
+  }
+
+  void lag(const Configuration* c, double h) override {
+    lagged_ = false;
+    if (c == nullptr) return;
+    place(c->x);
+    finder_.step_contacts(law_.distance, c->v, h, g_, frozen_);
+    lagged_ = true;
+  }
+
+  bool pattern_varies() const override { return !fixed_pattern_; }
+  std::string pattern_change() const override {
+    return "bodies come near other bodies (more than " + std::to_string(kAllPairsBodies) +
+           " bodies)";
+  }
+  bool pattern_holds(const Configuration& c) const override {
+    for (const BodyContact& k : current(c.x)) {
+      if (!blocks_.covers(k.a, k.b)) return false;
+    }
+    return true;
+  }
+  void follow_pattern(const Configuration& c) override {
+    std::vector<std::pair<int, int>> needed;
+    for (const BodyContact& k : current(c.x)) {
+      needed.emplace_back(std::min(k.a, k.b), std::max(k.a, k.b));
+    }
+    place(c.x);
+    blocks_.set(BodyPairBlocks::near_pairs(finder_, law_.distance, std::move(needed)));
+  }
+  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
+    blocks_.declare(finder_, builder);
+  }
+  void bind_jacobian(const SparseMatrix& pattern) override { blocks_.bind(finder_, pattern); }
+
   void add_jacobians(const Configuration& c, double* dfdx, double*) const override {
     if (dfdx != nullptr) add_stiffness(c, dfdx, false);
   }
@@ -89,109 +188,148 @@ class BodyBodyContactForce final : public ForceTerm {
   }
 
  private:
-  template <typename Visit>
-  void for_each_touch(const Configuration& c, Visit visit) const {
-    if (law_.model != ContactModel::kPenalty) return;
-    pairs_.for_each_inside(c.x, [&](const BodyPairs::Touch& t) {
-      const ContactPhi phi = law_(t.d);
-      if (phi.value != 0.0 || phi.slope != 0.0) visit(t, phi);
-    });
+  // The contacts at x: the step's (lagged), else those found at x.
+  const std::vector<BodyContact>& current(const double* x) const {
+    if (lagged_) return frozen_;
+    if (!live_valid_ || !placed_at(x)) {
+      place(x);
+      finder_.all_contacts(law_.distance, live_);
+      live_valid_ = true;
+    }
+    return live_;
   }
 
-  // -(phi'' grad d grad d^T + phi' hess d); the definite part keeps the first.
+  // Places the bodies at x unless they are there already.
+  void place(const double* x) const {
+    if (placed_at(x)) return;
+    finder_.place(x);
+    placed_.assign(x + begin_, x + begin_ + count_);
+    live_valid_ = false;
+  }
+  bool placed_at(const double* x) const {
+    return placed_.size() == count_ &&
+           std::memcmp(placed_.data(), x + begin_, count_ * sizeof(double)) == 0;
+  }
+  BodyOverlap overlap(const double* x) const {
+    place(x);
+    return finder_.overlap();
+  }
+
+  // n . (x_a - x_b) at x (for a live contact: its distance D at x).
+  double gap(const BodyContact& k, const double* x) const {
+    if (!lagged_) return k.d;
+    const auto& a = finder_.surface(k.a);
+    const auto& b = finder_.surface(k.b);
+    return k.n.dot(a.p(x) + a.A(x) * k.Xa - b.p(x) - b.A(x) * k.Xb);
+  }
+  // Its rate along a step dx (fixed bodies do not move).
+  double rate(const BodyContact& k, const double* dx) const {
+    const auto& a = finder_.surface(k.a);
+    const auto& b = finder_.surface(k.b);
+    Eigen::Vector3d move = Eigen::Vector3d::Zero();
+    if (a.first >= 0) move += a.p(dx) + a.A(dx) * k.Xa;
+    if (b.first >= 0) move -= b.p(dx) + b.A(dx) * k.Xb;
+    return k.n.dot(move);
+  }
+
+
+  // -(phi'' grad d grad d^T + phi' hess d), grad d = w (x) n; hess d only
+  // live and not definite (within a step d is linear).
   void add_stiffness(const Configuration& c, double* dfdx, bool definite) const {
-    for_each_touch(c, [&](const BodyPairs::Touch& t, const ContactPhi& phi) {
-      const BodyPairs::Pair& pair = pairs_.pairs()[t.pair];
-      const auto grad = pairs_.gap_gradient(t);
-      const BlockSlot* slots = slots_.data() + t.pair * 64;
-      double K[3][3];
-      for (std::size_t u = 0; u < 8; ++u) {
-        if (pair.index[u] < 0) continue;
-        for (std::size_t w = 0; w < 8; ++w) {
-          if (pair.index[w] < 0) continue;
-          for (int r = 0; r < 3; ++r) {
-            for (int q = 0; q < 3; ++q) K[r][q] = grad[u][r] * grad[w][q];
-          }
-          add_block<3>(dfdx, slots[8 * u + w], K, -phi.curvature);
+    const std::vector<BodyContact>& contacts = current(c.x);
+    for (const BodyContact& k : contacts) {
+      const ContactPhi phi = law_.between_bodies(gap(k, c.x));
+      if (phi.curvature == 0.0 && phi.slope == 0.0) continue;
+      const std::array<double, 8> w = gap_weights(k);
+      const Eigen::Matrix3d nn = k.n * k.n.transpose();
+      for (int u = 0; u < 8; ++u) {
+        for (int v = 0; v < 8; ++v) {
+          blocks_.add(dfdx, k.a, k.b, u, v, nn, -phi.curvature * w[u] * w[v]);
         }
       }
-      if (definite) return;
-      // hess d: s w_alpha I between a's unknown alpha and b's a_i, -s I
-      // between p_b and a_i, -2 h_i I on a_i.
-      const double h = pairs_.member(pair.b).half[t.axis];
-      const std::size_t ai = 5 + static_cast<std::size_t>(t.axis);
-      const double I[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-      auto add_identity = [&](std::size_t u, std::size_t w, double s) {
-        if (pair.index[u] < 0 || pair.index[w] < 0) return;
-        add_block<3>(dfdx, slots[8 * u + w], I, -phi.slope * s);
-      };
-      for (std::size_t alpha = 0; alpha < 4; ++alpha) {
-        add_identity(alpha, ai, t.side * t.c[alpha]);
-        add_identity(ai, alpha, t.side * t.c[alpha]);
+      if (definite || lagged_ || phi.slope == 0.0 || !(k.d > 0.0)) continue;
+      place(c.x);
+      const BodyContactFinder::Derivatives d = finder_.derivatives(k);
+      for (int u = 0; u < 8; ++u) {
+        for (int v = 0; v < 8; ++v) {
+          blocks_.add(dfdx, k.a, k.b, u, v, d.hessian.block<3, 3>(3 * u, 3 * v), -phi.slope);
+        }
       }
-      add_identity(4, ai, -t.side);
-      add_identity(ai, 4, -t.side);
-      add_identity(ai, ai, -2.0 * h);
-    });
+    }
   }
 
-  BodyPairs pairs_;
+  mutable BodyContactFinder finder_;
   ContactLaw law_;
-  std::vector<BlockSlot> slots_;
+  double g_;
+  std::size_t begin_, count_;  // the bodies' unknowns in the state
+  bool lagged_ = false;
+  std::vector<BodyContact> frozen_;
+  mutable std::vector<BodyContact> live_;
+  mutable bool live_valid_ = false;
+  mutable std::vector<double> placed_;
+  BodyPairBlocks blocks_;
+  bool fixed_pattern_ = false;  // every pair declared (BodyPairBlocks::every_pair)
 };
 
 }  // namespace
 
-// Two bodies or more, one a box, one free, and the penalty model.
+// Two bodies or more, one of them free.
 bool has_body_contacts(const Scene& scene) {
-  const Bodies& bodies = scene.get<Bodies>();
-  if (bodies.size() < 2 || scene.get<Contact>().model != ContactModel::kPenalty) return false;
-  const bool any_box = std::any_of(bodies.begin(), bodies.end(),
-                                   [](const Body& b) { return b.shape == Body::Shape::kBox; });
-  return any_box && body_pseudo_particles(scene) > 0;
+  return scene.get<Bodies>().size() >= 2 && body_pseudo_particles(scene) > 0;
 }
 
-// The barrier does not act between bodies yet (issue 46.13): a scene whose
-// bodies could meet is refused in one line instead of letting them pass
-// through each other silently.
-void check_no_barrier_between_bodies(const Scene& scene, const Reporter& r) {
-  const Bodies& bodies = scene.get<Bodies>();
-  if (bodies.size() < 2 || scene.get<Contact>().model != ContactModel::kBarrier) return;
-  const bool any_box = std::any_of(bodies.begin(), bodies.end(),
-                                   [](const Body& b) { return b.shape == Body::Shape::kBox; });
-  if (!any_box || body_pseudo_particles(scene) == 0) return;
-  r.fail("contact.model",
-         "\"barrier\" acts between bodies and planes only, not between the scene's " +
-             std::to_string(bodies.size()) +
-             " bodies (they would pass through each other): use \"penalty\" for bodies that "
-             "touch one another");
-}
-void read_no_barrier_between_bodies(const Json&, const Reporter& r, Scene& scene) {
-  check_no_barrier_between_bodies(scene, r);
-}
+namespace {
 
 std::unique_ptr<ForceTerm> make_body_body_contact(const Scene& scene, const ParticleOrder& order) {
   if (!has_body_contacts(scene)) return nullptr;
   return std::make_unique<BodyBodyContactForce>(scene, body_layout(scene, order.free_particles),
-                                                scene.get<Contact>());
+                                                order);
 }
 
+// Bodies must start apart: not interpenetrating, and with the barrier not
+// touching either (its energy is infinite at a zero gap).
+void check_bodies_apart(const Scene& scene, const Reporter& r) {
+  if (!has_body_contacts(scene)) return;
+  BodyContactFinder finder(scene, body_layout(scene, 0));
+  finder.place(nullptr);
+  const BodyOverlap o = finder.overlap();
+  if (o.found()) {
+    r.fail(element("bodies", static_cast<std::size_t>(o.a)),
+           "starts interpenetrating body " + std::to_string(o.b) + " (" + o.text() +
+               "), which contact between bodies does not allow: move them apart");
+  }
+  const Contact& contact = scene.get<Contact>();
+  if (contact.model != ContactModel::kBarrier) return;
+  std::vector<BodyContact> touching;
+  finder.all_contacts(contact.distance_or_default(), touching);
+  for (const BodyContact& k : touching) {
+    if (!(k.d > 0.0)) {
+      r.fail(element("bodies", static_cast<std::size_t>(k.a)),
+             "starts touching body " + std::to_string(k.b) + " (gap " + shortest_text(k.d) +
+                 " m), where the barrier's energy is infinite: with contact model \"barrier\" "
+                 "bodies must start apart");
+    }
+  }
+}
+
+void read_body_contacts(const Json&, const Reporter& r, Scene& scene) {
+  check_bodies_apart(scene, r);
+}
+
+}  // namespace
+
 // Random instances: two boxes of their own, above the scene's first plane
-// (so the barrier's gaps stay positive; under the barrier they do not
-// meet) and away from the other bodies. In kAny states one of the first
-// box's vertices is 10 % of the second's half side deep inside it, near
-// the middle of its +y face (pushed out through the face that faces the
-// first's centre, whichever that is); in kDefinite states (where Newton's
-// Gauss-Newton part would have to be exact) they are apart.
+// and away from the other bodies. In kAny states the second box's face
+// nearest the first lies 0.3 of the contact distance below the first's
+// lowest vertex along that face's normal, under the face's middle: a
+// contact inside the distance, the surfaces apart. In kDefinite states
+// (where Newton's definite part must be exact) they are apart.
 void add_random_body_pair(Scene& scene, std::mt19937& rng, RandomStates states) {
   if (scene.dimension != 3) {
     // (In 2-D, which has no bodies: the column's energy from the planes.)
     if (scene.get<Planes>().empty()) plane_kind().add_random(scene, rng, states);
     return;
   }
-  // Bodies meet only under the penalty model (the barrier is refused
-  // between bodies: check_no_barrier_between_bodies).
-  scene.block<Contact>().model = ContactModel::kPenalty;
   const std::size_t first = scene.get<Bodies>().size();
   add_random_body_with(scene, rng, states, false);
   add_random_body_with(scene, rng, states, false);
@@ -213,11 +351,22 @@ void add_random_body_pair(Scene& scene, std::mt19937& rng, RandomStates states) 
     two.position = base + Eigen::Vector3d(0.0, 0.0, 5.0);  // apart
     return;
   }
-  const Eigen::Vector3d half = 0.5 * two.size;  // a box: principal frame = mesh frame
+  // Two's +y face (a box: principal frame = mesh frame), turned by its A0.
+  const Eigen::Vector3d half = 0.5 * two.size;
+  const Eigen::Vector3d normal = b.A0.col(1).normalized();
+  double lowest = INFINITY;
+  Eigen::Vector3d vertex;
+  for (const Eigen::Vector3d& X : a.X) {
+    const Eigen::Vector3d x = a.p0 + a.A0 * X;
+    if (normal.dot(x) < lowest) {
+      lowest = normal.dot(x);
+      vertex = x;
+    }
+  }
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const Eigen::Vector3d vertex = a.p0 + a.A0 * a.X[static_cast<std::size_t>(rng() % a.X.size())];
-  const Eigen::Vector3d Y(0.2 * half.x() * u(rng), 0.9 * half.y(), 0.2 * half.z() * u(rng));
-  two.position = vertex - b.A0 * Y;
+  const double gap = 0.3 * scene.get<Contact>().distance_or_default();
+  const Eigen::Vector3d Y(0.2 * half.x() * u(rng), half.y(), 0.2 * half.z() * u(rng));
+  two.position = vertex - gap * normal - b.A0 * Y;
 }
 
 void body_body_contact_memory(const Scene& scene, MemoryEstimate& out);  // body_pair_memory.cc
@@ -226,8 +375,8 @@ const ElementKind& body_body_contact_kind() {
   static const ElementKind kind = {
       .name = "body-body-contact",
       .refers_to_particles = true,
-      .read = read_no_barrier_between_bodies,
-      .validate = check_no_barrier_between_bodies,
+      .read = read_body_contacts,
+      .validate = check_bodies_apart,
       .make = make_body_body_contact,
       .energy = {.name = "contact", .counts_with_spring = true, .present = has_body_contacts},
       .memory = body_body_contact_memory,  // body_pair_memory.cc

@@ -1,44 +1,54 @@
 // Coulomb friction between rigid bodies (docs/physics.md "Contact between
-// bodies"): at every vertex of body a inside box b (body_pairs.h), smoothed
-// Coulomb friction as with the planes (friction_force.cc; IPC, Li et al.
-// 2020, sec. 5.2) on the velocity of the vertex relative to b's material
-// point under it, with mu = sqrt(mu_a mu_b) (each body's "friction") and
-// the normal force f_n = -phi'(d) of the contact's penalty:
+// bodies"): at every contact of body_body_contact.cc (a's material point
+// X_a, b's X_b, the normal n from b's to a's, the gap d: body_contacts.h)
+// smoothed Coulomb friction as with the planes (friction_force.cc; IPC, Li
+// et al. 2020, sec. 5.2) at a's point x_a, on its velocity relative to b's
+// material point Y_b under it (x_a = p_b + A_b Y_b, i.e.
+// Y_b = X_b + d A_b^-1 n), so that both bodies feel it at one place and
+// the pair exerts no torque:
 //
-//   v_rel = sum_u c_u v_u,   v_t = T v_rel,   T = I - n n^T,  n = a_i / |a_i|,
-//   f = -mu f_n g(|v_t|) v_t  on the vertex,  -f on b's point Y under it,
+//   v_rel = (p_a' + A_a' X_a) - (p_b' + A_b' Y_b) = sum_u c_u v_u,
+//   c = (1, X_a, -1, -Y_b) on the pair's 8 pseudo-particles,
+//   v_t = T v_rel,  T = I - n n^T,
+//   f = -mu f_n g(|v_t|) v_t  on a, -f on b, both at x_a,
 //
-// so the generalized force on the pair's unknown u is F_u = c_u f, with
-// c = (1, X, -1, -Y) (body_pairs.h). Both bodies feel the force at the same
-// point, so the pair conserves linear and angular momentum.
+// with mu = sqrt(mu_a mu_b) (each body's "friction") and the contact's
+// normal force f_n = -phi'(d). The generalized force on unknown u is
+// F_u = c_u f.
 //
-// Jacobians (G = g I + (g'/y) v_t v_t^T, B = A_b^{-1}, dA_b/dt = A_b'):
-//   dF_u/dv_w = -mu f_n c_u c_w (g T + (g'/y) v_t v_t^T);
-//   dF_u/dq_w = c_u df/dq_w - [u = a_k of b] c_w f (B^T e_k)^T, where
-//   df/dq_w = -mu (g v_t (df_n/dq_w)^T + f_n G dv_t/dq_w),
-//   df_n/dq_w = -phi''(d) grad_w d,
-//   dv_t/dq_w = T dv_rel/dq_w + [w = a_i of b] (-(n . v_rel) T - n v_t^T) / |a_i|,
-//   dv_rel/dq_w = -c_w A_b' B      (through Y: dY/dq_w = c_w B).
-//
-// Lagged (MechanicalSystem::lag_normal_forces, as the planes' friction):
-// f_n, the contacts, T and c are taken at the lagged state, and friction is
-// F = -dW/dv of W(v) = sum mu f_n f0(|T v_rel|) with no x-dependence.
+// Within an implicit step (lagged, MechanicalSystem::lag_normal_forces) the
+// contacts, their f_n, T, X_a and Y_b are the step start's
+// (BodyContactFinder::step_contacts), and friction is F = -dW/dv of
+// W(v) = sum mu f_n f0(|T v_rel|), with no x-dependence:
+//   dF_u/dv_w = -mu f_n c_u c_w G T,   G = g I + (g'/y) v_t v_t^T.
+// Live, everything moves with x: f_n through the distance D, n and X_a
+// through the closest points (BodyContactFinder::derivatives gives dD/dq,
+// dn/dq, dX_a/dq), and Y_b = A_b^-1 (x_a - p_b) with them:
+//   dY_b/dq = A_b^-1 (C + A_a dX_a/dq),   C = [c_u I] (dx_a - dp_b - dA_b Y_b),
+//   dv_rel/dq = A_a' dX_a/dq - A_b' dY_b/dq,
+//   dv_t/dq = T dv_rel/dq - (n . v_rel) dn/dq - n v_rel^T dn/dq,
+//   df/dq = -mu (g v_t (df_n/dq)^T + f_n G dv_t/dq),  df_n/dq = -phi'' dD/dq,
+//   dF_u/dq = c_u df/dq + f dc_u/dq.
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <random>
 #include <vector>
 
 #include "models/bodies/bodies.h"
-#include "models/bodies/body_pairs.h"
+#include "models/bodies/body_contacts.h"
+#include "models/bodies/body_pair_blocks.h"
 #include "models/contact/contact.h"
 #include "models/contact/contact_potential.h"
 #include "models/core/element_kind.h"
+#include "models/springs/gravity.h"
 
 namespace springlab {
 
-// body_body_contact.cc: two overlapping boxes of their own (apart in
-// kDefinite states).
+// body_body_contact.cc: two boxes of their own within the contact distance
+// (apart in kDefinite states); whether a scene's bodies meet.
 void add_random_body_pair(Scene& scene, std::mt19937& rng, RandomStates states);
 bool has_body_contacts(const Scene& scene);
 
@@ -46,8 +56,14 @@ namespace {
 
 class BodyBodyFrictionForce final : public ForceTerm {
  public:
-  BodyBodyFrictionForce(const Scene& scene, const BodyLayout& layout, const Contact& contact)
-      : pairs_(scene, layout), law_(contact), eps_(contact.smoothing) {}
+  BodyBodyFrictionForce(const Scene& scene, const BodyLayout& layout, const ParticleOrder& order)
+      : finder_(scene, layout), law_(scene.get<Contact>()), eps_(scene.get<Contact>().smoothing),
+        g_(scene.get<Gravity>().acceleration.norm()),
+        begin_(3 * static_cast<std::size_t>(order.free_particles)),
+        count_(3 * static_cast<std::size_t>(order.body_particles)) {
+    finder_.place(nullptr);
+    blocks_.set(BodyPairBlocks::first_pairs(finder_, law_.distance, fixed_pattern_));
+  }
 
   std::string_view name() const override { return "body-body friction"; }
   bool conservative() const override { return false; }
@@ -58,150 +74,189 @@ class BodyBodyFrictionForce final : public ForceTerm {
   double velocity_potential(const Configuration& c) const override {
     if (!lagged_) return 0.0;
     double sum = 0.0;
-    for (const Sliding& s : lagged_contacts_) {
+    for (const Sliding& s : frozen_) {
       const double y = (s.T * relative_velocity(s, c.v)).norm();
       sum += s.mu * s.f_n * friction_potential(y, eps_);
     }
     return sum;
   }
 
-  void lag(const Configuration* c) override {
+  void lag(const Configuration* c, double h) override {
     lagged_ = false;
-    lagged_contacts_.clear();
+    frozen_.clear();
     if (c == nullptr) return;
-    for_each_sliding(*c, [&](const Sliding& s) { lagged_contacts_.push_back(s); });
+    place(c->x);
+    std::vector<BodyContact> contacts;
+    finder_.step_contacts(law_.distance, c->v, h, g_, contacts);
+    for (const BodyContact& k : contacts) {
+      Sliding s;
+      if (sliding(k, c->x, s)) frozen_.push_back(s);
+    }
     lagged_ = true;
   }
 
   void add_force(const Configuration& c, double* f) const override {
-    visit(c, [&](const Sliding& s) {
+    visit(c, [&](const Sliding& s, const BodyContact*) {
       const Eigen::Vector3d vt = s.T * relative_velocity(s, c.v);
-      const FrictionWeight w = friction_weight(vt.squaredNorm(), eps_);
-      const Eigen::Vector3d force = -s.mu * s.f_n * w.g * vt;
+      const FrictionWeight fw = friction_weight(vt.squaredNorm(), eps_);
+      const Eigen::Vector3d force = -s.mu * s.f_n * fw.g * vt;
+      const std::array<int, 8> index = BodyPairBlocks::unknowns(finder_, s.a, s.b);
       for (std::size_t u = 0; u < 8; ++u) {
-        if (s.index[u] < 0) continue;
-        for (int r = 0; r < 3; ++r) f[3 * s.index[u] + r] += s.c[u] * force[r];
+        if (index[u] < 0) continue;
+        for (int r = 0; r < 3; ++r) f[3 * index[u] + r] += s.w[u] * force[r];
       }
     });
   }
 
-  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
-    pairs_.declare_blocks(builder);
+  bool pattern_varies() const override { return !fixed_pattern_; }
+  std::string pattern_change() const override {
+    return "bodies come near other bodies (more than " + std::to_string(kAllPairsBodies) +
+           " bodies)";
   }
-  void bind_jacobian(const SparseMatrix& pattern) override { slots_ = pairs_.find_slots(pattern); }
+  bool pattern_holds(const Configuration& c) const override {
+    bool holds = true;
+    visit(c, [&](const Sliding& s, const BodyContact*) { holds = holds && blocks_.covers(s.a, s.b); });
+    return holds;
+  }
+  void follow_pattern(const Configuration& c) override {
+    std::vector<std::pair<int, int>> needed;
+    visit(c, [&](const Sliding& s, const BodyContact*) {
+      needed.emplace_back(std::min(s.a, s.b), std::max(s.a, s.b));
+    });
+    place(c.x);
+    blocks_.set(BodyPairBlocks::near_pairs(finder_, law_.distance, std::move(needed)));
+  }
+  void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
+    blocks_.declare(finder_, builder);
+  }
+  void bind_jacobian(const SparseMatrix& pattern) override { blocks_.bind(finder_, pattern); }
 
   void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
-    visit(c, [&](const Sliding& s) {
-      const BlockSlot* slots = slots_.data() + s.pair * 64;
+    visit(c, [&](const Sliding& s, const BodyContact* live) {
       const Eigen::Vector3d v_rel = relative_velocity(s, c.v);
       const Eigen::Vector3d vt = s.T * v_rel;
-      const FrictionWeight w = friction_weight(vt.squaredNorm(), eps_);
-      const Eigen::Matrix3d G = w.g * Eigen::Matrix3d::Identity() + w.g_over_y * vt * vt.transpose();
+      const FrictionWeight fw = friction_weight(vt.squaredNorm(), eps_);
+      const Eigen::Matrix3d G =
+          fw.g * Eigen::Matrix3d::Identity() + fw.g_over_y * vt * vt.transpose();
       if (dfdv != nullptr) {
-        const Eigen::Matrix3d D = -s.mu * s.f_n * G * s.T;  // d f / d v_rel
-        for (std::size_t u = 0; u < 8; ++u) {
-          for (std::size_t q = 0; q < 8; ++q) {
-            if (s.index[u] >= 0 && s.index[q] >= 0) add(dfdv, slots[8 * u + q], D, s.c[u] * s.c[q]);
-          }
+        const Eigen::Matrix3d D = -s.mu * s.f_n * G * s.T;  // df/dv_rel
+        for (int u = 0; u < 8; ++u) {
+          for (int w = 0; w < 8; ++w) blocks_.add(dfdv, s.a, s.b, u, w, D, s.w[u] * s.w[w]);
         }
       }
-      if (dfdx == nullptr || lagged_) return;
-      const Eigen::Vector3d force = -s.mu * s.f_n * w.g * vt;
-      const Eigen::Matrix3d B = s.Ab.inverse();
-      const Eigen::Matrix3d AdotB = s.Abdot * B;
-      const double a_norm = s.Ab.col(s.axis).norm();
-      const Eigen::Vector3d n = s.Ab.col(s.axis) / a_norm;
-      for (std::size_t q = 0; q < 8; ++q) {
-        if (s.index[q] < 0) continue;
-        // df/dq_q
-        Eigen::Matrix3d dvt = -s.c[q] * s.T * AdotB;
-        if (q == 5 + static_cast<std::size_t>(s.axis)) {
-          dvt += -(n.dot(v_rel) * s.T + n * vt.transpose()) / a_norm;
-        }
-        const Eigen::Matrix3d df = -s.mu * (w.g * vt * (-s.curvature * s.grad[q]).transpose() +
-                                            s.f_n * G * dvt);
-        for (std::size_t u = 0; u < 8; ++u) {
-          if (s.index[u] < 0) continue;
-          Eigen::Matrix3d block = s.c[u] * df;
-          if (u >= 5) block -= s.c[q] * force * B.row(static_cast<Eigen::Index>(u - 5));
-          add(dfdx, slots[8 * u + q], block, 1.0);
+      if (dfdx == nullptr || live == nullptr || !(live->d > 0.0)) return;
+      // Live: through f_n, n and the material points (the header's chain).
+      place(c.x);
+      const BodyContactFinder::Derivatives d = finder_.derivatives(*live);
+      const ContactPhi phi = law_.between_bodies(live->d);
+      const Eigen::Matrix<double, 1, 24> dfn = -phi.curvature * d.gradient.transpose();
+      const Eigen::Matrix3d Adot_a = velocity_matrix(s.a, c.v), Adot_b = velocity_matrix(s.b, c.v);
+      Eigen::Matrix<double, 3, 24> dYb = finder_.surface(s.a).A(c.x) * d.dXa;
+      for (int u = 0; u < 8; ++u) dYb.block<3, 3>(0, 3 * u).diagonal().array() += s.w[u];
+      dYb = s.B * dYb;
+      const Eigen::Matrix<double, 3, 24> dv_rel = Adot_a * d.dXa - Adot_b * dYb;
+      const Eigen::Vector3d& n = live->n;
+      const Eigen::Matrix<double, 3, 24> dvt =
+          s.T * dv_rel - n.dot(v_rel) * d.dn - n * (v_rel.transpose() * d.dn);
+      const Eigen::Matrix<double, 3, 24> df =
+          -s.mu * (fw.g * vt * dfn + s.f_n * G * dvt);
+      const Eigen::Vector3d force = -s.mu * s.f_n * fw.g * vt;
+      for (int u = 0; u < 8; ++u) {
+        // dw_u/dq: 0 for p's; the material point's row for the a_i's.
+        Eigen::Matrix<double, 1, 24> dw = Eigen::Matrix<double, 1, 24>::Zero();
+        if (u >= 1 && u <= 3) dw = d.dXa.row(u - 1);
+        if (u >= 5) dw = -dYb.row(u - 5);
+        const Eigen::Matrix<double, 3, 24> dF = s.w[u] * df + force * dw;
+        for (int w = 0; w < 8; ++w) {
+          blocks_.add(dfdx, s.a, s.b, u, w, dF.block<3, 3>(0, 3 * w), 1.0);
         }
       }
     });
   }
 
  private:
-  // One vertex in contact with friction, and what its force needs.
+  // One contact with friction, and what its force needs.
   struct Sliding {
-    std::size_t pair;
-    int axis;
-    std::array<int, 8> index;
-    std::array<double, 8> c;
-    std::array<Eigen::Vector3d, 8> grad;  // of the gap d
-    Eigen::Matrix3d T, Ab, Abdot;
-    double mu, f_n, curvature;
+    int a = 0, b = 0;
+    std::array<double, 8> w{};  // c = (1, X_a, -1, -Y_b)
+    Eigen::Vector3d Yb;
+    Eigen::Matrix3d B;          // A_b^-1
+    Eigen::Matrix3d T;
+    double mu = 0.0, f_n = 0.0;
   };
 
-  static void add(double* values, const BlockSlot& slot, const Eigen::Matrix3d& M, double s) {
-    double K[3][3];
-    for (int r = 0; r < 3; ++r) {
-      for (int q = 0; q < 3; ++q) K[r][q] = M(r, q);
-    }
-    add_block<3>(values, slot, K, s);
+  // The contact's friction at x, if it has any (mu > 0, a normal force).
+  bool sliding(const BodyContact& k, const double* x, Sliding& s) const {
+    const double mu = std::sqrt(finder_.surface(k.a).friction * finder_.surface(k.b).friction);
+    if (!(mu > 0.0)) return false;
+    const ContactPhi phi = law_.between_bodies(k.d);
+    if (!(phi.slope < 0.0)) return false;  // (also skips a closed gap's NaN)
+    s.a = k.a;
+    s.b = k.b;
+    s.B = finder_.surface(k.b).A(x).inverse();
+    s.Yb = k.Xb + k.d * s.B * k.n;
+    s.w = {1.0, k.Xa.x(), k.Xa.y(), k.Xa.z(), -1.0, -s.Yb.x(), -s.Yb.y(), -s.Yb.z()};
+    s.T = Eigen::Matrix3d::Identity() - k.n * k.n.transpose();
+    s.mu = mu;
+    s.f_n = -phi.slope;
+    return true;
   }
 
-  static Eigen::Vector3d relative_velocity(const Sliding& s, const double* v) {
+  Eigen::Vector3d relative_velocity(const Sliding& s, const double* v) const {
+    const std::array<int, 8> index = BodyPairBlocks::unknowns(finder_, s.a, s.b);
     Eigen::Vector3d out = Eigen::Vector3d::Zero();
     for (std::size_t u = 0; u < 8; ++u) {
-      if (s.index[u] < 0) continue;
-      for (int r = 0; r < 3; ++r) out[r] += s.c[u] * v[3 * s.index[u] + r];
+      if (index[u] < 0) continue;
+      for (int r = 0; r < 3; ++r) out[r] += s.w[u] * v[3 * index[u] + r];
     }
     return out;
   }
-
-  // The live contacts at c (positions, and b's dA/dt from c.v).
-  template <typename Visit>
-  void for_each_sliding(const Configuration& c, Visit visit) const {
-    if (law_.model != ContactModel::kPenalty) return;
-    pairs_.for_each_inside(c.x, [&](const BodyPairs::Touch& t) {
-      const BodyPairs::Pair& pair = pairs_.pairs()[t.pair];
-      if (!(pair.friction > 0.0)) return;
-      const ContactPhi phi = law_(t.d);
-      if (phi.slope == 0.0) return;
-      Sliding s;
-      s.pair = t.pair;
-      s.axis = t.axis;
-      s.index = pair.index;
-      s.c = t.c;
-      s.grad = pairs_.gap_gradient(t);
-      const Eigen::Vector3d n = t.Ab.col(t.axis).normalized();
-      s.T = Eigen::Matrix3d::Identity() - n * n.transpose();
-      s.Ab = t.Ab;
-      s.Abdot = c.v != nullptr ? pairs_.member(pair.b).A(c.v) : Eigen::Matrix3d::Zero();
-      if (pairs_.member(pair.b).first < 0) s.Abdot.setZero();
-      s.mu = pair.friction;
-      s.f_n = -phi.slope;
-      s.curvature = phi.curvature;
-      visit(s);
-    });
+  Eigen::Matrix3d velocity_matrix(int body, const double* v) const {
+    const BodyContactFinder::Surface& s = finder_.surface(body);
+    return s.first < 0 ? Eigen::Matrix3d::Zero() : s.A(v);
   }
 
-  // Live, or the lagged contacts (their f_n, T, c fixed; no x-dependence).
+  // Each contact with friction at c: the step's (lagged; no live contact),
+  // else those found at c.x with the live contact.
   template <typename Visit>
   void visit(const Configuration& c, Visit visit_one) const {
     if (lagged_) {
-      for (const Sliding& s : lagged_contacts_) visit_one(s);
+      for (const Sliding& s : frozen_) visit_one(s, nullptr);
       return;
     }
-    for_each_sliding(c, visit_one);
+    place(c.x);
+    if (!live_valid_) {
+      finder_.all_contacts(law_.distance, live_);
+      live_valid_ = true;
+    }
+    for (const BodyContact& k : live_) {
+      Sliding s;
+      if (sliding(k, c.x, s)) visit_one(s, &k);
+    }
   }
 
-  BodyPairs pairs_;
+  void place(const double* x) const {
+    if (placed_.size() == count_ &&
+        std::memcmp(placed_.data(), x + begin_, count_ * sizeof(double)) == 0) {
+      return;
+    }
+    finder_.place(x);
+    placed_.assign(x + begin_, x + begin_ + count_);
+    live_valid_ = false;
+  }
+
+
+  mutable BodyContactFinder finder_;
   ContactLaw law_;
-  double eps_;
+  double eps_, g_;
+  std::size_t begin_, count_;
   bool lagged_ = false;
-  std::vector<Sliding> lagged_contacts_;
-  std::vector<BlockSlot> slots_;
+  std::vector<Sliding> frozen_;
+  mutable std::vector<BodyContact> live_;
+  mutable bool live_valid_ = false;
+  mutable std::vector<double> placed_;
+  BodyPairBlocks blocks_;
+  bool fixed_pattern_ = false;  // every pair declared (BodyPairBlocks::every_pair)
 };
 
 bool has_body_friction(const Scene& scene) {
@@ -215,11 +270,11 @@ std::unique_ptr<ForceTerm> make_body_body_friction(const Scene& scene,
                                                    const ParticleOrder& order) {
   if (!has_body_friction(scene)) return nullptr;
   return std::make_unique<BodyBodyFrictionForce>(scene, body_layout(scene, order.free_particles),
-                                                 scene.get<Contact>());
+                                                 order);
 }
 
-// Random instances: body-body contact's overlapping pair, then a friction
-// coefficient for every body.
+// Random instances: body-body contact's pair, then a friction coefficient
+// for every body.
 void add_random_body_friction_pair(Scene& scene, std::mt19937& rng, RandomStates states) {
   add_random_body_pair(scene, rng, states);
   if (scene.dimension != 3) return;

@@ -268,7 +268,7 @@ class BodyFrictionForce final : public ForceTerm {
     });
     return sum;
   }
-  void lag(const Configuration* c) override {
+  void lag(const Configuration* c, double) override {
     lagged_ = false;
     if (c == nullptr) return;
     lagged_fn_.assign(planes_.size() * vertices_.size(), 0.0);

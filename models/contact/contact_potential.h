@@ -38,6 +38,21 @@ inline ContactPhi barrier_phi(double kappa, double h, double d) {
           kappa * (-2.0 * l - 4.0 * e / d + e * e / (d * d))};
 }
 
+// Between bodies the penalty acts on a skin (docs/physics.md "Contact
+// between bodies"): the gap d there is a distance between surfaces, never
+// negative while they are apart, so the penalty spring k_c engages at the
+// contact distance delta and the surfaces themselves must not cross:
+//   phi(d) = k_c/2 (delta - d)^2 for 0 <= d < delta, 0 beyond, +infinity for d < 0.
+inline ContactPhi skin_penalty_phi(double k, double delta, double d) {
+  if (d >= delta) return {0.0, 0.0, 0.0};
+  if (!(d >= 0.0)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {std::numeric_limits<double>::infinity(), nan, nan};
+  }
+  const double e = delta - d;
+  return {0.5 * k * e * e, -k * e, k};
+}
+
 // Smoothed Coulomb friction's weight (IPC, Li et al. 2020, sec. 5.2;
 // friction_force.cc): F = -mu f_n g(y) v_t with y = |v_t| and
 //   g(y) = f1(y) / y = 2/eps - y/eps^2 (y < eps), 1/y beyond,
@@ -72,6 +87,16 @@ struct ContactLaw {
   ContactPhi operator()(double d) const {
     return model == ContactModel::kPenalty ? penalty_phi(stiffness, d)
                                            : barrier_phi(stiffness, distance, d);
+  }
+  // Between two bodies' surfaces: the barrier, or the penalty on its skin.
+  ContactPhi between_bodies(double d) const {
+    return model == ContactModel::kPenalty ? skin_penalty_phi(stiffness, distance, d)
+                                           : barrier_phi(stiffness, distance, d);
+  }
+  // The gap below which the surfaces are refused: the barrier's 0 is
+  // infinite, the skin's penalty is finite there and refuses only d < 0.
+  bool forbidden_between_bodies(double d) const {
+    return model == ContactModel::kPenalty ? !(d >= 0.0) : !(d > 0.0);
   }
 };
 

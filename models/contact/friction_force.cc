@@ -80,7 +80,7 @@ class FrictionForce final : public ForceTerm {
     }
     return sum;
   }
-  void lag(const Configuration* c) override {
+  void lag(const Configuration* c, double) override {
     lagged_ = false;
     if (c == nullptr) return;
     lagged_fn_.assign(planes_.size() * static_cast<std::size_t>(free_particles_), 0.0);

@@ -156,6 +156,9 @@ class ForceTerm {
   // at c. follow_pattern(c): declare around c from now on (the model then
   // rebuilds the pattern, declare_jacobian_blocks and bind_jacobian again).
   virtual bool pattern_varies() const { return false; }
+  // Why, completing "the Jacobian pattern changes as ..."
+  // (MechanicalSystem::pattern_change).
+  virtual std::string pattern_change() const { return "its couplings change with the state"; }
   virtual bool pattern_holds(const Configuration&) const { return true; }
   virtual void follow_pattern(const Configuration&) {}
   // dF/dx made negative semidefinite where it is not (MechanicalSystem::
@@ -253,9 +256,11 @@ class ForceTerm {
   // plane_constraints) appends them and returns true; so does friction,
   // which they solve with the planes (appending none).
   virtual bool plane_constraints(std::vector<PlaneConstraint>& /*out*/) const { return false; }
-  // MechanicalSystem::lag_normal_forces: c the lagged configuration, or
-  // nullptr to evaluate live again. Only friction lags.
-  virtual void lag(const Configuration* /*c*/) {}
+  // MechanicalSystem::lag_normal_forces: c the lagged configuration (its v
+  // the step's start velocity, or null), h the step's length; or nullptr to
+  // evaluate live again. Friction lags its normal forces; contact between
+  // bodies keeps the contacts it finds there.
+  virtual void lag(const Configuration* /*c*/, double /*h*/) {}
 };
 
 }  // namespace springlab

@@ -152,6 +152,10 @@ class MechanicalSystem {
   // Springs and elements keep one pattern: version 0 throughout.
   virtual bool pattern_varies() const { return false; }
   virtual long pattern_version() const { return 0; }
+  // Why it varies, as a phrase completing "the Jacobian pattern changes as
+  // ..." (a solver that cannot follow it says so): "its particles change
+  // neighbours (a fluid)".
+  virtual std::string pattern_change() const { return "its couplings change with the state"; }
 
   // True when both Jacobians are symmetric at every state (no spring damping:
   // its dF/dx is not symmetric). Lets implicit methods use LDL^T.
@@ -176,10 +180,15 @@ class MechanicalSystem {
   // friction takes its normal force f_n from x_lag instead of from the
   // evaluated state, which makes it the gradient of a dissipation potential
   // of v (IPC's lagging, Li et al. 2020); nullptr: from the evaluated state
-  // again. An implicit method lags at the step's start for the duration of
-  // its solve (then derives_from_potentials and jacobian_symmetric may
-  // change) and clears it after; every other evaluation sees friction live.
-  virtual void lag_normal_forces(const Vector* /*x_lag*/) const {}
+  // again. An implicit method lags at the step's start (x_lag, v_lag) for
+  // the duration of its solve of a step of length h (then
+  // derives_from_potentials and jacobian_symmetric may change) and clears
+  // it after; every other evaluation sees friction live. Contact between
+  // bodies finds there the contacts it keeps for the step, as far as the
+  // bodies can move in h at v_lag (docs/physics.md "Contact between
+  // bodies"); v_lag may be null (then h is not read).
+  virtual void lag_normal_forces(const Vector* /*x_lag*/, const Vector* /*v_lag*/,
+                                 double /*h*/) const {}
 
   // Part 3: the fast solvers' views of the same forces
   // (models/core/fast_solver_views.h), or nullptr when the system has none (a

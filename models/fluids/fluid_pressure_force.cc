@@ -95,6 +95,9 @@ class FluidPressureForce final : public ForceTerm {
 
   // Pairs within two supports couple (a common neighbour): fluid_pattern.h.
   bool pattern_varies() const override { return true; }
+  std::string pattern_change() const override {
+    return "its particles change neighbours (a fluid)";
+  }
   bool pattern_holds(const Configuration& c) const override { return pattern_.holds(fluids_, c.x); }
   void follow_pattern(const Configuration& c) override { pattern_.follow(fluids_, c.x); }
 

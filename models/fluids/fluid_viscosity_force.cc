@@ -80,7 +80,7 @@ class FluidViscosityForce final : public ForceTerm {
     }
     return sum;
   }
-  void lag(const Configuration* c) override {
+  void lag(const Configuration* c, double) override {
     lagged_ = false;
     lagged_pairs_.clear();
     lagged_slots_.clear();
@@ -120,6 +120,9 @@ class FluidViscosityForce final : public ForceTerm {
   // Neighbours couple: fluid_pattern.h. Lagged, the pairs are those at the
   // lag's configuration, whatever c is.
   bool pattern_varies() const override { return true; }
+  std::string pattern_change() const override {
+    return "its particles change neighbours (a fluid)";
+  }
   bool pattern_holds(const Configuration& c) const override {
     return pattern_.holds(fluids_, lagged_ ? x_lag_.data() : c.x);
   }

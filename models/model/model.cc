@@ -458,6 +458,13 @@ Eigen::MatrixXd Model::scene_velocities(const Vector& v) const {
   return out;
 }
 
+std::string Model::pattern_change() const {
+  for (const auto& term : terms_) {
+    if (term->pattern_varies()) return term->pattern_change();
+  }
+  return MechanicalSystem::pattern_change();
+}
+
 bool Model::has_forbidden_states() const {
   for (const auto& term : terms_) {
     if (term->forbids_states()) return true;
@@ -535,13 +542,15 @@ bool Model::stiff_forms(std::vector<DistanceConstraint>& out,
   return true;
 }
 
-void Model::lag_normal_forces(const Vector* x_lag) const {
+void Model::lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const {
   if (x_lag != nullptr) x_all_.head(dofs()) = *x_lag;
-  const Configuration c = stored_configuration(0.0);
+  if (x_lag != nullptr && v_lag != nullptr) v_all_.head(dofs()) = *v_lag;
+  Configuration c = stored_configuration(0.0);
+  c.v = x_lag != nullptr && v_lag != nullptr ? v_all_.data() : nullptr;
   symmetric_ = true;
   derives_from_potentials_ = true;
   for (const auto& term : terms_) {
-    term->lag(x_lag != nullptr ? &c : nullptr);
+    term->lag(x_lag != nullptr ? &c : nullptr, h);
     symmetric_ = symmetric_ && term->symmetric_jacobians();
     derives_from_potentials_ = derives_from_potentials_ && term->derives_from_potentials();
   }

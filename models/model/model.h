@@ -68,6 +68,7 @@ class Model final : public MechanicalSystem,
   // Whether the pattern has been built (tests).
   bool pattern_built() const { return pattern_built_; }
   bool pattern_varies() const override { return pattern_varies_; }
+  std::string pattern_change() const override;
   long pattern_version() const override { return pattern_version_; }
   bool jacobian_symmetric() const override { return symmetric_; }
   VelocityDependence velocity_dependence() const override { return velocity_dependence_; }
@@ -76,7 +77,7 @@ class Model final : public MechanicalSystem,
   // in scene terms; empty when it is not one.
   std::string forbidden_state(const Vector& x) const;
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
-  void lag_normal_forces(const Vector* x_lag) const override;
+  void lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const override;
   const FastSolverViews* fast_solver_views() const override { return this; }
 
   // FastSolverViews (fast_solver_views.h), gathered from the same terms.

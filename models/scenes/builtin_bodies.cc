@@ -13,13 +13,20 @@
 //     multiple pendulum released from horizontal;
 //   box-pile: n boxes, each smaller than the one below, dropped onto one
 //     another and the ground (body-body contact and friction,
-//     body_body_contact.cc, body_body_friction.cc).
+//     body_body_contact.cc, body_body_friction.cc);
+//   box-tower: n equal boxes, each turned against the one below, dropped
+//     onto one another into a tower;
+//   box-drop: n boxes dropped in layers into a bin (the ground and four
+//     walls), coming to rest on and against one another.
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "models/bodies/bodies.h"
 #include "models/bodies/body_springs.h"
@@ -95,16 +102,41 @@ Scene build_box_on_slope(const Values& p) {
   return scene;
 }
 
-// Box i has sides (s, 0.75 s, 0.5 s) f^i (f = shrink), its shortest side
+// The contact of the box scenes: the ground's and the bodies' model
+// ("contact": 0 penalty, 1 barrier), its stiffness (k_c or kappa) and its
+// distance (the penalty's skin between bodies, the barrier's dhat).
+void set_box_contact(const Values& p, Scene& scene) {
+  Contact& contact = scene.block<Contact>();
+  contact.model = p.at("contact") == 1.0 ? ContactModel::kBarrier : ContactModel::kPenalty;
+  contact.stiffness = p.at("contact_stiffness");
+  contact.distance = p.at("distance");
+}
+
+Body scene_box(const Values& p, const Eigen::Vector3d& size) {
+  Body box;
+  box.shape = Body::Shape::kBox;
+  box.size = size;
+  box.density = p.at("density");
+  box.rigidity = p.at("rigidity");
+  box.friction = p.at("friction");
+  return box;
+}
+
+// The ground, with the boxes' friction.
+Plane ground(const Values& p) {
+  Plane plane;
+  plane.normal = {0.0, 1.0, 0.0};
+  plane.friction = p.at("friction");
+  return plane;
+}
+
+// Box i has sides (s, 0.5 s, 0.75 s) f^i (f = shrink), its shortest side
 // vertical, turned about the vertical by 0.15 i rad and tilted by 0.05 rad
-// (i > 0), and starts a quarter of its height above the top of the box
-// below (the ground for i = 0). Every box has the ground's friction mu
+// (i > 0), its lowest corner `drop` of its height above the highest of the
+// box below (above the ground for i = 0). Every box has the ground's friction mu
 // against the others (body_body_friction.cc): a tilted box lands on an
 // edge, and without friction the push of the box below, tilting under it,
-// would slide it off. With f = 0.8 each box's corners lie
-// inside the top face of the one below (the corner (0.4, 0.3) s turned by
-// 0.15 rad is at (0.351, 0.356) s, inside (0.5, 0.375) s), which is what
-// vertex-in-box contact needs (docs/physics.md "Contact between bodies").
+// would slide it off.
 Scene build_box_pile(const Values& p) {
   const int n = static_cast<int>(p.at("n"));
   const double s = p.at("size"), f = p.at("shrink");
@@ -120,28 +152,95 @@ Scene build_box_pile(const Values& p) {
   double top = 0.0;
   double scale = 1.0;
   for (int i = 0; i < n; ++i, scale *= f) {
-    Body box;
-    box.shape = Body::Shape::kBox;
-    box.size = scale * Eigen::Vector3d(s, 0.5 * s, 0.75 * s);
-    box.density = p.at("density");
-    box.rigidity = p.at("rigidity");
-    // Turned about the vertical, then tilted about x by 0.05 rad (i > 0).
+    Body box = scene_box(p, scale * Eigen::Vector3d(s, 0.5 * s, 0.75 * s));
+    // Turned about the vertical, then tilted about x by `tilt` (i > 0).
     const Eigen::AngleAxisd turn(Eigen::AngleAxisd(0.15 * i, Eigen::Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(i > 0 ? 0.05 : 0.0, Eigen::Vector3d::UnitX()));
+                                 Eigen::AngleAxisd(i > 0 ? p.at("tilt") : 0.0, Eigen::Vector3d::UnitX()));
     const Eigen::Vector3d r = turn.angle() * turn.axis();
     box.orientation = {r.x(), r.y(), r.z()};
-    box.friction = p.at("friction");
-    const double height = box.size.y();
-    box.position = Eigen::Vector3d(0.0, top + 0.25 * height + 0.5 * height, 0.0);
-    top += 1.25 * height;
+    // Half its extent along the vertical, turned: sum_j |Q_yj| size_j / 2.
+    const double reach = 0.5 * turn.toRotationMatrix().row(1).cwiseAbs().dot(box.size);
+    const double start = top + p.at("drop") * box.size.y();
+    box.position = Eigen::Vector3d(0.0, start + reach, 0.0);
+    top = start + 2.0 * reach;
     scene.block<Bodies>().push_back(box);
   }
-  Plane ground;
-  ground.normal = {0.0, 1.0, 0.0};
-  ground.friction = p.at("friction");
-  scene.block<Planes>().push_back(ground);
-  Contact& contact = scene.block<Contact>();
-  contact.stiffness = p.at("contact_stiffness");
+  scene.block<Planes>().push_back(ground(p));
+  set_box_contact(p, scene);
+  return scene;
+}
+
+// n equal boxes of sides (s, 0.5 s, 0.75 s), box i turned about the
+// vertical by +-`turn` (alternately), each starting `gap` of its height
+// above the one below (the ground for the first): they fall onto each
+// other edge across edge and stand as a tower.
+Scene build_box_tower(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const double s = p.at("size"), gap = p.at("gap") * 0.5 * s;
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Springs>();
+  const double height = 0.5 * s;
+  for (int i = 0; i < n; ++i) {
+    Body box = scene_box(p, Eigen::Vector3d(s, height, 0.75 * s));
+    box.orientation = {0.0, (i % 2 == 0 ? 1.0 : -1.0) * p.at("turn"), 0.0};
+    box.position = Eigen::Vector3d(0.0, (i + 1) * gap + (i + 0.5) * height, 0.0);
+    scene.block<Bodies>().push_back(box);
+  }
+  scene.block<Planes>().push_back(ground(p));
+  set_box_contact(p, scene);
+  return scene;
+}
+
+// n boxes of sides (s, 0.7 s, 0.5 s) in layers of `columns` x `columns`
+// over a square bin (the ground and four walls, `width` on a side), each
+// at its grid point with a turn of its own (a fixed sequence, the same for
+// every run), and dropped into it.
+Scene build_box_drop(const Values& p) {
+  const int n = static_cast<int>(p.at("n"));
+  const int columns = static_cast<int>(p.at("columns"));
+  const double s = p.at("size"), width = p.at("width");
+  const double spacing = 1.5 * s;
+  if (!(columns * spacing <= width)) {
+    std::ostringstream message;
+    message << "scene 'box-drop': " << columns << " columns of boxes 1.5 size apart need a bin "
+            << "at least " << columns * spacing << " m wide (parameter 'width' is " << width
+            << " m)";
+    throw SceneError(message.str());
+  }
+  Scene scene;
+  scene.dimension = 3;
+  scene.block<Gravity>().acceleration = {0.0, -p.at("g"), 0.0};
+  scene.block<Springs>();
+  // A fixed sequence of numbers in [0, 1) (a linear congruential generator,
+  // Numerical Recipes' constants: the same turns on every machine).
+  std::uint32_t state = 12345;
+  auto next = [&state] {
+    state = 1664525u * state + 1013904223u;
+    return state / 4294967296.0;
+  };
+  const double corner = -0.5 * (columns - 1) * spacing;
+  for (int i = 0; i < n; ++i) {
+    Body box = scene_box(p, Eigen::Vector3d(s, 0.7 * s, 0.5 * s));
+    const int layer = i / (columns * columns), row = (i / columns) % columns, column = i % columns;
+    Eigen::Vector3d axis(next() - 0.5, next() - 0.5, next() - 0.5);
+    const double angle = 3.0 * next();
+    axis = axis.norm() > 0.0 ? Eigen::Vector3d(axis.normalized()) : Eigen::Vector3d::UnitY();
+    box.orientation = {angle * axis.x(), angle * axis.y(), angle * axis.z()};
+    box.position = Eigen::Vector3d(corner + column * spacing, p.at("height") + layer * spacing,
+                                   corner + row * spacing);
+    scene.block<Bodies>().push_back(box);
+  }
+  scene.block<Planes>().push_back(ground(p));
+  for (int side = 0; side < 4; ++side) {
+    Plane wall = ground(p);
+    const double sign = side % 2 == 0 ? 1.0 : -1.0;
+    wall.normal = side < 2 ? Eigen::Vector3d(sign, 0.0, 0.0) : Eigen::Vector3d(0.0, 0.0, sign);
+    wall.point = -0.5 * width * wall.normal;
+    scene.block<Planes>().push_back(wall);
+  }
+  set_box_contact(p, scene);
   return scene;
 }
 
@@ -219,23 +318,78 @@ const SceneEntry& box_on_slope_scene() {
   return entry;
 }
 
+// The box scenes' common parameters after their own: material, friction,
+// gravity and contact (set_box_contact).
+std::vector<ParameterSpec> box_params(std::vector<ParameterSpec> own) {
+  return with(std::move(own),
+              {param("density", 1000, "density [kg/m^3]", Range::kPositive),
+               param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
+               param("friction", 0.5, "Coulomb coefficient mu of the ground and of every box",
+                     Range::kNonNegative),
+               param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
+               choice("contact", "barrier",
+                      "contact model of the ground and between boxes (IPC's barrier, or the "
+                      "penalty)",
+                      {"penalty", "barrier"}),
+               param("contact_stiffness", 1e5,
+                     "contact stiffness: the penalty's k_c or the barrier's kappa [N/m]",
+                     Range::kPositive),
+               param("distance", 1e-3,
+                     "contact distance: the barrier's dhat, or the penalty's skin between boxes "
+                     "[m]",
+                     Range::kPositive)});
+}
+
 const SceneEntry& box_pile_scene() {
   static const SceneEntry entry = scene_entry(
       "box-pile",
-          "n boxes, each shrink times the one below, turned and tilted, dropped onto one "
-          "another and onto the ground, with friction",
-         {param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
-          param("size", 0.2, "longest side of the bottom box (sides size, 0.75 size, 0.5 size) [m]",
-                Range::kPositive),
-          param("shrink", 0.7, "each box's sides over the one's below, in (0, 1]", Range::kPositive),
-          param("density", 1000, "density [kg/m^3]", Range::kPositive),
-          param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
-          param("friction", 0.5, "Coulomb coefficient mu of the ground and of every box",
-                Range::kNonNegative),
-          param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
-          param("contact_stiffness", 1e5, "penalty stiffness k_c per vertex [N/m]",
-                Range::kPositive)},
-         build_box_pile);
+      "n boxes, each shrink times the one below, turned and tilted, dropped onto one "
+      "another and onto the ground, with friction",
+      box_params({param("n", 3, "number of boxes", Range::kWhole, 1, 1000),
+                  param("size", 0.2,
+                        "longest side of the bottom box (sides size, 0.5 size, 0.75 size) [m]",
+                        Range::kPositive),
+                  param("shrink", 0.8, "each box's sides over the one's below, in (0, 1]",
+                        Range::kPositive),
+                  param("drop", 0.1, "each box's start above the one below, in its heights",
+                        Range::kNonNegative),
+                  param("tilt", 0.05, "each box but the first tilted about x [rad]",
+                        Range::kAny)}),
+      build_box_pile);
+  return entry;
+}
+
+const SceneEntry& box_tower_scene() {
+  static const SceneEntry entry = scene_entry(
+      "box-tower",
+      "n equal boxes, each turned against the one below, dropped onto one another into a "
+      "tower",
+      box_params({param("n", 10, "number of boxes", Range::kWhole, 1, 1000),
+                  param("size", 0.2,
+                        "longest side of each box (sides size, 0.5 size, 0.75 size) [m]",
+                        Range::kPositive),
+                  param("turn", 0.1, "each box turned about the vertical by +-turn [rad]",
+                        Range::kAny),
+                  param("gap", 0.1, "each box's start above the one below, in its heights",
+                        Range::kPositive)}),
+      build_box_tower);
+  return entry;
+}
+
+const SceneEntry& box_drop_scene() {
+  static const SceneEntry entry = scene_entry(
+      "box-drop",
+      "n boxes dropped in layers, each turned its own way, into a square bin (the ground "
+      "and four walls), coming to rest",
+      box_params({param("n", 100, "number of boxes", Range::kWhole, 1, 10000),
+                  param("size", 0.1,
+                        "longest side of each box (sides size, 0.7 size, 0.5 size) [m]",
+                        Range::kPositive),
+                  param("columns", 5, "boxes along each side of a layer", Range::kWhole, 1, 100),
+                  param("width", 0.8, "the bin's inner width [m]", Range::kPositive),
+                  param("height", 0.15, "height of the lowest layer's centres [m]",
+                        Range::kPositive)}),
+      build_box_drop);
   return entry;
 }
 

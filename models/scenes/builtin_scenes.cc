@@ -33,6 +33,8 @@ namespace springlab {
   X(SceneEntry, box_on_slope_scene)       \
   X(SceneEntry, box_chain_scene)          \
   X(SceneEntry, box_pile_scene)           \
+  X(SceneEntry, box_tower_scene)          \
+  X(SceneEntry, box_drop_scene)           \
   X(SceneEntry, dam_break_scene)          \
   X(SceneEntry, dam_break_obstacle_scene) \
   X(SceneEntry, tank_scene)               \

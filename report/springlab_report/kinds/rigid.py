@@ -160,7 +160,85 @@ def render(exp, ctx):
         "right: the largest stable step found by bisection (markers) and theory's c / ω_max "
         "(lines). Drifts and strain from the first output after t = 0; below 1e-16 drawn at 1e-16." % STRAIN_WINDOWS)
     facts = sentences(runs, kappa, limits, exp)
-    return figure_html(saved, "rigid: the tumbling box", esc(caption)) + facts_html(facts)
+    html = figure_html(saved, "rigid: the tumbling box", esc(caption)) + facts_html(facts)
+    return html + render_pile(exp, ctx)
+
+
+def render_pile(exp, ctx):
+    """The pile: the top box's height and the energy against time for each
+    (integrator, dt), and what each run did."""
+    rows, runs = exp.table("pile"), exp.table("pile_runs")
+    if rows is None or runs is None or not len(runs):
+        return ""
+    db = Columns(rows, numbers=("dt", "t", "top_height", "energy", "kinetic", "smallest_gap"),
+                 texts=("integrator",))
+    runs = Columns(runs, numbers=("dt", "diverged_at", "steps", "newton_per_step",
+                                  "top_height_final", "energy_initial", "energy_final",
+                                  "smallest_gap", "wall_seconds"),
+                   texts=("integrator", "status", "failure"))
+    integ = ctx.integrators
+    fig = new_figure(15.0, 4.8)
+    ax_h, ax_e = fig.subplots(1, 2, squeeze=False)[0]
+    groups = db.groups("integrator", "dt")
+    order = integ.sort(set(db["integrator"]))
+    keys = sorted(groups, key=lambda k: (order.index(k[0]), -float(k[1])))
+    for k, key in enumerate(keys):
+        idx = groups[key]
+        name, dt = key[0], float(key[1])
+        style = dict(color=integ.colour(name), ls="-" if dt < 0.005 else "--",
+                     lw=max(1.0, 2.4 - 0.15 * k), label="%s, dt = %s s" % (name, fmt(dt, 3)))
+        ax_h.plot(db["t"][idx], db["top_height"][idx], **style)
+        ax_e.plot(db["t"][idx], db["energy"][idx], **style)
+    for ax, title, label in ((ax_h, "height of the top box", "y of its centre [m]"),
+                             (ax_e, "energy", "E [J]")):
+        ax.set_title(title, loc="left", fontweight="bold")
+        ax.set_ylabel(label)
+        ax.set_xlabel("t [s]")
+        ax.grid(True, alpha=0.3)
+    legend_outside(ax_e, fontsize=9)
+    saved = ctx.figs.save(fig, exp.name + "-pile.png")
+    pile = exp.setting("pile") or {}
+    caption = ("The box pile (%s bodies meeting each other and the ground under the barrier) "
+               "under each implicit method: the top box's height and the total energy against "
+               "time. A pile that stands keeps its top box up; a run that stops ends its lines." %
+               fmt(pile.get("bodies"), 3))
+    return (figure_html(saved, "rigid: the box pile", esc(caption)) +
+            facts_html(pile_sentences(runs), heading="What the pile shows"))
+
+
+def pile_sentences(runs):
+    out = []
+    done = [r for r in range(len(runs)) if runs["status"][r] == "completed"]
+    stopped = [r for r in range(len(runs)) if runs["status"][r] != "completed"]
+
+    def label(r):
+        return "%s at %s s" % (runs["integrator"][r], fmt(runs["dt"][r], 3))
+    if done:
+        heights = [runs["top_height_final"][r] for r in done]
+        reference = max(heights)
+        standing = [r for r in done if runs["top_height_final"][r] >= reference - 0.01]
+        fallen = [r for r in done if runs["top_height_final"][r] < reference - 0.01]
+        if standing:
+            out.append("Completed with the top box within 1 cm of the highest final height "
+                       "(%s m): %s." % (fmt(reference, 4), ", ".join(
+                           "%s (%s Newton iterations per step)" % (
+                               label(r), fmt(runs["newton_per_step"][r], 3)) for r in standing)))
+        if fallen:
+            out.append("Completed with the top box lower (boxes slid or bounced off): %s." %
+                       ", ".join("%s (%s m)" % (label(r), fmt(runs["top_height_final"][r], 3))
+                                 for r in fallen))
+        gaps = [runs["smallest_gap"][r] for r in done if math.isfinite(runs["smallest_gap"][r])]
+        if gaps:
+            out.append("The smallest gap between two boxes' surfaces over every completed run "
+                       "is %s m: no accepted state has them touching." % fmt(min(gaps), 3))
+        losses = ["%s %s" % (label(r), _pct(runs["energy_final"][r] / runs["energy_initial"][r]
+                                            - 1.0)) for r in done]
+        out.append("Energy change over the run: %s." % ", ".join(losses))
+    if stopped:
+        out.append("Stopped: %s." % "; ".join(
+            "%s %s at t = %s s (%s)" % (label(r), runs["status"][r], fmt(runs["diverged_at"][r], 4),
+                                      runs["failure"][r]) for r in stopped))
+    return out
 
 
 def sentences(runs, kappa, limits, exp):
