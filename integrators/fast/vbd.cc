@@ -34,8 +34,9 @@ Vbd::Vbd()
                   .stability_limit = kInfinity,
                   .stability_note = "at convergence: implicit Euler's step, drag and wind "
                                     "(and spring damping) included; an unconverged step leaves "
-                                    "springs stretched and Chebyshev's extrapolation can "
-                                    "overshoot"}) {}
+                                    "springs stretched and can gain energy (cloth 32 at 1/60 s: "
+                                    "over 5 E_s with 10 iterations, under 0.01 E_s with 100), and "
+                                    "Chebyshev's extrapolation can overshoot"}) {}
 
 double Vbd::chebyshev_rho(const IntegratorOptions& options) {
   if (options.no_chebyshev) return 0.0;
