@@ -94,6 +94,10 @@ class VelocityStep final : public NewtonProblem {
   // Where some states have no energy, a trial whose step would end in one
   // is refused even when the forces' state (the midpoint) is allowed.
   bool allowed() override;
+  // The contacts between bodies found again at the stage x*(v)
+  // (MechanicalSystem::follow_lagged_contacts), unless r or Phi at v would
+  // then not be finite or the step's end not allowed.
+  bool follow(const Vector& v) override;
 
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
