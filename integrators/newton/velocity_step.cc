@@ -222,6 +222,7 @@ bool VelocityStep::follow(const Vector& v) {
   double magnitude = 0.0;
   if (f_part_.allFinite() && allowed() &&
       (!has_potential() || std::isfinite(potential(v, magnitude)))) {
+    ++follows_;
     return true;
   }
   system.follow_lagged_contacts(nullptr, nullptr, 0.0);
