@@ -18,6 +18,8 @@ void VelocityStep::begin(double t, const Vector& x, const Vector& v, double h,
   v_ = &v;
   h_ = h;
   s_ = scheme;
+  rest_start_ = model_->system().has_trust_region() &&
+                (accepted_start(start_) || fallback_start(start_));
   if (s_.discrete_gradient) {
     v_start_potential_ = model_->system().position_potential(t_ + s_.t_eval_offset * h_, x);
   }
@@ -203,6 +205,22 @@ double VelocityStep::admissible_fraction(const Vector& v, const Vector& dv) {
     x_cap_ = *x_ + s.end * (x_cap_ - *x_);
     dx_cap_ *= s.end;
     fraction = std::min(fraction, system.admissible_fraction(x_cap_, dx_cap_));
+  }
+  return fraction;
+}
+
+double VelocityStep::trusted_fraction(const Vector& v, const Vector& dv) {
+  const VelocityImplicitScheme& s = s_;
+  const MechanicalSystem& system = model_->system();
+  if (!system.has_trust_region()) return std::numeric_limits<double>::infinity();
+  x_cap_ = *x_ + h_ * (s.a * *v_ + s.b * v);
+  if (s.x_offset != nullptr) x_cap_ += *s.x_offset;
+  dx_cap_ = (h_ * s.b) * dv;
+  double fraction = system.trusted_fraction(x_cap_, dx_cap_);
+  if (s.end != 1.0) {
+    x_cap_ = *x_ + s.end * (x_cap_ - *x_);
+    dx_cap_ *= s.end;
+    fraction = std::min(fraction, system.trusted_fraction(x_cap_, dx_cap_));
   }
   return fraction;
 }
