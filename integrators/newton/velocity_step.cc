@@ -18,8 +18,16 @@ void VelocityStep::begin(double t, const Vector& x, const Vector& v, double h,
   v_ = &v;
   h_ = h;
   s_ = scheme;
-  rest_start_ = model_->system().has_trust_region() &&
-                (accepted_start(start_) || fallback_start(start_));
+  // With a trust region, the start is the inertial prediction v_n cut back
+  // into it from the stage at x_n (start_): v_n itself where it moves no
+  // particle further than the region's length.
+  rest_start_ = false;
+  if (model_->system().has_trust_region() && (accepted_start(start_) || fallback_start(start_))) {
+    const Vector towards = *v_ - start_;
+    const double alpha = trusted_fraction(start_, towards);
+    rest_start_ = alpha < 1.0;
+    if (rest_start_) start_ += alpha * towards;
+  }
   if (s_.discrete_gradient) {
     v_start_potential_ = model_->system().position_potential(t_ + s_.t_eval_offset * h_, x);
   }

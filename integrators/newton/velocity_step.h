@@ -72,11 +72,13 @@ class VelocityStep final : public NewtonProblem {
   const MechanicalSystem& system() const { return model_->system(); }
 
   // v_n; where the system has a trust region (MechanicalSystem::
-  // has_trust_region: a fluid), the v whose stage is x_n (accepted_start,
-  // else fallback_start): the inertial prediction x_n + h v_n may carry a
-  // particle through a wall thinner than h |v_n| (a fluid's wall of
-  // particles), and Newton, moving each particle a little at a time from
-  // there, finds the solution beyond it.
+  // has_trust_region: a fluid) and v_n's stage moves a particle beyond it
+  // from x_n, v_n cut back towards the v whose stage is x_n
+  // (accepted_start, else fallback_start) until it no longer does: the
+  // inertial prediction x_n + h v_n may carry a particle through a wall
+  // thinner than h |v_n| (a fluid's wall of particles), and Newton, moving
+  // each particle a little at a time from there, finds the solution beyond
+  // it.
   const Vector& start() const override { return rest_start_ ? start_ : *v_; }
   // (||x_n||_inf + ||x_o||_inf) / (h w |b|): the stage moves by h w b per
   // unit of v (its positions' round-off, newton_problem.h).
