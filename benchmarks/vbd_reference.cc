@@ -17,7 +17,8 @@
 //         + sum_j t_ij d_ij,                d = x_i - x_j, t = k (1 - L/|d|),
 //   H_i = (m_i / h^2 + gamma / h) I + sum_j [(k - t) d d^T / |d|^2 + t I],
 // and the step x_i -= H_i^-1 g_i (Cholesky; where H_i is not positive
-// definite, again with every t clamped at 0; failing that, H_i's
+// definite, or the step is longer than |g_i| h^2 / m_i, the inertia's
+// alone, again with every t clamped at 0; failing that, H_i's
 // eigenvalues raised to at least m_i / h^2). The free particles are
 // coloured greedily in scene order (each the smallest colour none of its
 // spring neighbours has); an iteration sweeps the colours in order, each
@@ -267,7 +268,8 @@ int main(int argc, char** argv) {
             Eigen::Matrix<double, 3, 3, Eigen::RowMajor> H;
             local(i, h, xn, y, false, grad, H);
             Eigen::LLT<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> llt(H);
-            if (llt.info() != Eigen::Success) {
+            const double w = m[i] / (h * h);
+            if (llt.info() != Eigen::Success || llt.solve(grad).norm() * w > grad.norm()) {
               local(i, h, xn, y, true, grad, H);
               llt.compute(H);
               if (llt.info() != Eigen::Success) {

@@ -82,6 +82,9 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   void lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const override {
     model_.lag_normal_forces(x_lag, v_lag, h);
   }
+  bool follow_lagged_contacts(const Vector* x, const Vector* v, double h) const override {
+    return model_.follow_lagged_contacts(x, v, h);
+  }
   const FastSolverViews* fast_solver_views() const override { return this; }
 
   // FastSolverViews: the model's, with the spring among the external forces.

@@ -26,12 +26,14 @@
 // Each step of h is S substeps of h/S (--substeps, default 1), each N
 // iterations (--iterations, default 10), then v = (x - x_n) / h.
 //
-// The local step stays a descent step: H_i is used where its symmetric part
-// is positive definite (a Cholesky factor exists); where it is not (a
-// compressed spring's negative transverse stiffness outweighs the
-// inertia), the particle's blocks are evaluated again with each element's
-// share made semidefinite (VertexBlockView's `definite`: projection on
-// demand, per particle), which leaves H_i >= m_i / h^2 I. With a barrier
+// The local step stays a descent step no longer than the inertia allows:
+// H_i is used where its symmetric part is positive definite (a Cholesky
+// factor exists) and its step is no longer than |g_i| h^2 / m_i, the
+// longest a definite H_i >= m_i / h^2 I can take; where it is not (a
+// compressed spring's negative transverse stiffness outweighs the inertia,
+// or nearly cancels it), the particle's blocks are evaluated again with
+// each element's share made semidefinite (VertexBlockView's `definite`:
+// projection on demand, per particle), which leaves H_i >= m_i / h^2 I. With a barrier
 // (contact planes, IPC) or a material without energy at J <= 0
 // (neo-Hookean), the step is capped at kStepCap = 0.9 of the fraction at
 // which particle i alone would close a gap or invert an element (IPC's
@@ -95,7 +97,8 @@ class Vbd final : public Integrator {
   static double chebyshev_rho(const IntegratorOptions& options);
 
   // Local steps solved with the definite blocks (the particle's exact
-  // block was indefinite), since the start of the run.
+  // block was indefinite, or its step longer than the inertia's), since
+  // the start of the run.
   long definite_steps() const { return definite_steps_; }
 
  protected:

@@ -239,6 +239,22 @@ bool VelocityStep::allowed() {
   return std::isfinite(model_->system().position_potential(t_ + h_, x_end_));
 }
 
+bool VelocityStep::follow(const Vector& v) {
+  const MechanicalSystem& system = model_->system();
+  stage(v);
+  if (!system.follow_lagged_contacts(&xs_, &v, h_)) return false;
+  // (residual() and potential() at v with the contacts found there.)
+  residual(v, f_part_);
+  double magnitude = 0.0;
+  if (f_part_.allFinite() && allowed() &&
+      (!has_potential() || std::isfinite(potential(v, magnitude)))) {
+    ++follows_;
+    return true;
+  }
+  system.follow_lagged_contacts(nullptr, nullptr, 0.0);
+  return false;
+}
+
 void VelocityStep::update_frozen(Vector& r, double& phi) {
   if (!frozen_) {
     // Leaving the frozen potential (newton_policy.h's phase 2): its r, at

@@ -106,6 +106,12 @@ class VelocityStep final : public NewtonProblem {
   // Where some states have no energy, a trial whose step would end in one
   // is refused even when the forces' state (the midpoint) is allowed.
   bool allowed() override;
+  // The contacts between bodies found again at the stage x*(v)
+  // (MechanicalSystem::follow_lagged_contacts), unless r or Phi at v would
+  // then not be finite or the step's end not allowed.
+  bool follow(const Vector& v) override;
+  // How many times follow() has set the step up again (over all steps).
+  long follows() const { return follows_; }
 
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
@@ -163,6 +169,7 @@ class VelocityStep final : public NewtonProblem {
   bool frozen_ = false;
   double frozen_c_ = 0.0;
   double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
+  long follows_ = 0;
 };
 
 }  // namespace springlab

@@ -268,6 +268,10 @@ class ForceTerm {
   // evaluate live again. Friction lags its normal forces; contact between
   // bodies keeps the contacts it finds there.
   virtual void lag(const Configuration* /*c*/, double /*h*/) {}
+  // MechanicalSystem::follow_lagged_contacts: while lagged, the contacts a
+  // term keeps found again at c (null: those of before the last call);
+  // true when they changed.
+  virtual bool follow_lag(const Configuration* /*c*/, double /*h*/) { return false; }
 };
 
 }  // namespace springlab

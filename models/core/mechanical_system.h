@@ -205,6 +205,17 @@ class MechanicalSystem {
   // bodies"); v_lag may be null (then h is not read).
   virtual void lag_normal_forces(const Vector* /*x_lag*/, const Vector* /*v_lag*/,
                                  double /*h*/) const {}
+  // While lagged: the contacts between bodies found again at x, an iterate
+  // of the step's solve (Newton's accepted iterate's state), as far as the
+  // bodies can move in h at v, in place of those found at the step's start
+  // (IPC's constraint set, found at every iterate: Li et al. 2020, sec. 4).
+  // True when they changed (the step's equations then did); x null: the
+  // contacts of before the last such call again. Friction's normal forces
+  // stay those of the step's start.
+  virtual bool follow_lagged_contacts(const Vector* /*x*/, const Vector* /*v*/,
+                                      double /*h*/) const {
+    return false;
+  }
 
   // Part 3: the fast solvers' views of the same forces
   // (models/core/fast_solver_views.h), or nullptr when the system has none (a

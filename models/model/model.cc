@@ -578,6 +578,18 @@ void Model::lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h
   }
 }
 
+bool Model::follow_lagged_contacts(const Vector* x, const Vector* v, double h) const {
+  if (x != nullptr) x_all_.head(dofs()) = *x;
+  if (x != nullptr && v != nullptr) v_all_.head(dofs()) = *v;
+  Configuration c = stored_configuration(0.0);
+  c.v = x != nullptr && v != nullptr ? v_all_.data() : nullptr;
+  bool changed = false;
+  for (const auto& term : terms_) {
+    if (term->follow_lag(x != nullptr ? &c : nullptr, h)) changed = true;
+  }
+  return changed;
+}
+
 void Model::plane_constraints(std::vector<PlaneConstraint>& out) const {
   out.clear();
   for (const auto& term : terms_) term->plane_constraints(out);

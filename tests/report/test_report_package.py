@@ -613,6 +613,58 @@ class RigidKind(unittest.TestCase):
         self.assertTrue((self.s.dir / "out" / "rigid.png").is_file())
 
 
+def pile_data(scratch):
+    """The rigid experiment above with its box pile: implicit Euler stands
+    (energy 9 -> 8 J), newmark diverges at t = 0.2 s after its energy
+    reached 40 J (at t = 0.1 s), generalized-alpha fails at t = 0.1 s."""
+    rigid_data(scratch)
+    definition = json.loads((scratch.dir / "rigid.json").read_text())
+    cols = ["task", "integrator", "dt", "t", "top_height", "energy", "kinetic", "smallest_gap"]
+    runs = ["task", "integrator", "dt", "status", "diverged_at", "steps", "newton_per_step",
+            "top_height_final", "energy_initial", "energy_final", "smallest_gap",
+            "wall_seconds", "failure"]
+    definition["pile"] = {"scene": "box-pile", "bodies": 8}
+    definition["tables"] += [{"file": "rigid-pile.csv", "suffix": "pile", "columns": cols},
+                             {"file": "rigid-pile_runs.csv", "suffix": "pile_runs",
+                              "columns": runs}]
+    scratch.json("rigid.json", definition)
+    rows = [",".join(cols)]
+    for t in (0.0, 0.1, 0.2, 0.3):
+        rows.append("1,implicit-euler,0.001,%r,0.41,%r,0,0.001" % (t, 9 - 1 * t / 0.3))
+    for t, e in ((0.0, 9.0), (0.1, 40.0), (0.2, 20.0)):
+        rows.append("2,newmark,0.001,%r,0.41,%r,0,0.001" % (t, e))
+    for t in (0.0, 0.1):
+        rows.append("3,generalized-alpha,0.001,%r,0.41,9,0,0.001" % t)
+    run_rows = [",".join(runs),
+                "1,implicit-euler,0.001,completed,,300,1.2,0.41,9,8,0.001,0.1,",
+                "2,newmark,0.001,diverged,0.2,200,7,0.41,9,20,0.001,0.1,rigidity",
+                "3,generalized-alpha,0.001,failed,0.1,100,2,0.41,9,9,0.001,0.1,Newton"]
+    scratch.write("rigid-pile.csv", "\n".join(rows) + "\n")
+    scratch.write("rigid-pile_runs.csv", "\n".join(run_rows) + "\n")
+
+
+class RigidPile(unittest.TestCase):
+    def setUp(self):
+        self.s = Scratch()
+
+    def tearDown(self):
+        self.s.close()
+
+    def test_caption_names_the_run_that_leaves_the_energy_axis(self):
+        pile_data(self.s)
+        status, page = render(self.s)
+        self.assertEqual(status, 0)
+        text = html.unescape(page)
+        # The axis ends at 1.25 x 9 J (implicit Euler's highest): newmark's
+        # 40 J is above it, generalized-alpha's 9 J is not.
+        self.assertIn("The energy axis ends at 1.25 times the highest energy of the runs that "
+                      "completed; above it: newmark at 0.001 s (40 J at t = 0.1 s).", text)
+        self.assertNotIn("generalized-alpha at 0.001 s (", text)
+        self.assertIn("Stopped: newmark at 0.001 s diverged at t = 0.2 s (rigidity); "
+                      "generalized-alpha at 0.001 s failed at t = 0.1 s (Newton).", text)
+        self.assertTrue((self.s.dir / "out" / "rigid-pile.png").is_file())
+
+
 class FluidPlayer(unittest.TestCase):
     """The player's fluid particles: which they are, their speed between
     frames, and one byte scale for every panel."""

@@ -182,13 +182,34 @@ def render_pile(exp, ctx):
     groups = db.groups("integrator", "dt")
     order = integ.sort(set(db["integrator"]))
     keys = sorted(groups, key=lambda k: (order.index(k[0]), -float(k[1])))
+    stopped_at = pile_stops(runs)
+    # The energy axis spans what the runs that completed reached (with a
+    # margin); a run that leaves it is named in the caption, with its peak.
+    done = [r for r in range(len(runs)) if runs["status"][r] == "completed"]
+    top = max((float(np.nanmax(db["energy"][groups[k]])) for k in keys
+               if pile_stop(stopped_at, k) is None), default=None)
+    left_axis = []
     for k, key in enumerate(keys):
         idx = groups[key]
         name, dt = key[0], float(key[1])
+        stop = pile_stop(stopped_at, key)
+        label = "%s, dt = %s s" % (name, fmt(dt, 3))
+        if stop is not None:
+            label += ", %s at t = %s s" % (stop[0], fmt(stop[1], 3))
         style = dict(color=integ.colour(name), ls="-" if dt < 0.005 else "--",
-                     lw=max(1.0, 2.4 - 0.15 * k), label="%s, dt = %s s" % (name, fmt(dt, 3)))
-        ax_h.plot(db["t"][idx], db["top_height"][idx], **style)
-        ax_e.plot(db["t"][idx], db["energy"][idx], **style)
+                     lw=max(1.0, 2.4 - 0.15 * k), label=label)
+        t, h, e = db["t"][idx], db["top_height"][idx], db["energy"][idx]
+        ax_h.plot(t, h, **style)
+        ax_e.plot(t, e, **style)
+        if stop is not None and len(t):  # where the run ended: a cross
+            for ax, y in ((ax_h, h), (ax_e, e)):
+                ax.plot([t[-1]], [y[-1]], "x", color=style["color"], ms=9, mew=2.2)
+        if top is not None and done and np.nanmax(e) > 1.25 * top:
+            peak = int(np.nanargmax(e))
+            left_axis.append("%s at %s s (%s J at t = %s s)" % (
+                name, fmt(dt, 3), fmt(e[peak], 3), fmt(t[peak], 3)))
+    if top is not None and done:
+        ax_e.set_ylim(0.0, 1.25 * top)
     for ax, title, label in ((ax_h, "height of the top box", "y of its centre [m]"),
                              (ax_e, "energy", "E [J]")):
         ax.set_title(title, loc="left", fontweight="bold")
@@ -200,10 +221,29 @@ def render_pile(exp, ctx):
     pile = exp.setting("pile") or {}
     caption = ("The box pile (%s bodies meeting each other and the ground under the barrier) "
                "under each implicit method: the top box's height and the total energy against "
-               "time. A pile that stands keeps its top box up; a run that stops ends its lines." %
+               "time. A pile that stands keeps its top box up; a run that stops ends its lines "
+               "with a cross (the legend says when, the sentences below why)." %
                fmt(pile.get("bodies"), 3))
+    if left_axis:
+        caption += (" The energy axis ends at 1.25 times the highest energy of the runs that "
+                    "completed; above it: %s." % "; ".join(left_axis))
     return (figure_html(saved, "rigid: the box pile", esc(caption)) +
             facts_html(pile_sentences(runs), heading="What the pile shows"))
+
+
+def pile_stops(runs):
+    """(integrator, dt) -> (status, time) of each run that did not complete."""
+    return {(runs["integrator"][r], float(runs["dt"][r])): (runs["status"][r],
+                                                           float(runs["diverged_at"][r]))
+            for r in range(len(runs)) if runs["status"][r] != "completed"}
+
+
+def pile_stop(stops, key):
+    """The stop of the run drawn as `key` (integrator, dt text), or None."""
+    for (name, dt), stop in stops.items():
+        if name == key[0] and math.isclose(dt, float(key[1]), rel_tol=1e-9):
+            return stop
+    return None
 
 
 def pile_sentences(runs):
