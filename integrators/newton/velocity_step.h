@@ -69,6 +69,7 @@ class VelocityStep final : public NewtonProblem {
   double t() const { return t_; }  // t_n
   double h() const { return h_; }
   const Vector& x() const { return *x_; }  // x_n
+  const Vector& v_n() const { return *v_; }  // (start() may differ: below)
   const MechanicalSystem& system() const { return model_->system(); }
 
   // v_n; where the system has a trust region (MechanicalSystem::
