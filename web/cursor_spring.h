@@ -75,6 +75,10 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   double admissible_fraction(const Vector& x, const Vector& dx) const override {
     return model_.admissible_fraction(x, dx);
   }
+  bool has_trust_region() const override { return model_.has_trust_region(); }
+  double trusted_fraction(const Vector& x, const Vector& dx) const override {
+    return model_.trusted_fraction(x, dx);
+  }
   void lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const override {
     model_.lag_normal_forces(x_lag, v_lag, h);
   }

@@ -18,7 +18,7 @@ void IncrementalPotentialCheck::begin(VelocityStep& step, double tol) {
   active_ = step.has_potential() && !s.discrete_gradient;
   if (!active_) return;
   // v_kept: x*(v) = x_n + x_o + h (a v_n + b v) = x_n.
-  const Vector& v_n = step.start();
+  const Vector& v_n = step.v_n();
   v_kept_ = (-s.a / s.b) * v_n;
   if (s.x_offset != nullptr) v_kept_ -= (1.0 / (step.h() * s.b)) * *s.x_offset;
   if (!start_potentials(step)) {
@@ -64,7 +64,7 @@ std::string IncrementalPotentialCheck::judge(VelocityStep& step, const Vector& v
   double noise = std::max(kRoundoff * std::max(noise_scale_, magnitude_end),
                           std::numeric_limits<double>::min());
   // Backward Euler's energy H(v) = Phi(v) - |v - v_n|^2_M / 2 + |v|^2_M / 2.
-  const Vector& v_n = step.start();
+  const Vector& v_n = step.v_n();
   const Vector& mass = step.system().mass();
   const bool energy_judged = judges_energy_;
   double inertia = 0.0, kinetic = 0.0;

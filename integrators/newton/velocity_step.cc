@@ -18,6 +18,16 @@ void VelocityStep::begin(double t, const Vector& x, const Vector& v, double h,
   v_ = &v;
   h_ = h;
   s_ = scheme;
+  // With a trust region, the start is the inertial prediction v_n cut back
+  // into it from the stage at x_n (start_): v_n itself where it moves no
+  // particle further than the region's length.
+  rest_start_ = false;
+  if (model_->system().has_trust_region() && (accepted_start(start_) || fallback_start(start_))) {
+    const Vector towards = *v_ - start_;
+    const double alpha = trusted_fraction(start_, towards);
+    rest_start_ = alpha < 1.0;
+    if (rest_start_) start_ += alpha * towards;
+  }
   if (s_.discrete_gradient) {
     v_start_potential_ = model_->system().position_potential(t_ + s_.t_eval_offset * h_, x);
   }
@@ -203,6 +213,22 @@ double VelocityStep::admissible_fraction(const Vector& v, const Vector& dv) {
     x_cap_ = *x_ + s.end * (x_cap_ - *x_);
     dx_cap_ *= s.end;
     fraction = std::min(fraction, system.admissible_fraction(x_cap_, dx_cap_));
+  }
+  return fraction;
+}
+
+double VelocityStep::trusted_fraction(const Vector& v, const Vector& dv) {
+  const VelocityImplicitScheme& s = s_;
+  const MechanicalSystem& system = model_->system();
+  if (!system.has_trust_region()) return std::numeric_limits<double>::infinity();
+  x_cap_ = *x_ + h_ * (s.a * *v_ + s.b * v);
+  if (s.x_offset != nullptr) x_cap_ += *s.x_offset;
+  dx_cap_ = (h_ * s.b) * dv;
+  double fraction = system.trusted_fraction(x_cap_, dx_cap_);
+  if (s.end != 1.0) {
+    x_cap_ = *x_ + s.end * (x_cap_ - *x_);
+    dx_cap_ *= s.end;
+    fraction = std::min(fraction, system.trusted_fraction(x_cap_, dx_cap_));
   }
   return fraction;
 }
