@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 
 #include <Eigen/Dense>
 
@@ -17,46 +16,17 @@
 #include "models/fluids/fluid_pressure_hessian.h"
 #include "models/fluids/fluids.h"
 #include "models/fluids/sph_particles.h"
+#include "scenes_for_tests.h"
 
 namespace springlab {
 namespace {
-
-// A random blob of fluid without walls, gravity or planes, compressed so
-// that every particle has pressure, moving at random; `fixed` of its
-// particles are walls.
-Scene blob(int dim, int n, unsigned seed, double viscosity, int fixed = 0) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Scene s;
-  s.dimension = dim;
-  const double side = std::pow(static_cast<double>(n), 1.0 / dim) * 0.1;
-  for (int p = 0; p < n; ++p) {
-    Particle q;
-    for (int r = 0; r < dim; ++r) {
-      q.x[r] = 0.5 * side * u(rng);
-      q.v[r] = u(rng);
-    }
-    q.mass = 0.01 * (1.0 + 0.2 * u(rng));
-    q.fixed = p < fixed;
-    if (q.fixed) q.v.setZero();
-    s.particles.push_back(q);
-  }
-  Fluid f;
-  f.count = n;
-  f.spacing = 0.1;
-  f.density = 0.2 / std::pow(0.1, dim) * 0.01;
-  f.speed_of_sound = 3.0;
-  f.viscosity = viscosity;
-  s.block<Fluids>().push_back(f);
-  return s;
-}
 
 // The column assembly (no search) and the plain one (a binary search per
 // block, particle j by particle j) sum the same terms: equal to round-off,
 // exact and definite, in 2-D and 3-D, with walls among the particles.
 TEST(FluidPressureHessian, ColumnAssemblyEqualsThePlainOne) {
   for (int dim : {2, 3}) {
-    const Model model(blob(dim, dim == 2 ? 60 : 50, 7, 0.0, 9));
+    const Model model(testing::fluid_blob(dim, dim == 2 ? 60 : 50, 7, 0.0, 9));
     const Vector x = model.initial_positions(), v = model.initial_velocities();
     SparseMatrix dfdx;
     model.jacobians(0.0, x, v, &dfdx, nullptr);  // updates the particles at x
@@ -96,7 +66,7 @@ TEST(FluidPressureHessian, ColumnAssemblyEqualsThePlainOne) {
 // from it, the lagged kappa's. Cleared, it is live again.
 TEST(FluidViscosity, LaggedIsTheGradientOfItsDissipationPotential) {
   for (int dim : {2, 3}) {
-    const Model model(blob(dim, dim == 2 ? 40 : 30, 13, 0.05, 5));
+    const Model model(testing::fluid_blob(dim, dim == 2 ? 40 : 30, 13, 0.05, 5));
     ASSERT_FALSE(model.derives_from_potentials());
     ASSERT_FALSE(model.jacobian_symmetric());
     const Vector x = model.initial_positions(), v = model.initial_velocities();
