@@ -19,13 +19,9 @@
 // newton_per_step, and completed (1 when the run's status is "completed";
 // the benchmark fails otherwise).
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -33,6 +29,8 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "benchmarks/bench_support.h"
 
 #ifndef SPRINGLAB_EXE
 #error "SPRINGLAB_EXE must name the springlab executable"
@@ -42,35 +40,6 @@ namespace springlab::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Process {
-  bool ok = false;
-  double wall = 0.0, cpu = 0.0, max_rss_mb = 0.0;
-};
-
-// Runs argv with stdout to `out`.
-Process run_process(std::vector<std::string> args, const fs::path& out) {
-  std::vector<char*> argv;
-  for (std::string& s : args) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (std::freopen(out.c_str(), "w", stdout) == nullptr) ::_exit(127);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  Process p;
-  int status = 0;
-  struct rusage usage {};
-  if (pid < 0 || ::wait4(pid, &status, 0, &usage) != pid) return p;
-  p.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  p.cpu = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-          1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  p.max_rss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB
-  p.ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  return p;
-}
 
 struct Case {
   std::string scene, integrator;
@@ -84,22 +53,23 @@ void BM_Bodies(benchmark::State& state, const Case& c) {
   const fs::path out = dir / "run.json";
   double wall = INFINITY, cpu = INFINITY, rss = 0.0, steps = 0.0, newton = 0.0;
   for (auto _ : state) {
-    const Process p = run_process({SPRINGLAB_EXE, "run", c.scene, "-p", "n=" + std::to_string(c.n),
-                                   "--integrator", c.integrator, "--dt", c.dt, "--t-end", c.t_end,
-                                   "--json"},
-                                  out);
+    double p_cpu = 0.0, p_rss = 0.0;
+    const double p_wall =
+        run_process({SPRINGLAB_EXE, "run", c.scene, "-p", "n=" + std::to_string(c.n),
+                     "--integrator", c.integrator, "--dt", c.dt, "--t-end", c.t_end, "--json"},
+                    out, &p_cpu, &p_rss);
     std::ifstream in(out);
     const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     const nlohmann::json summary = nlohmann::json::parse(text, nullptr, false);
-    if (!p.ok || summary.is_discarded() || summary.value("status", "") != "completed") {
+    if (p_wall < 0.0 || summary.is_discarded() || summary.value("status", "") != "completed") {
       state.SkipWithError(("the run did not complete: " + text.substr(0, 300)).c_str());
       break;
     }
     steps = summary.at("steps").get<double>();
     newton = summary.at("newton_iterations").get<double>();
-    wall = std::min(wall, p.wall);
-    cpu = std::min(cpu, p.cpu);
-    rss = std::max(rss, p.max_rss_mb);
+    wall = std::min(wall, p_wall);
+    cpu = std::min(cpu, p_cpu);
+    rss = std::max(rss, p_rss);
   }
   fs::remove_all(dir);
   if (steps > 0.0) {

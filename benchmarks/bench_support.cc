@@ -118,7 +118,7 @@ std::string short_number(double value) {
 }
 
 double run_process(std::vector<std::string> args, const std::filesystem::path& out,
-                   double* cpu) {
+                   double* cpu, double* max_rss_mb) {
   std::vector<char*> argv;
   for (std::string& s : args) argv.push_back(s.data());
   argv.push_back(nullptr);
@@ -137,6 +137,7 @@ double run_process(std::vector<std::string> args, const std::filesystem::path& o
     *cpu = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
            1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   }
+  if (max_rss_mb != nullptr) *max_rss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB
   return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? seconds : -1.0;
 }
 

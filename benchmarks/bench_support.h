@@ -74,10 +74,11 @@ void register_fast_reference_benchmarks();
 void register_fluid_benchmarks();
 
 // Runs argv (argv[0] a path) with stdout to `out`; the wall time in
-// seconds, < 0 on failure, and in *cpu (when given) the child's user +
-// system CPU time: a whole process, as the user runs it.
+// seconds, < 0 on failure, in *cpu (when given) the child's user + system
+// CPU time and in *max_rss_mb (when given) its peak resident memory [MiB]:
+// a whole process, as the user runs it.
 double run_process(std::vector<std::string> args, const std::filesystem::path& out,
-                   double* cpu = nullptr);
+                   double* cpu = nullptr, double* max_rss_mb = nullptr);
 
 // The number after "key": in a run's JSON line (either spacing); -1 if absent.
 double json_number(const std::string& text, const std::string& key);

@@ -3,10 +3,12 @@
 #pragma once
 
 #include <cmath>
+#include <random>
 
 #include "models/springs/drag.h"
 #include "models/springs/gravity.h"
 #include "models/core/scene.h"
+#include "models/fluids/fluids.h"
 #include "models/springs/springs.h"
 #include "models/springs/wind.h"
 
@@ -70,6 +72,36 @@ inline Scene compressed_chain() {
                            1.0, p == 6});
     s.block<Springs>().push_back({p - 1, p, 100.0, 1.0, 0.0});
   }
+  return s;
+}
+
+// A random blob of fluid without walls, gravity or planes, compressed so
+// that every particle has pressure (the rest density below every
+// particle's), moving at random; the first `fixed` particles are walls.
+inline Scene fluid_blob(int dim, int n, unsigned seed, double viscosity, int fixed = 0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Scene s;
+  s.dimension = dim;
+  const double side = std::pow(static_cast<double>(n), 1.0 / dim) * 0.1;
+  for (int p = 0; p < n; ++p) {
+    Particle q;
+    for (int r = 0; r < dim; ++r) {
+      q.x[r] = 0.5 * side * u(rng);
+      q.v[r] = u(rng);
+    }
+    q.mass = 0.01 * (1.0 + 0.2 * u(rng));
+    q.fixed = p < fixed;
+    if (q.fixed) q.v.setZero();
+    s.particles.push_back(q);
+  }
+  Fluid f;
+  f.count = n;
+  f.spacing = 0.1;
+  f.density = 0.2 / std::pow(0.1, dim) * 0.01;
+  f.speed_of_sound = 3.0;
+  f.viscosity = viscosity;
+  s.block<Fluids>().push_back(f);
   return s;
 }
 

@@ -20,6 +20,7 @@
 #include "models/fluids/neighbour_grid.h"
 #include "models/fluids/sph_kernel.h"
 #include "models/model/scene_file.h"
+#include "scenes_for_tests.h"
 
 namespace springlab {
 namespace {
@@ -149,36 +150,9 @@ TEST(FluidNeighbours, APointNotFiniteHasNoPartners) {
 
 // ---- Forces ----
 
-// A random blob of fluid without walls, gravity or planes, compressed so
-// that every particle has pressure, moving at random.
-Scene random_blob(int dim, int n, unsigned seed, double viscosity) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Scene s;
-  s.dimension = dim;
-  const double side = std::pow(static_cast<double>(n), 1.0 / dim) * 0.1;
-  for (int p = 0; p < n; ++p) {
-    Particle q;
-    for (int r = 0; r < dim; ++r) {
-      q.x[r] = 0.5 * side * u(rng);
-      q.v[r] = u(rng);
-    }
-    q.mass = 0.01 * (1.0 + 0.2 * u(rng));
-    s.particles.push_back(q);
-  }
-  Fluid f;
-  f.count = n;
-  f.spacing = 0.1;
-  f.density = 0.2 / std::pow(0.1, dim) * 0.01;  // below every particle's density
-  f.speed_of_sound = 3.0;
-  f.viscosity = viscosity;
-  s.block<Fluids>().push_back(f);
-  return s;
-}
-
 TEST(FluidForces, ConserveMomentumWithoutBoundaries) {
   for (int dim : {2, 3}) {
-    const Model model(random_blob(dim, 200, 3, 0.05));
+    const Model model(testing::fluid_blob(dim, 200, 3, 0.05));
     Vector f;
     model.force(0.0, model.initial_positions(), model.initial_velocities(), f);
     Eigen::Vector3d total = Eigen::Vector3d::Zero();
@@ -200,7 +174,7 @@ TEST(FluidForces, ConserveMomentumWithoutBoundaries) {
 // pressure's force against its energy.
 TEST(FluidForces, JacobiansMatchCentralDifferences) {
   for (int dim : {2, 3}) {
-    const Model model(random_blob(dim, dim == 2 ? 40 : 30, 11, 0.05));
+    const Model model(testing::fluid_blob(dim, dim == 2 ? 40 : 30, 11, 0.05));
     const Vector x = model.initial_positions(), v = model.initial_velocities();
     SparseMatrix dfdx, dfdv;
     model.jacobians(0.0, x, v, &dfdx, &dfdv);
@@ -236,7 +210,7 @@ TEST(FluidForces, JacobiansMatchCentralDifferences) {
 // The pattern follows the neighbours: after the particles rearrange, the
 // Jacobian comes on a new pattern (a new version) and is still exact.
 TEST(FluidForces, PatternFollowsTheNeighbours) {
-  const Model model(random_blob(2, 40, 5, 0.05));
+  const Model model(testing::fluid_blob(2, 40, 5, 0.05));
   ASSERT_TRUE(model.pattern_varies());
   const Vector x = model.initial_positions(), v = model.initial_velocities();
   SparseMatrix dfdx, dfdv;
@@ -542,7 +516,7 @@ std::vector<std::unique_ptr<PositionProjection>> projections_of(const Model& mod
 // projections lower the compression.
 TEST(FluidPositionBased, ProjectionKeepsMomentumAndRelievesCompression) {
   for (int dim : {2, 3}) {
-    const Scene scene = random_blob(dim, dim == 2 ? 150 : 120, 9, 0.0);
+    const Scene scene = testing::fluid_blob(dim, dim == 2 ? 150 : 120, 9, 0.0);
     const Model model(scene);
     auto projections = projections_of(model);
     ASSERT_EQ(projections.size(), 1u);

@@ -75,8 +75,15 @@ class CursorSpring final : public MechanicalSystem, public FastSolverViews {
   double admissible_fraction(const Vector& x, const Vector& dx) const override {
     return model_.admissible_fraction(x, dx);
   }
+  bool has_trust_region() const override { return model_.has_trust_region(); }
+  double trusted_fraction(const Vector& x, const Vector& dx) const override {
+    return model_.trusted_fraction(x, dx);
+  }
   void lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const override {
     model_.lag_normal_forces(x_lag, v_lag, h);
+  }
+  bool follow_lagged_contacts(const Vector* x, const Vector* v, double h) const override {
+    return model_.follow_lagged_contacts(x, v, h);
   }
   const FastSolverViews* fast_solver_views() const override { return this; }
 

@@ -19,15 +19,10 @@ void IncrementalPotentialCheck::begin(VelocityStep& step, double tol) {
   active_ = step.has_potential() && !s.discrete_gradient;
   if (!active_) return;
   // v_kept: x*(v) = x_n + x_o + h (a v_n + b v) = x_n.
-  const Vector& v_n = step.start();
+  const Vector& v_n = step.v_n();
   v_kept_ = (-s.a / s.b) * v_n;
   if (s.x_offset != nullptr) v_kept_ -= (1.0 / (step.h() * s.b)) * *s.x_offset;
-  double magnitude_kept = 0.0, magnitude_n = 0.0;
-  step.stage(v_kept_);
-  phi_kept_ = step.potential(v_kept_, magnitude_kept);
-  step.stage(v_n);
-  const double phi_n = step.potential(v_n, magnitude_n);
-  if (!std::isfinite(phi_kept_)) {
+  if (!start_potentials(step)) {
     active_ = false;  // nothing to compare with
     return;
   }
@@ -37,15 +32,31 @@ void IncrementalPotentialCheck::begin(VelocityStep& step, double tol) {
   judges_energy_ = s.a == 0.0 && s.b == 1.0 && s.c == 1.0 &&
                    s.weight == 1.0 && s.inertia == nullptr && s.x_offset == nullptr &&
                    step.system().velocity_dependence() == VelocityDependence::kNone;
+}
+
+bool IncrementalPotentialCheck::start_potentials(VelocityStep& step) {
+  follows_ = step.follows();
+  const Vector& v_n = step.start();
+  double magnitude_kept = 0.0, magnitude_n = 0.0;
+  step.stage(v_kept_);
+  phi_kept_ = step.potential(v_kept_, magnitude_kept);
+  step.stage(v_n);
+  const double phi_n = step.potential(v_n, magnitude_n);
+  if (!std::isfinite(phi_kept_)) return false;
   // (A non-finite Phi(v_n): a state with no energy.)
   const bool kept_lower = !(phi_n < phi_kept_);
   phi_start_ = kept_lower ? phi_kept_ : phi_n;
   noise_scale_ = kept_lower ? magnitude_kept : std::max(magnitude_kept, magnitude_n);
+  return true;
 }
 
 std::string IncrementalPotentialCheck::judge(VelocityStep& step, const Vector& v, double tol,
                                              Vector& r, NewtonLinearSolver& linear) {
   if (!active_) return {};
+  // Where the solve set the step up again (the contacts between bodies found
+  // again at an iterate: VelocityStep::follow), Phi is another function:
+  // the start's values are those of the step as it now is.
+  if (step.follows() != follows_ && !start_potentials(step)) return {};
   double magnitude_end = 0.0;
   step.stage(v);
   const double phi_end = step.potential(v, magnitude_end);
@@ -54,7 +65,7 @@ std::string IncrementalPotentialCheck::judge(VelocityStep& step, const Vector& v
   double noise = std::max(kRoundoff * std::max(noise_scale_, magnitude_end),
                           std::numeric_limits<double>::min());
   // Backward Euler's energy H(v) = Phi(v) - |v - v_n|^2_M / 2 + |v|^2_M / 2.
-  const Vector& v_n = step.start();
+  const Vector& v_n = step.v_n();
   const Vector& mass = step.system().mass();
   const bool energy_judged = judges_energy_;
   double inertia = 0.0, kinetic = 0.0;

@@ -78,7 +78,12 @@ class IncrementalPotentialCheck {
                     NewtonLinearSolver& linear);
 
  private:
+  // Phi at v_kept and v_n (phi_kept_, phi_start_ the lower, noise_scale_);
+  // false where Phi(v_kept) is not finite (nothing to compare with).
+  bool start_potentials(VelocityStep& step);
+
   bool active_ = false, judges_energy_ = false;
+  long follows_ = 0;  // VelocityStep::follows() when the above were taken
   double phi_start_ = 0.0, phi_kept_ = 0.0, noise_scale_ = 0.0, resolution_ = 0.0;
   Vector v_kept_, d_;
 };

@@ -34,8 +34,9 @@ bool LineSearch::accept(NewtonProblem& problem, const Line& line, double alpha) 
 
 bool LineSearch::expand(NewtonProblem& problem, const Line& line, double& alpha) {
   double best_phi = line.phi, best_magnitude = line.magnitude, best_alpha = 0.0;
+  const double trusted = problem.trusted_fraction(line.v, line.dv);
   for (int k = 0; k < 40; ++k, alpha *= 2.0) {
-    if (alpha * line.update > kMaxEscape) break;
+    if (alpha * line.update > kMaxEscape || alpha > trusted) break;
     trial_.v = line.v + alpha * line.dv;
     problem.residual(trial_.v, trial_.r);
     trial_.phi = problem.potential(trial_.v, trial_.magnitude);
@@ -67,9 +68,12 @@ bool LineSearch::search(NewtonProblem& problem, const Line& line, bool negative_
     // keeps the gaps open).
     if (kGapCap * cap >= kShortestStep) alpha = std::min(alpha, kGapCap * cap);
   }
+  // The trust region: its fraction, and the floor below relative to it.
+  const double trusted = std::min(1.0, problem.trusted_fraction(line.v, line.dv));
+  alpha = std::min(alpha, trusted);
   // With a descent direction of the potential the search cannot fail but
   // to round-off.
-  const double alpha_min = line.minimize && definite ? 1e-12 : kShortestStep;
+  const double alpha_min = (line.minimize && definite ? 1e-12 : kShortestStep) * trusted;
   for (;;) {
     trial_.v = line.v + alpha * line.dv;
     problem.residual(trial_.v, trial_.r);

@@ -14,6 +14,13 @@
 // search starts at kGapCap = 0.9 of the fraction of dv at which the first
 // gap would close, instead of finding the closed gap by halving.
 //
+// The trust region (NewtonProblem::trusted_fraction: a fluid's water
+// particles move at most h/2 per update, docs/physics.md "Implicit steps
+// on a fluid"): the search starts at most at the fraction of dv that keeps
+// every particle within it, halves from there (down to that fraction times
+// the search's own floor), and a longer step along negative curvature
+// stops there too.
+//
 // Negative curvature. Where CG stopped at its first product (dv is a
 // direction along which the potential curves down: a saddle of Phi, a
 // buckling cloth), the step's equations have solutions of lower Phi nearby:

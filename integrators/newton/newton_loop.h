@@ -82,6 +82,10 @@ class NewtonLoop {
 
  private:
   void start(NewtonProblem& problem, Vector& v);
+  // Where the start's forces are defined but its state is not allowed (the
+  // step's end past a barrier's gap, NewtonProblem::allowed): a start
+  // between a state the last step accepted and it, as near it as allowed.
+  void allowed_start(NewtonProblem& problem, Vector& v);
   // dv (and, with a rank-one term, q) at v in the mode: false, with `error`.
   bool compute_update(NewtonProblem& problem, NewtonLinearSolver& linear, const Vector& v,
                       std::string& error);

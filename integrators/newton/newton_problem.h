@@ -59,8 +59,20 @@ class NewtonProblem {
   virtual double admissible_fraction(const Vector& /*v*/, const Vector& /*dv*/) {
     return std::numeric_limits<double>::infinity();
   }
+  // The fraction of dv from v beyond which an update moves some part of
+  // the state further than the problem's trust region (+infinity: none;
+  // MechanicalSystem::trusted_fraction): the line search starts there.
+  virtual double trusted_fraction(const Vector& /*v*/, const Vector& /*dv*/) {
+    return std::numeric_limits<double>::infinity();
+  }
   // Whether the v of the last residual() is allowed beyond r being finite.
   virtual bool allowed() { return true; }
+  // The iteration has moved to v (an iterate the line search accepted): a
+  // problem whose equations are set up around where the iteration is (the
+  // contacts a step keeps, found again there) sets them up around v. True
+  // when r and Phi changed (the loop then evaluates them again at v); never
+  // where v would then leave the allowed states.
+  virtual bool follow(const Vector& /*v*/) { return false; }
 };
 
 }  // namespace springlab

@@ -191,7 +191,7 @@ void Lbfgs::remember(double step_length) {
 bool Lbfgs::solve(VelocityStep& step, const CountedModel& model, const Vector& inv_mass,
                   double tol, int max_iterations, Vector& v) {
   const double h = step.h();
-  const Vector& v_n = step.start();
+  const Vector& v_n = step.v_n();
   IntegratorStats& stats = model.stats();
   if (!factor_h0(h, step.scheme().b, stats)) return false;
   s_.clear();

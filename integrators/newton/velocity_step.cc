@@ -18,6 +18,16 @@ void VelocityStep::begin(double t, const Vector& x, const Vector& v, double h,
   v_ = &v;
   h_ = h;
   s_ = scheme;
+  // With a trust region, the start is the inertial prediction v_n cut back
+  // into it from the stage at x_n (start_): v_n itself where it moves no
+  // particle further than the region's length.
+  rest_start_ = false;
+  if (model_->system().has_trust_region() && (accepted_start(start_) || fallback_start(start_))) {
+    const Vector towards = *v_ - start_;
+    const double alpha = trusted_fraction(start_, towards);
+    rest_start_ = alpha < 1.0;
+    if (rest_start_) start_ += alpha * towards;
+  }
   if (s_.discrete_gradient) {
     v_start_potential_ = model_->system().position_potential(t_ + s_.t_eval_offset * h_, x);
   }
@@ -207,10 +217,42 @@ double VelocityStep::admissible_fraction(const Vector& v, const Vector& dv) {
   return fraction;
 }
 
+double VelocityStep::trusted_fraction(const Vector& v, const Vector& dv) {
+  const VelocityImplicitScheme& s = s_;
+  const MechanicalSystem& system = model_->system();
+  if (!system.has_trust_region()) return std::numeric_limits<double>::infinity();
+  x_cap_ = *x_ + h_ * (s.a * *v_ + s.b * v);
+  if (s.x_offset != nullptr) x_cap_ += *s.x_offset;
+  dx_cap_ = (h_ * s.b) * dv;
+  double fraction = system.trusted_fraction(x_cap_, dx_cap_);
+  if (s.end != 1.0) {
+    x_cap_ = *x_ + s.end * (x_cap_ - *x_);
+    dx_cap_ *= s.end;
+    fraction = std::min(fraction, system.trusted_fraction(x_cap_, dx_cap_));
+  }
+  return fraction;
+}
+
 bool VelocityStep::allowed() {
   if (s_.end == 1.0 || !has_forbidden_states()) return true;
   x_end_ = *x_ + s_.end * (xs_ - *x_);
   return std::isfinite(model_->system().position_potential(t_ + h_, x_end_));
+}
+
+bool VelocityStep::follow(const Vector& v) {
+  const MechanicalSystem& system = model_->system();
+  stage(v);
+  if (!system.follow_lagged_contacts(&xs_, &v, h_)) return false;
+  // (residual() and potential() at v with the contacts found there.)
+  residual(v, f_part_);
+  double magnitude = 0.0;
+  if (f_part_.allFinite() && allowed() &&
+      (!has_potential() || std::isfinite(potential(v, magnitude)))) {
+    ++follows_;
+    return true;
+  }
+  system.follow_lagged_contacts(nullptr, nullptr, 0.0);
+  return false;
 }
 
 void VelocityStep::update_frozen(Vector& r, double& phi) {

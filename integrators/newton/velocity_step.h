@@ -69,9 +69,18 @@ class VelocityStep final : public NewtonProblem {
   double t() const { return t_; }  // t_n
   double h() const { return h_; }
   const Vector& x() const { return *x_; }  // x_n
+  const Vector& v_n() const { return *v_; }  // (start() may differ: below)
   const MechanicalSystem& system() const { return model_->system(); }
 
-  const Vector& start() const override { return *v_; }
+  // v_n; where the system has a trust region (MechanicalSystem::
+  // has_trust_region: a fluid) and v_n's stage moves a particle beyond it
+  // from x_n, v_n cut back towards the v whose stage is x_n
+  // (accepted_start, else fallback_start) until it no longer does: the
+  // inertial prediction x_n + h v_n may carry a particle through a wall
+  // thinner than h |v_n| (a fluid's wall of particles), and Newton, moving
+  // each particle a little at a time from there, finds the solution beyond
+  // it.
+  const Vector& start() const override { return rest_start_ ? start_ : *v_; }
   // (||x_n||_inf + ||x_o||_inf) / (h w |b|): the stage moves by h w b per
   // unit of v (its positions' round-off, newton_problem.h).
   double position_resolution() const override;
@@ -91,9 +100,19 @@ class VelocityStep final : public NewtonProblem {
   // midpoint methods, of the step's end -- would close
   // (MechanicalSystem::admissible_fraction).
   double admissible_fraction(const Vector& v, const Vector& dv) override;
+  // The fraction of dv within the system's trust region at the stage --
+  // and, for the midpoint methods, at the step's end
+  // (MechanicalSystem::trusted_fraction).
+  double trusted_fraction(const Vector& v, const Vector& dv) override;
   // Where some states have no energy, a trial whose step would end in one
   // is refused even when the forces' state (the midpoint) is allowed.
   bool allowed() override;
+  // The contacts between bodies found again at the stage x*(v)
+  // (MechanicalSystem::follow_lagged_contacts), unless r or Phi at v would
+  // then not be finite or the step's end not allowed.
+  bool follow(const Vector& v) override;
+  // How many times follow() has set the step up again (over all steps).
+  long follows() const { return follows_; }
 
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
@@ -131,6 +150,8 @@ class VelocityStep final : public NewtonProblem {
   Vector xs_, vs_, f_, f_part_;
   Vector x_end_;           // a trial's step end (allowed)
   Vector x_cap_, dx_cap_;  // the step cap's state and step (admissible_fraction)
+  bool rest_start_ = false;  // start() is start_, not v_n
+  Vector start_;
   // The discrete gradient's: D = y - x_n, y = x_n + D, the correction's
   // coefficient c (0: left out), F at y, the rank-one term's vector z.
   Vector delta_, y_, f_end_, z_;
@@ -149,6 +170,7 @@ class VelocityStep final : public NewtonProblem {
   bool frozen_ = false;
   double frozen_c_ = 0.0;
   double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
+  long follows_ = 0;
 };
 
 }  // namespace springlab

@@ -156,6 +156,32 @@ class BodyBodyContactForce final : public ForceTerm {
     lagged_ = true;
   }
 
+  // The contacts found again at an iterate c of the step's solve, each a
+  // plane through its pieces' closest points at c, in place of the kept
+  // ones (follow_lagged_contacts). A kept plane holds its two material
+  // points apart along its normal of the step's start; as the bodies move
+  // (an edge sliding along another, a box turning on its edge) other points
+  // of the same pieces come closer than those, and the surfaces cross
+  // (BodyContactFinder::overlap) where no kept gap closes: the iterate is
+  // then pinned there. Found again at c, the planes are those of the pieces'
+  // distances there. Not where a gap found at c is closed (the kept
+  // contacts let c be reached, the new ones would give it no energy).
+  // c null: the contacts of before the last call again.
+  bool follow_lag(const Configuration* c, double h) override {
+    if (!lagged_) return false;
+    if (c == nullptr) {
+      frozen_.swap(found_);
+      return true;
+    }
+    place(c->x);
+    finder_.step_contacts(law_.distance, c->v, h, g_, found_);
+    for (const BodyContact& k : found_) {
+      if (law_.forbidden_between_bodies(k.d)) return false;
+    }
+    frozen_.swap(found_);
+    return true;
+  }
+
   bool pattern_varies() const override { return !fixed_pattern_; }
   std::string pattern_change() const override {
     return "bodies come near other bodies (more than " + std::to_string(kAllPairsBodies) +
@@ -264,6 +290,7 @@ class BodyBodyContactForce final : public ForceTerm {
   std::size_t begin_, count_;  // the bodies' unknowns in the state
   bool lagged_ = false;
   std::vector<BodyContact> frozen_;
+  std::vector<BodyContact> found_;  // follow_lag's: the contacts kept before
   mutable std::vector<BodyContact> live_;
   mutable bool live_valid_ = false;
   mutable std::vector<double> placed_;

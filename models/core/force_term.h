@@ -208,6 +208,13 @@ class ForceTerm {
   virtual double admissible_fraction(const Configuration&, const double* /*dx*/) const {
     return std::numeric_limits<double>::infinity();
   }
+  // MechanicalSystem::has_trust_region and trusted_fraction for this term
+  // (dx as above): a fluid's pressure, whose water particles should move at
+  // most h/2 per update of an iterative solve (fluid_pressure_force.cc).
+  virtual bool has_trust_region() const { return false; }
+  virtual double trusted_fraction(const Configuration&, const double* /*dx*/) const {
+    return std::numeric_limits<double>::infinity();
+  }
   // Vertex block descent's view (models/vertex_blocks.h, VertexBlockView):
   // for each of `count` free particles p (the k-th's blocks at out.f +
   // k dim, out.dfdx + k dim^2, out.dfdv + k dim^2, row-major), adds this
@@ -261,6 +268,10 @@ class ForceTerm {
   // evaluate live again. Friction lags its normal forces; contact between
   // bodies keeps the contacts it finds there.
   virtual void lag(const Configuration* /*c*/, double /*h*/) {}
+  // MechanicalSystem::follow_lagged_contacts: while lagged, the contacts a
+  // term keeps found again at c (null: those of before the last call);
+  // true when they changed.
+  virtual bool follow_lag(const Configuration* /*c*/, double /*h*/) { return false; }
 };
 
 }  // namespace springlab

@@ -19,7 +19,9 @@
 //      definite matrix), jacobian_pattern, pattern_varies and pattern_version
 //      (a symbolic factorization kept per pattern), jacobian_symmetric,
 //      velocity_dependence, has_forbidden_states and admissible_fraction (the
-//      barrier's step cap), lag_normal_forces (friction lagged for one solve).
+//      barrier's step cap), has_trust_region and trusted_fraction (how far
+//      one update may move a particle), lag_normal_forces (friction lagged
+//      for one solve).
 //   3. The fast solvers' views of the same forces, not in this interface:
 //      FastSolverViews (models/core/fast_solver_views.h), which a system hands
 //      out through fast_solver_views() (nullptr: none). projective_form
@@ -175,6 +177,20 @@ class MechanicalSystem {
   virtual double admissible_fraction(const Vector& /*x*/, const Vector& /*dx*/) const {
     return std::numeric_limits<double>::infinity();
   }
+  // A trust region (docs/physics.md "Implicit steps on a fluid"): true when
+  // some forces are described by their value and Jacobians at x only over a
+  // short distance, shorter than a large step can move a particle (a
+  // fluid's: a particle feels its neighbours through a kernel of support
+  // 2h, and a wall of particles through its pressure only once within that
+  // support). An iterative solver then moves no particle further than that
+  // in one update, and starts a step from its last accepted positions.
+  virtual bool has_trust_region() const { return false; }
+  // The largest alpha (+infinity: no bound) such that x + alpha dx moves no
+  // particle further than the trust region's length (a fluid's water
+  // particle: half its smoothing length).
+  virtual double trusted_fraction(const Vector& /*x*/, const Vector& /*dx*/) const {
+    return std::numeric_limits<double>::infinity();
+  }
 
   // Lagged normal forces (docs/physics.md "Contact with planes"): with x_lag, Coulomb
   // friction takes its normal force f_n from x_lag instead of from the
@@ -189,6 +205,17 @@ class MechanicalSystem {
   // bodies"); v_lag may be null (then h is not read).
   virtual void lag_normal_forces(const Vector* /*x_lag*/, const Vector* /*v_lag*/,
                                  double /*h*/) const {}
+  // While lagged: the contacts between bodies found again at x, an iterate
+  // of the step's solve (Newton's accepted iterate's state), as far as the
+  // bodies can move in h at v, in place of those found at the step's start
+  // (IPC's constraint set, found at every iterate: Li et al. 2020, sec. 4).
+  // True when they changed (the step's equations then did); x null: the
+  // contacts of before the last such call again. Friction's normal forces
+  // stay those of the step's start.
+  virtual bool follow_lagged_contacts(const Vector* /*x*/, const Vector* /*v*/,
+                                      double /*h*/) const {
+    return false;
+  }
 
   // Part 3: the fast solvers' views of the same forces
   // (models/core/fast_solver_views.h), or nullptr when the system has none (a

@@ -288,6 +288,28 @@ double Model::admissible_fraction(const Vector& x, const Vector& dx) const {
   return fraction;
 }
 
+bool Model::has_trust_region() const {
+  for (const auto& term : terms_) {
+    if (term->has_trust_region()) return true;
+  }
+  return false;
+}
+
+double Model::trusted_fraction(const Vector& x, const Vector& dx) const {
+  double fraction = std::numeric_limits<double>::infinity();
+  if (!has_trust_region()) return fraction;
+  x_all_.head(dofs()) = x;
+  dx_all_.setZero(x_all_.size());
+  dx_all_.head(dofs()) = dx;
+  const Configuration c = stored_configuration(0.0);
+  for (const auto& term : terms_) {
+    if (term->has_trust_region()) {
+      fraction = std::min(fraction, term->trusted_fraction(c, dx_all_.data()));
+    }
+  }
+  return fraction;
+}
+
 double Model::velocity_potential(double t, const Vector& v) const {
   if (!derives_from_potentials_ || !reads_velocity_) return 0.0;  // no term has a W
   v_all_.head(dofs()) = v;
@@ -554,6 +576,18 @@ void Model::lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h
     symmetric_ = symmetric_ && term->symmetric_jacobians();
     derives_from_potentials_ = derives_from_potentials_ && term->derives_from_potentials();
   }
+}
+
+bool Model::follow_lagged_contacts(const Vector* x, const Vector* v, double h) const {
+  if (x != nullptr) x_all_.head(dofs()) = *x;
+  if (x != nullptr && v != nullptr) v_all_.head(dofs()) = *v;
+  Configuration c = stored_configuration(0.0);
+  c.v = x != nullptr && v != nullptr ? v_all_.data() : nullptr;
+  bool changed = false;
+  for (const auto& term : terms_) {
+    if (term->follow_lag(x != nullptr ? &c : nullptr, h)) changed = true;
+  }
+  return changed;
 }
 
 void Model::plane_constraints(std::vector<PlaneConstraint>& out) const {

@@ -77,7 +77,10 @@ class Model final : public MechanicalSystem,
   // in scene terms; empty when it is not one.
   std::string forbidden_state(const Vector& x) const;
   double admissible_fraction(const Vector& x, const Vector& dx) const override;
+  bool has_trust_region() const override;
+  double trusted_fraction(const Vector& x, const Vector& dx) const override;
   void lag_normal_forces(const Vector* x_lag, const Vector* v_lag, double h) const override;
+  bool follow_lagged_contacts(const Vector* x, const Vector* v, double h) const override;
   const FastSolverViews* fast_solver_views() const override { return this; }
 
   // FastSolverViews (fast_solver_views.h), gathered from the same terms.

@@ -126,7 +126,7 @@ Box dam_break_box(const Values& p) {
   b.dim = static_cast<int>(p.at("dimension"));
   b.l = l;
   b.nx = cells(5.0 * a, l);
-  b.ny_wall = cells(2.5 * a, l);
+  b.ny_wall = cells(p.at("walls") * a, l);
   b.nz = b.dim == 3 ? cells(0.5 * a, l) : 1;
   b.nx_water = cells(a, l);
   b.ny_water = cells(2.0 * a, l);
@@ -268,7 +268,11 @@ const SceneEntry& dam_break_scene() {
       "dam-break",
           "a water column a wide and 2a high released against the wall of a box 5a long "
           "(Martin and Moyce 1952), weakly compressible SPH with wall particles",
-         with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive)},
+         with({param("a", 0.1, "width of the column (its height is 2a) [m]", Range::kPositive),
+               param("walls", 2.5,
+                     "height of the box's walls as a multiple of a (water thrown higher spills "
+                     "over them)",
+                     Range::kPositive)},
               fluid_params(0.005, 0.02)),
          build_dam_break, dam_break_counts, "spacing");
   return entry;
