@@ -15,7 +15,7 @@
 #include "models/bodies/body_distance.h"
 #include "models/bodies/mass_properties.h"
 
-namespace springlab {
+namespace springlab::test_body_distance {
 namespace {
 
 using Points = std::vector<Eigen::Vector3d>;
@@ -192,4 +192,4 @@ TEST(BodyDistance, SegmentMeetsTriangleAndWindingNumber) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_body_distance

@@ -23,7 +23,7 @@
 #include "models/model/model_memory.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_memory_estimate {
 namespace {
 
 using namespace springlab::testing;
@@ -185,4 +185,4 @@ TEST_F(MemoryLimitsEstimate, AFluidOverTheLimitIsRefusedBeforeItsModel) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_memory_estimate

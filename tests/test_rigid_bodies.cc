@@ -31,7 +31,7 @@
 #include "run_process.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_rigid_bodies {
 namespace {
 
 double relative(double a, double b) { return std::abs(a - b) / std::abs(b); }
@@ -695,4 +695,4 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegratorOnBodies,
                          ::testing::ValuesIn(integrator_names()), testing::registry_test_name);
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_rigid_bodies

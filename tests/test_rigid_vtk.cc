@@ -13,7 +13,7 @@
 #include "models/core/scene.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_rigid_vtk {
 namespace {
 
 using namespace springlab::testing;
@@ -79,4 +79,4 @@ TEST(RigidVtk, BodySurfaceIsDrawnAsTrianglesAtPPlusAX) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_rigid_vtk
