@@ -67,7 +67,9 @@ TEST(MemoryEstimate, BodyPairsAreCountedAsTheModelMakesThem) {
     const std::size_t pairs =
         BodyPairBlocks::first_pairs(finder, scene.get<Contact>().distance_or_default(), fixed).size();
     EXPECT_EQ(fixed, scene.get<Bodies>().size() <= 16u);
-    if (fixed) EXPECT_GT(pairs, 0u);
+    if (fixed) {
+      EXPECT_GT(pairs, 0u);
+    }
     const MemoryEstimate e = estimate_model_memory(scene);
     int terms = 0;
     for (const MemoryPart& part : e.parts) {
