@@ -25,6 +25,15 @@ endif()
 option(SPRINGLAB_CLOSED_WINGS "Link each wing alone with -Wl,--no-undefined (off under sanitizers and fuzzers)"
        ${closed_default})
 set(SPRINGLAB_WING_HEADERS_ROOT ${PROJECT_BINARY_DIR}/wings)
+# A unity build: each wing's files compiled SPRINGLAB_UNITY_BATCH at a time,
+# as one translation unit (CMake's UNITY_BUILD), so that the headers every
+# file includes (Eigen, the standard library, nlohmann/json) are parsed and
+# their templates instantiated once per batch instead of once per file
+# (docs/performance.md "Build time"). Names private to a file (anonymous
+# namespaces) must then differ within a wing. -DSPRINGLAB_UNITY=OFF compiles
+# file by file (an edit then recompiles one file, not its batch).
+option(SPRINGLAB_UNITY "Compile each wing's files in batches (a unity build)" ON)
+set(SPRINGLAB_UNITY_BATCH 8 CACHE STRING "files per unity batch")
 
 function(springlab_wing wing)
   cmake_parse_arguments(arg "" "" "FOLDERS;DEPENDS;LINK;EXCLUDE" ${ARGN})
@@ -61,6 +70,10 @@ function(springlab_wing wing)
   add_library(${target} STATIC ${sources})
   set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON
                         OUTPUT_NAME springlab_${wing} EXPORT_NAME ${wing})
+  if(SPRINGLAB_UNITY)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON
+                          UNITY_BUILD_BATCH_SIZE ${SPRINGLAB_UNITY_BATCH})
+  endif()
   target_include_directories(${target} PUBLIC
     $<BUILD_INTERFACE:${headers_dir}>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/springlab>)

@@ -27,7 +27,7 @@
 #include "models/springs/springs.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_body_contact {
 namespace {
 
 RunResult run(const Model& model, const std::string& integrator, double dt, double t_end,
@@ -445,4 +445,4 @@ TEST(BodyContact, BodiesThatStartInterpenetratingAreRefused) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_body_contact

@@ -15,7 +15,7 @@
 #include "models/bodies/body_distance.h"
 #include "models/bodies/mass_properties.h"
 
-namespace springlab {
+namespace springlab::test_body_distance {
 namespace {
 
 using Points = std::vector<Eigen::Vector3d>;
@@ -183,7 +183,7 @@ TEST(BodyDistance, SegmentMeetsTriangleAndWindingNumber) {
   EXPECT_FALSE(segment_meets_triangle({0.8, 0.8, -1}, {0.8, 0.8, 1}, a, b, c));
   EXPECT_TRUE(segment_meets_triangle({-1, 0.3, 0.5}, {1, 0.3, -0.5}, a, b, c));
   Points box;
-  std::vector<Triangle> triangles;
+  std::vector<SurfaceTriangle> triangles;
   box_surface(Eigen::Vector3d(1.0, 2.0, 3.0), box, triangles);
   EXPECT_NEAR(winding_number({0.1, 0.2, 0.3}, box, triangles), 1.0, 1e-12);
   EXPECT_NEAR(winding_number({0.45, -0.9, 1.4}, box, triangles), 1.0, 1e-12);
@@ -192,4 +192,4 @@ TEST(BodyDistance, SegmentMeetsTriangleAndWindingNumber) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_body_distance

@@ -14,7 +14,7 @@
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
 
-namespace springlab {
+namespace springlab::test_body_motion {
 namespace {
 
 TEST(BodyMotion, FramesHoldTheBodiesSurfaceVerticesAndTheSettingsTheirFaces) {
@@ -60,4 +60,4 @@ TEST(BodyMotion, FramesHoldTheBodiesSurfaceVerticesAndTheSettingsTheirFaces) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_body_motion

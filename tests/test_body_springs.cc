@@ -27,7 +27,7 @@
 #include "registry_suite.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_body_springs {
 namespace {
 
 class Recorder final : public Observer {
@@ -333,4 +333,4 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegratorOnBoxChain,
                          ::testing::ValuesIn(integrator_names()), testing::registry_test_name);
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_body_springs

@@ -25,7 +25,7 @@
 #include "models/model/scene_file.h"
 #include "models/core/scene.h"
 
-namespace springlab {
+namespace springlab::test_box_piles {
 namespace {
 
 std::string scene_file(const std::string& name) {
@@ -221,4 +221,4 @@ TEST(BoxPiles, AnExplicitMethodPastItsLimitSaysSo) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_box_piles

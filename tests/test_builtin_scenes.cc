@@ -18,7 +18,7 @@
 #include "models/fem/fem.h"
 #include "models/materials/material.h"
 
-namespace springlab {
+namespace springlab::test_builtin_scenes {
 namespace {
 
 using Overrides = std::vector<std::pair<std::string, std::string>>;
@@ -390,4 +390,4 @@ TEST(BuiltinScenesTest, ClothWindBlowsAlongZWithAOneSecondRelaxation) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_builtin_scenes

@@ -18,7 +18,7 @@
 #include "registry_suite.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_check {
 namespace {
 
 using testing::ProcessResult;
@@ -242,4 +242,4 @@ TEST(OwnMethods, DefinitionPluginsRunBesideTheBuiltins) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_check

@@ -33,7 +33,7 @@
 #error "SPRINGLAB_TEST_DATA must name tests/data"
 #endif
 
-namespace springlab {
+namespace springlab::test_cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -753,4 +753,4 @@ TEST_F(CliStability, ImplicitEulerStableUpToDtMax) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_cli

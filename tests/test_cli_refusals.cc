@@ -19,7 +19,7 @@
 
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_cli_refusals {
 namespace {
 
 namespace fs = std::filesystem;
@@ -317,9 +317,9 @@ TEST(CliStabilityBounds, NothingDivergingIsSaidSo) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_cli_refusals
 
-namespace springlab {
+namespace springlab::test_cli_refusals {
 namespace {
 
 // --jobs above the usable CPUs holds that many more models for no speed:
@@ -343,4 +343,4 @@ TEST(CliNotes, JobsAreCappedAtTheUsableCpus) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_cli_refusals

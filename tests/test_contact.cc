@@ -23,7 +23,7 @@
 #include "models/springs/springs.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_contact {
 namespace {
 
 // One particle of mass m at height y0 above the plane y = 0, under gravity g.
@@ -474,4 +474,4 @@ TEST(Contact, FrictionWorkIsTheEnergyLost) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_contact

@@ -21,7 +21,7 @@
 #include "models/model/scene_file.h"
 #include "models/model/element_registry.h"
 
-namespace springlab {
+namespace springlab::test_element_kinds {
 namespace {
 
 using testing::random_scene;
@@ -280,4 +280,4 @@ TEST(ElementKinds, EveryKindIsCompleteAndColumnsAgree) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_element_kinds

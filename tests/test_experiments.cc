@@ -40,7 +40,7 @@
 #include "models/model/model.h"
 #include "models/springs/springs.h"
 
-namespace springlab {
+namespace springlab::test_experiments {
 namespace {
 
 namespace fs = std::filesystem;
@@ -1510,4 +1510,4 @@ TEST(ExperimentKinds, SolverErrorComparesEachStepWithTheSameStepSolvedTightly) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_experiments

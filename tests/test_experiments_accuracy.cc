@@ -18,7 +18,7 @@
 #include "experiments/kinds/experiment.h"
 #include "integrators/registry/registry.h"
 
-namespace springlab {
+namespace springlab::test_experiments_accuracy {
 namespace {
 
 using Json = nlohmann::json;
@@ -429,4 +429,4 @@ TEST(ExperimentAccuracyWorkPrecision, OscillatorMayUseTheExactSolution) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_experiments_accuracy

@@ -17,7 +17,7 @@
 #include "csv_fields.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_failure_paths {
 namespace {
 
 namespace fs = std::filesystem;
@@ -209,4 +209,4 @@ TEST_F(FailurePaths, TextSummaryNamesTheLastRow) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_failure_paths

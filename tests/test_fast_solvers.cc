@@ -20,7 +20,7 @@
 #include "models/springs/springs.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_fast_solvers {
 namespace {
 
 // The oscillator (one spring of rest length 0: a linear force) with gravity,
@@ -705,4 +705,4 @@ TEST(FastSolvers, ASystemWithoutViewsIsRefusedAndNewtonStillRunsIt) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fast_solvers

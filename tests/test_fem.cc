@@ -28,7 +28,7 @@
 #include "registry_suite.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_fem {
 namespace {
 
 // The scene with every particle at x = A X + b (X its rest position), all
@@ -457,9 +457,9 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegratorOnElements,
                          ::testing::ValuesIn(integrator_names()), testing::registry_test_name);
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fem
 
-namespace springlab {
+namespace springlab::test_fem {
 namespace {
 
 std::string scene_refusal(const std::string& name,
@@ -516,9 +516,9 @@ TEST(FemMaterials, PoissonRatiosWithoutAStableRestStateAreRefusedWithTheReason) 
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fem
 
-namespace springlab {
+namespace springlab::test_fem {
 namespace {
 
 // The largest total energy of the states a run accepts (t = 0 included).
@@ -654,4 +654,4 @@ TEST(FemSolvers, ImplicitEulerQuasiNewtonRefusesAnAnswerThatGainsEnergy) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fem

@@ -25,7 +25,7 @@
 #include "models/core/scene.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_fem_equilibrium {
 namespace {
 
 // A unit square (cube) of n^dim cells, rest position X of grid point
@@ -243,4 +243,4 @@ INSTANTIATE_TEST_SUITE_P(Registry, EquilibriumOfEveryModel, ::testing::ValuesIn(
                          });
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fem_equilibrium

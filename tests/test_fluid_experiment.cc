@@ -11,7 +11,7 @@
 
 #include "experiment_tasks.h"
 
-namespace springlab {
+namespace springlab::test_fluid_experiment {
 namespace {
 
 using Json = nlohmann::json;
@@ -184,4 +184,4 @@ TEST(FluidExperiment, DefinitionErrorsNameTheKey) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fluid_experiment

@@ -18,7 +18,7 @@
 #include "models/fluids/sph_particles.h"
 #include "scenes_for_tests.h"
 
-namespace springlab {
+namespace springlab::test_fluid_implicit {
 namespace {
 
 // The column assembly (no search) and the plain one (a binary search per
@@ -311,4 +311,4 @@ TEST(FluidFrameSteps, SloshingPeriodAtOneSixtieth) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fluid_implicit

@@ -22,7 +22,7 @@
 #include "models/model/scene_file.h"
 #include "scenes_for_tests.h"
 
-namespace springlab {
+namespace springlab::test_fluids {
 namespace {
 
 // ---- The kernel ----
@@ -659,4 +659,4 @@ TEST(FluidPositionBased, ProjectiveDynamicsRefusesNamingXpbd) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_fluids

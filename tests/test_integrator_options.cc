@@ -14,7 +14,7 @@
 #include "integrators/registry/registry.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_integrator_options {
 namespace {
 
 TEST(IntegratorOptions, EveryOptionAMethodReadsIsDeclared) {
@@ -98,4 +98,4 @@ TEST(IntegratorOptions, DefinitionsReadTheDeclaredNamesWithUnderscores) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_integrator_options

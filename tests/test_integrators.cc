@@ -15,7 +15,7 @@
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
-namespace springlab {
+namespace springlab::test_integrators {
 namespace {
 
 using testing::damped_windy_chain;
@@ -444,9 +444,9 @@ SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(EverySymplecticIntegrator, symplect
 SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(EveryNewtonIntegrator, iterates_newton);
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_integrators
 
-namespace springlab {
+namespace springlab::test_integrators {
 namespace {
 
 // A 2-D chain of 6 particles (the first fixed) whose springs join them in
@@ -558,9 +558,9 @@ TEST(Integrator, VerletOnASecondSpringDampedSceneIsRight) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_integrators
 
-namespace springlab {
+namespace springlab::test_integrators {
 namespace {
 
 // Issue #38: Newton's "no convergence" quoted a last update below the
@@ -589,4 +589,4 @@ TEST(ImplicitEuler, NoConvergenceSaysWhyAnUpdateBelowTheToleranceDidNotEndIt) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_integrators

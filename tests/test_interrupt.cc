@@ -18,6 +18,7 @@
 
 extern char** environ;
 
+namespace springlab_test_interrupt {
 namespace {
 
 namespace fs = std::filesystem;
@@ -92,7 +93,9 @@ TEST(Interrupt, CtrlCDuringASweepWritesFinishedTasksMarkedIncomplete) {
 }
 
 }  // namespace
+}  // namespace springlab_test_interrupt
 
+namespace springlab_test_interrupt {
 namespace {
 
 // A single task that would run for minutes (a bisection at --rel-tol 1e-16
@@ -199,3 +202,4 @@ TEST(Interrupt, SignalStopsTheRigidReferenceWithinASecond) {
 }
 
 }  // namespace
+}  // namespace springlab_test_interrupt

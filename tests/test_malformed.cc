@@ -29,7 +29,7 @@
 #error "SPRINGLAB_MALFORMED must name tests/malformed"
 #endif
 
-namespace springlab {
+namespace springlab::test_malformed {
 namespace {
 
 namespace fs = std::filesystem;
@@ -290,4 +290,4 @@ TEST_F(MalformedGenerated, SceneCommandOverTheCap) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_malformed

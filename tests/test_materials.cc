@@ -20,7 +20,7 @@
 #include "models/materials/kernels/tet_kernel.h"
 #include "registry_suite.h"
 
-namespace springlab {
+namespace springlab::test_materials {
 namespace {
 
 struct MaterialCase {
@@ -450,4 +450,4 @@ TEST(Materials, NearestUnitVolumeIsTheNearestMatrixOfUnitJ) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_materials

@@ -23,7 +23,7 @@
 #include "models/model/model_memory.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_memory_estimate {
 namespace {
 
 using namespace springlab::testing;
@@ -67,7 +67,9 @@ TEST(MemoryEstimate, BodyPairsAreCountedAsTheModelMakesThem) {
     const std::size_t pairs =
         BodyPairBlocks::first_pairs(finder, scene.get<Contact>().distance_or_default(), fixed).size();
     EXPECT_EQ(fixed, scene.get<Bodies>().size() <= 16u);
-    if (fixed) EXPECT_GT(pairs, 0u);
+    if (fixed) {
+      EXPECT_GT(pairs, 0u);
+    }
     const MemoryEstimate e = estimate_model_memory(scene);
     int terms = 0;
     for (const MemoryPart& part : e.parts) {
@@ -185,4 +187,4 @@ TEST_F(MemoryLimitsEstimate, AFluidOverTheLimitIsRefusedBeforeItsModel) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_memory_estimate

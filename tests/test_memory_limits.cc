@@ -20,7 +20,7 @@
 #include "integrators/linear/sparse_direct_solver.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_memory_limits {
 namespace {
 
 using namespace springlab::testing;
@@ -224,4 +224,4 @@ TEST_F(MemoryLimitsCli, NoLimitCrashes) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_memory_limits

@@ -22,7 +22,7 @@
 #include "random_scenes.h"
 #include "models/model/energy_layout.h"
 
-namespace springlab {
+namespace springlab::test_model {
 namespace {
 
 using testing::kind_named;
@@ -218,4 +218,4 @@ TEST(Model, StiffAndNonstiffPartsAddUpToTheWhole) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_model

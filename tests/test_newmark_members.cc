@@ -15,7 +15,7 @@
 #include "models/model/model.h"
 #include "models/scenes/builtin_scenes.h"
 
-namespace springlab {
+namespace springlab::test_newmark_members {
 namespace {
 
 TheoryLimit newmark_theory(double beta, double gamma, double w) {
@@ -79,4 +79,4 @@ TEST(VerletFamily, FailuresNameTheMethodThatRan) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_newmark_members

@@ -13,7 +13,7 @@
 
 #include "integrators/newton/newton_linear_solver.h"
 
-namespace springlab {
+namespace springlab::test_newton_linear_solver {
 namespace {
 
 constexpr int kN = 40;
@@ -151,4 +151,4 @@ TEST(NewtonLinearSolver, BacksOffFromProbingAKeptFactorThatKeepsFailing) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_newton_linear_solver

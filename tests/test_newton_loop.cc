@@ -10,7 +10,7 @@
 
 #include "integrators/newton/newton_loop.h"
 
-namespace springlab {
+namespace springlab::test_newton_loop {
 namespace {
 
 // A problem of n unknowns with a dense-pattern J assembled from a callback.
@@ -144,4 +144,4 @@ TEST(NewtonLoop, ReportsTheIterationCapWithTheLastUpdate) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_newton_loop

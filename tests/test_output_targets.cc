@@ -30,7 +30,7 @@
 
 extern char** environ;
 
-namespace springlab {
+namespace springlab::test_output_targets {
 namespace {
 
 namespace fs = std::filesystem;
@@ -353,4 +353,4 @@ TEST_F(OutputTargets, SignalsDuringARunRemoveItsTemporaries) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_output_targets

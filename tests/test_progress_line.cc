@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+namespace springlab_test_progress_line {
 namespace {
 
 namespace fs = std::filesystem;
@@ -128,3 +129,4 @@ TEST(StabilityProgress, ShowsATrialThatIsStillInItsFirstInterval) {
 }
 
 }  // namespace
+}  // namespace springlab_test_progress_line

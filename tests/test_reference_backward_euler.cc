@@ -15,7 +15,7 @@
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
 
-namespace springlab {
+namespace springlab::test_reference_backward_euler {
 namespace {
 
 constexpr double kTol = 1e-12;  // m/s, both solvers
@@ -100,4 +100,4 @@ TEST(ReferenceBackwardEuler, ImplicitEulerLandsOnTheReferenceSolution) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_reference_backward_euler

@@ -13,7 +13,7 @@
 #include "models/model/model.h"
 #include "models/scenes/builtin_scenes.h"
 
-namespace springlab {
+namespace springlab::test_refusal_remedy {
 namespace {
 
 using Overrides = std::vector<std::pair<std::string, std::string>>;
@@ -68,4 +68,4 @@ TEST(RefusalRemedy, EmptyWhereNoSettingHelps) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_refusal_remedy

@@ -14,7 +14,7 @@
 #include "models/materials/material.h"
 #include "models/model/element_registry.h"
 
-namespace springlab {
+namespace springlab::test_registry {
 namespace {
 
 TEST(Registry, ClosestNamesForeseeTyposCaseAndSeparators) {
@@ -89,4 +89,4 @@ TEST(Registry, EveryRegistryHasUniqueNames) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_registry

@@ -29,7 +29,7 @@
 #include "registry_suite.h"
 #include "models/model/element_registry.h"
 
-namespace springlab {
+namespace springlab::test_registry_coverage {
 namespace {
 
 // What gtest instantiated, suite by suite ("Registry/EveryIntegrator"): the
@@ -185,4 +185,4 @@ TEST(RegistryCoverage, EveryMaterialAndKindIsInEverySuiteThatAppliesToIt) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_registry_coverage

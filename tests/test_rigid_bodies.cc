@@ -31,7 +31,7 @@
 #include "run_process.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_rigid_bodies {
 namespace {
 
 double relative(double a, double b) { return std::abs(a - b) / std::abs(b); }
@@ -44,7 +44,7 @@ TEST(MassProperties, BoxMatchesTheClosedForm) {
   const Eigen::Vector3d size(0.3, 0.2, 0.1), offset(5.0, -3.0, 2.0);
   const double rho = 700.0;
   std::vector<Eigen::Vector3d> vertices;
-  std::vector<Triangle> triangles;
+  std::vector<SurfaceTriangle> triangles;
   box_surface(size, vertices, triangles);
   for (Eigen::Vector3d& v : vertices) v += offset;
   const MassProperties mp = mass_properties(vertices, triangles, rho);
@@ -65,7 +65,7 @@ TEST(MassProperties, CylinderMeshMatchesThePrismsClosedForm) {
   const double r = 0.1, h = 0.4, rho = 1000.0;
   for (int N : {3, 7, 32, 4096}) {
     std::vector<Eigen::Vector3d> vertices;
-    std::vector<Triangle> triangles;
+    std::vector<SurfaceTriangle> triangles;
     cylinder_surface(r, h, N, vertices, triangles);
     const MassProperties mp = mass_properties(vertices, triangles, rho);
     const double t = 2.0 * std::numbers::pi / N;
@@ -91,7 +91,7 @@ TEST(MassProperties, PrincipalFrameOfARotatedBoxIsRecovered) {
   const Eigen::Matrix3d Q =
       Eigen::AngleAxisd(0.83, Eigen::Vector3d(0.3, -0.8, 0.5).normalized()).toRotationMatrix();
   std::vector<Eigen::Vector3d> vertices;
-  std::vector<Triangle> triangles;
+  std::vector<SurfaceTriangle> triangles;
   box_surface(size, vertices, triangles);
   for (Eigen::Vector3d& v : vertices) v = Q * v + Eigen::Vector3d(1.0, 2.0, -0.5);
   const MassProperties mp = mass_properties(vertices, triangles, 1000.0);
@@ -695,4 +695,4 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegratorOnBodies,
                          ::testing::ValuesIn(integrator_names()), testing::registry_test_name);
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_rigid_bodies

@@ -18,7 +18,7 @@
 #include "experiment_tasks.h"
 #include "experiments/analysis/rigid_reference.h"
 
-namespace springlab {
+namespace springlab::test_rigid_experiment {
 namespace {
 
 using Json = nlohmann::json;
@@ -165,4 +165,4 @@ TEST(RigidExperiment, ThePileRowsFollowTheTopBoxAndItsGaps) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_rigid_experiment

@@ -13,7 +13,7 @@
 #include "models/core/scene.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_rigid_vtk {
 namespace {
 
 using namespace springlab::testing;
@@ -70,7 +70,7 @@ TEST(RigidVtk, BodySurfaceIsDrawnAsTrianglesAtPPlusAX) {
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(points[3 * k + i], x[i], 1e-12) << k << " " << i;
   }
   std::string connectivity;
-  for (const Triangle& t : rb.triangles) {
+  for (const SurfaceTriangle& t : rb.triangles) {
     connectivity += std::to_string(t[0]) + ' ' + std::to_string(t[1]) + ' ' + std::to_string(t[2]) + ' ';
   }
   EXPECT_EQ(array_after(frame, "Name=\"connectivity\""), connectivity);
@@ -79,4 +79,4 @@ TEST(RigidVtk, BodySurfaceIsDrawnAsTrianglesAtPPlusAX) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_rigid_vtk

@@ -12,7 +12,7 @@
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
 
-namespace springlab {
+namespace springlab::test_roundoff_scales {
 namespace {
 
 // A cantilever under gravity, centred on y = 0 (the beam scene): the
@@ -75,4 +75,4 @@ TEST(RoundoffScales, StoredMagnitudeSumsTheMagnitudesOfTheTermsThatCancel) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_roundoff_scales

@@ -18,7 +18,7 @@
 #include "scene_equality.h"
 #include "models/model/scene_file.h"
 
-namespace springlab {
+namespace springlab::test_scene {
 namespace {
 
 // Two particles, one spring: the smallest valid scene, edited by the cases.
@@ -520,4 +520,4 @@ TEST(SceneTest, SpecExampleFileLoads) {
 #endif
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_scene

@@ -21,7 +21,7 @@
 #include "models/model/model.h"
 #include "scenes_for_tests.h"
 
-namespace springlab {
+namespace springlab::test_second_order {
 namespace {
 
 using testing::oscillator;
@@ -322,4 +322,4 @@ TEST(SecondOrder, OutOfRangeParametersAreRefused) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_second_order

@@ -27,7 +27,7 @@
 #include "models/springs/springs.h"
 #include "models/springs/wind.h"
 
-namespace springlab {
+namespace springlab::test_simulation {
 namespace {
 
 // One zero-rest-length spring along x from a fixed anchor at the origin, no
@@ -637,4 +637,4 @@ TEST(SimulationStability, BadRangeThrows) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_simulation

@@ -9,7 +9,7 @@
 #include "models/springs/spring_force.h"
 #include "models/springs/springs.h"
 
-namespace springlab {
+namespace springlab::test_spring_force {
 namespace {
 
 // 1000 springs on disjoint pairs of free particles, so each particle's force
@@ -120,4 +120,4 @@ TEST(SpringForce, SharedParticlesAgreeToRounding) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_spring_force

@@ -24,7 +24,7 @@
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
 
-namespace springlab {
+namespace springlab::test_stability_limits {
 namespace {
 
 namespace fs = std::filesystem;
@@ -195,4 +195,4 @@ TEST(StabilityShortRuns, TrialsRunAtLeastHundredStepsAndTwentyPeriods) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_stability_limits

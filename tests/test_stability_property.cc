@@ -30,7 +30,7 @@
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
-namespace springlab {
+namespace springlab::test_stability_property {
 namespace {
 
 using testing::oscillator;
@@ -314,4 +314,4 @@ SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStabilityFixedStepDecay,
 SPRINGLAB_INSTANTIATE_OVER_INTEGRATORS_WHERE(DeclaredStabilityAdaptiveDecay, adaptive);
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_stability_property

@@ -10,7 +10,7 @@
 
 #include "models/core/strict_json.h"
 
-namespace springlab {
+namespace springlab::test_strict_json {
 namespace {
 
 // A failure as the policy's callback saw it.
@@ -127,4 +127,4 @@ TEST(StrictJson, PolicyThatDoesNotThrowIsALogicError) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_strict_json

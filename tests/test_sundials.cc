@@ -18,7 +18,7 @@
 #include "registry_suite.h"
 #include "scenes_for_tests.h"
 
-namespace springlab {
+namespace springlab::test_sundials {
 namespace {
 
 bool is_adaptive(const IntegratorInfo& i) { return i.adaptive; }
@@ -344,4 +344,4 @@ TEST(Sundials, IdaCvodeBdfAndRk4AgreeOnTheChain) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_sundials

@@ -23,7 +23,7 @@
 #include "models/core/scene.h"
 #include "models/springs/springs.h"
 
-namespace springlab {
+namespace springlab::test_vbd {
 namespace {
 
 // One step of h from (x0, v0) of `scene`: the method's end positions.
@@ -338,4 +338,4 @@ TEST(Vbd, RefusesRigidBodiesAndFluidsNamingImplicitEuler) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_vbd

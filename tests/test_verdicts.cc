@@ -35,7 +35,7 @@
 #include "random_scenes.h"
 #include "run_process.h"
 
-namespace springlab {
+namespace springlab::test_verdicts {
 namespace {
 
 RunSettings settings(const std::string& integrator, double dt, double t_end,
@@ -545,4 +545,4 @@ TEST(Verdicts, TheFluidStabilitySearchReadsTheSameLimitAtTheRunsRule) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_verdicts

@@ -34,7 +34,7 @@
 
 extern char** environ;
 
-namespace springlab {
+namespace springlab::test_vtk_series {
 namespace {
 
 namespace fs = std::filesystem;
@@ -339,4 +339,4 @@ TEST_F(VtkSeriesTest, FramesHoldTheTrajectoryAndAnOldFolderGetsTheSameSeries) {
 }
 
 }  // namespace
-}  // namespace springlab
+}  // namespace springlab::test_vtk_series

@@ -23,7 +23,7 @@
 namespace springlab {
 
 class VtkBodies;  // experiments/io/vtk_bodies.h (not included: its scene_io.h's Json
-                  // and bodies.h's Triangle would meet lab_api.cc's)
+                  // would meet lab_api.cc's)
 
 struct PanelSettings {
   std::string scene;                                        // a built-in scene's name

@@ -10,7 +10,7 @@ VtkBodies::VtkBodies(const Scene& scene, int free_particles)
 void VtkBodies::append_cells(int first_point, std::vector<Cell>& cells) const {
   int base = first_point;
   for (const RigidBody& b : layout_.bodies) {
-    for (const Triangle& t : b.triangles) {
+    for (const SurfaceTriangle& t : b.triangles) {
       cells.push_back({.size = 3, .nodes = {base + t[0], base + t[1], base + t[2], 0}});
     }
     base += static_cast<int>(b.X.size());

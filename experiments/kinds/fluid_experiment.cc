@@ -39,13 +39,13 @@
 #include <sstream>
 #include <string>
 
-#include <time.h>
 
 #include "experiments/analysis/stability.h"
 #include "experiments/io/output_files.h"
 #include "experiments/kinds/experiment.h"
 #include "experiments/kinds/experiment_support.h"
 #include "experiments/kinds/fluid_gauges.h"
+#include "experiments/kinds/fluid_measures.h"
 #include "experiments/kinds/reference_file.h"
 #include "models/fluids/fluids.h"
 #include "models/model/energy_layout.h"
@@ -86,27 +86,6 @@ Reference read_reference(const DefinitionObject& d) {
   }
   if (r.T.size() < 2) d.fail("reference", r.file + ": needs at least two points");
   return r;
-}
-
-// Linear interpolation in (x, y), x increasing; nullopt outside [x0, xn].
-std::optional<double> interpolate(const std::vector<double>& x, const std::vector<double>& y,
-                                  double at) {
-  if (x.empty() || at < x.front() || at > x.back()) return std::nullopt;
-  for (std::size_t k = 1; k < x.size(); ++k) {
-    if (x[k] >= at) {
-      const double f = (at - x[k - 1]) / (x[k] - x[k - 1]);
-      return y[k - 1] + f * (y[k] - y[k - 1]);
-    }
-  }
-  return y.back();
-}
-
-// CPU seconds of this thread (POSIX): a run's cost whatever else the
-// machine does, and whatever the runner's --jobs.
-double thread_cpu_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 // What the observer needs of the dam break: the water (free particles of

@@ -5,9 +5,9 @@
 #include <optional>
 #include <sstream>
 
-#include <time.h>
 
 #include "experiments/kinds/experiment_support.h"
+#include "experiments/kinds/fluid_measures.h"
 #include "experiments/kinds/reference_file.h"
 #include "experiments/driver/simulation.h"
 #include "models/model/model.h"
@@ -72,17 +72,6 @@ GaugeReference read_gauge_reference(const DefinitionObject& d, const std::vector
   return r;
 }
 
-// Linear interpolation in (x, y), x increasing; nullopt outside [x0, xn].
-std::optional<double> interpolate(const std::vector<double>& x, const std::vector<double>& y,
-                                  double at) {
-  if (x.empty() || at < x.front() || at > x.back()) return std::nullopt;
-  const auto upper = std::lower_bound(x.begin(), x.end(), at);
-  const std::size_t k = static_cast<std::size_t>(upper - x.begin());
-  if (k == 0) return y.front();
-  const double f = (at - x[k - 1]) / (x[k] - x[k - 1]);
-  return y[k - 1] + f * (y[k] - y[k - 1]);
-}
-
 // The first time a series passes `level` (linear between samples), where it
 // starts below it; nullopt otherwise.
 std::optional<double> arrival(const std::vector<double>& t, const std::vector<double>& h,
@@ -92,12 +81,6 @@ std::optional<double> arrival(const std::vector<double>& t, const std::vector<do
     if (h[k] >= level) return t[k - 1] + (level - h[k - 1]) / (h[k] - h[k - 1]) * (t[k] - t[k - 1]);
   }
   return std::nullopt;
-}
-
-double thread_cpu_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 // Samples every gauge at every observed state.

@@ -22,7 +22,7 @@
 namespace springlab {
 namespace {
 
-struct Variant {
+struct MethodVariant {
   std::string integrator;
   std::string label;
   IntegratorOptions options;
@@ -43,7 +43,7 @@ class SpectralExperiment final : public Experiment {
       const std::vector<DefinitionObject> list = d.objects("variants");
       for (const DefinitionObject& v : list) {
         v.allow_only({"integrator", "label", "beta", "gamma", "alpha", "rho_inf"});
-        Variant variant;
+        MethodVariant variant;
         variant.integrator = definition_integrator(v, "integrator");
         if (make_integrator(variant.integrator)->info().adaptive) {
           v.fail("integrator", "is adaptive: it has no fixed step to analyse");
@@ -76,7 +76,7 @@ class SpectralExperiment final : public Experiment {
   std::size_t task_count() const override { return variants_.size(); }
 
   TaskOutput run_task(std::size_t index) const override {
-    const Variant& v = variants_[index];
+    const MethodVariant& v = variants_[index];
     TaskOutput out;
     out.rows.resize(1);
     const double decades = std::log10(wh_max_ / wh_min_);
@@ -108,7 +108,7 @@ class SpectralExperiment final : public Experiment {
 
   nlohmann::json settings() const override {
     nlohmann::json variants = nlohmann::json::array();
-    for (const Variant& v : variants_) {
+    for (const MethodVariant& v : variants_) {
       nlohmann::json e = {{"label", v.label}, {"integrator", v.integrator}};
       const IntegratorOptions& o = v.options;
       if (!std::isnan(o.beta)) e["beta"] = o.beta;
@@ -122,7 +122,7 @@ class SpectralExperiment final : public Experiment {
   }
 
  private:
-  std::vector<Variant> variants_;
+  std::vector<MethodVariant> variants_;
   double wh_min_ = 1e-2, wh_max_ = 1e3;
   int per_decade_ = 10;
 };

@@ -11,10 +11,6 @@
 namespace springlab {
 namespace {
 
-// The shortest decimal that reads back as `value`: a refusal prints the
-// value as given (--beta 0.5000001, not the rounded 0.5).
-std::string given_text(double value) { return shortest_decimal(value); }
-
 constexpr double kDefaultAlpha = -0.1;
 constexpr double kDefaultRhoInf = 0.5;
 
@@ -40,7 +36,7 @@ std::string HhtAlpha::check_options(const IntegratorOptions& o, Eigen::Index) co
   if (std::isnan(o.alpha) || (o.alpha >= -1.0 / 3.0 && o.alpha <= 0.0)) return {};
   std::ostringstream why;
   why << "--alpha: must be in [-1/3, 0] (Hilber, Hughes and Taylor's range), got "
-      << given_text(o.alpha);
+      << shortest_decimal(o.alpha);
   return why.str();
 }
 
@@ -64,7 +60,7 @@ std::string GeneralizedAlpha::check_options(const IntegratorOptions& o, Eigen::I
   if (std::isnan(o.rho_inf) || (o.rho_inf >= 0.0 && o.rho_inf <= 1.0)) return {};
   std::ostringstream why;
   why << "--rho-inf: must be in [0, 1] (the spectral radius at infinity), got "
-      << given_text(o.rho_inf);
+      << shortest_decimal(o.rho_inf);
   return why.str();
 }
 

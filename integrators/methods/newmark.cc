@@ -13,10 +13,6 @@
 namespace springlab {
 namespace {
 
-// The shortest decimal that reads back as `value`: a refusal prints the
-// value as given (--beta 0.5000001, not the rounded 0.5).
-std::string given_text(double value) { return shortest_decimal(value); }
-
 // The trapezoidal rule's R(z) on y' = lambda y: average acceleration is the
 // trapezoidal rule applied to (x, v)' = (v, M^-1 F).
 std::complex<double> trapezoidal(std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }
@@ -74,9 +70,9 @@ std::string Newmark::check_options(const IntegratorOptions& o, Eigen::Index) con
   std::ostringstream why;
   if (!(p.gamma >= 0.5 && p.gamma <= 1.0)) {
     why << "--gamma: must be in [0.5, 1] (below 1/2 the method amplifies every mode), got "
-        << given_text(p.gamma);
+        << shortest_decimal(p.gamma);
   } else if (!(p.beta >= 0.0 && p.beta <= 0.5)) {
-    why << "--beta: must be in [0, 0.5], got " << given_text(p.beta);
+    why << "--beta: must be in [0, 0.5], got " << shortest_decimal(p.beta);
   }
   return why.str();
 }

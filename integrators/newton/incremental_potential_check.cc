@@ -1,4 +1,5 @@
 #include "integrators/newton/incremental_potential_check.h"
+#include "integrators/newton/newton_tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,7 @@ namespace springlab {
 namespace {
 
 // Units of round-off of Phi's terms (as Newton's line search).
-constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();
+using newton::kRoundoff;
 
 }  // namespace
 

@@ -1,4 +1,5 @@
 #include "integrators/newton/line_search.h"
+#include "integrators/newton/newton_tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,7 @@
 namespace springlab {
 namespace {
 
-constexpr double kArmijo = 1e-4;
+using newton::kArmijo;
 // The longest update tried along a direction of negative curvature, m/s.
 constexpr double kMaxEscape = 10.0;
 constexpr double kGapCap = 0.9;

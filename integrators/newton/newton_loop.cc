@@ -1,4 +1,5 @@
 #include "integrators/newton/newton_loop.h"
+#include "integrators/newton/newton_tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -17,7 +18,7 @@ constexpr double kAccurateForcing = 1e-3;
 // The rank-one term is used while 1 + z.q stays above this.
 constexpr double kMinShermanMorrison = 0.5;
 // Updates below this many units of round-off of ||v||_inf are noise.
-constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();
+using newton::kRoundoff;
 
 }  // namespace
 

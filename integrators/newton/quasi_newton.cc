@@ -49,16 +49,17 @@
 #include <limits>
 
 #include "integrators/linear/constraint_laplacian.h"
+#include "integrators/newton/newton_tolerances.h"
 
 namespace springlab {
 namespace {
 
 constexpr int kHistory = 5;         // Liu et al. 2017 use 5
-constexpr double kArmijo = 1e-4;    // as Newton's search
+using newton::kArmijo;  // as Newton's search
 constexpr int kHalvings = 30;
 constexpr double kExtrapolateFrom = 1.2;  // a* at which the longer step is tried
 constexpr double kLongestStep = 4.0;      // its cap, as a multiple of d
-constexpr double kRoundoff = 1e3 * std::numeric_limits<double>::epsilon();  // as Newton's
+using newton::kRoundoff;  // as Newton's
 
 }  // namespace
 

@@ -39,7 +39,7 @@ namespace springlab {
 // ---- Derived bodies (bodies.h). ----
 
 void body_surface(const Body& body, std::vector<Eigen::Vector3d>& vertices,
-                  std::vector<Triangle>& triangles) {
+                  std::vector<SurfaceTriangle>& triangles) {
   switch (body.shape) {
     case Body::Shape::kMesh:
       vertices = body.vertices;
@@ -449,7 +449,7 @@ void check_body(const Reporter& r, const std::string& where, const Body& b) {
     }
   }
   std::vector<Eigen::Vector3d> vertices;
-  std::vector<Triangle> triangles;
+  std::vector<SurfaceTriangle> triangles;
   body_surface(b, vertices, triangles);
   const std::string problem = surface_problem(vertices, triangles);
   if (!problem.empty()) r.fail(where, problem);
@@ -499,7 +499,7 @@ Body read_body(const Reporter& r, const std::string& where, const Json& j) {
       if (ts[k].size() != 3) {
         r.fail(at, "expected 3 vertex indices (got " + std::to_string(ts[k].size()) + ")");
       }
-      Triangle t;
+      SurfaceTriangle t;
       for (std::size_t c = 0; c < 3; ++c) t[c] = read_index(r, element(at, c), ts[k][c]);
       b.triangles.push_back(t);
     }
@@ -647,7 +647,7 @@ void write_bodies(const Scene& scene, std::vector<std::pair<std::string, std::st
       }
       text += "], \"triangles\": [";
       for (std::size_t k = 0; k < b.triangles.size(); ++k) {
-        const Triangle& t = b.triangles[k];
+        const SurfaceTriangle& t = b.triangles[k];
         text += (k ? ", [" : "[") + std::to_string(t[0]) + ", " + std::to_string(t[1]) + ", " +
                 std::to_string(t[2]) + "]";
       }

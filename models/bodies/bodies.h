@@ -38,7 +38,7 @@ struct Body {
   enum class Shape { kMesh, kBox, kCylinder };
   Shape shape = Shape::kBox;
   std::vector<Eigen::Vector3d> vertices;  // kMesh
-  std::vector<Triangle> triangles;        // kMesh
+  std::vector<SurfaceTriangle> triangles;        // kMesh
   Eigen::Vector3d size = Eigen::Vector3d::Ones();  // kBox: side lengths along x, y, z [m]
   double radius = 0.5, height = 1.0;               // kCylinder, about z [m]
   int segments = kDefaultCylinderSegments;         // kCylinder
@@ -69,7 +69,7 @@ std::size_t body_surface_vertices(const Body& body);
 
 // The surface of a body (its mesh, or its shape's), in the file's frame.
 void body_surface(const Body& body, std::vector<Eigen::Vector3d>& vertices,
-                  std::vector<Triangle>& triangles);
+                  std::vector<SurfaceTriangle>& triangles);
 
 // The rotation Q of `orientation` (identity when empty).
 Eigen::Matrix3d body_rotation(const Body& body);
@@ -78,7 +78,7 @@ Eigen::Matrix3d body_rotation(const Body& body);
 struct RigidBody {
   MassProperties mass;             // m, V, c, R, J
   std::vector<Eigen::Vector3d> X;  // rest coordinates of the surface vertices
-  std::vector<Triangle> triangles;
+  std::vector<SurfaceTriangle> triangles;
   Eigen::Vector3d p0, v0;          // initial p and dp/dt
   Eigen::Matrix3d A0, Adot0;       // initial A = Q R (or `affine`), dA/dt = [omega]x A
   double rigidity = 0.0;

@@ -80,7 +80,7 @@ BodyContactFinder::BodyContactFinder(const Scene& scene, const BodyLayout& layou
     }
     std::sort(sides.begin(), sides.end());
     auto normal = [&](int t) {
-      const Triangle& tri = s.triangles[static_cast<std::size_t>(t)];
+      const SurfaceTriangle& tri = s.triangles[static_cast<std::size_t>(t)];
       return (s.X[tri[1]] - s.X[tri[0]]).cross(s.X[tri[2]] - s.X[tri[0]]).normalized();
     };
     for (std::size_t e = 0; e + 1 < sides.size(); e += 2) {
@@ -191,7 +191,7 @@ void BodyContactFinder::vertices_against(int a, int b, double r,
     int best_t = -1;
     SimplexDistance nearest;
     for (std::size_t t = 0; t < sb.triangles.size(); ++t) {
-      const Triangle& tri = sb.triangles[t];
+      const SurfaceTriangle& tri = sb.triangles[t];
       const Eigen::Vector3d& t0 = xb[tri[0]];
       const Eigen::Vector3d& t1 = xb[tri[1]];
       const Eigen::Vector3d& t2 = xb[tri[2]];
@@ -207,7 +207,7 @@ void BodyContactFinder::vertices_against(int a, int b, double r,
       }
     }
     if (best_t < 0) continue;
-    const Triangle& tri = sb.triangles[static_cast<std::size_t>(best_t)];
+    const SurfaceTriangle& tri = sb.triangles[static_cast<std::size_t>(best_t)];
     BodyContact c;
     c.a = a;
     c.b = b;
@@ -321,7 +321,7 @@ BodyOverlap BodyContactFinder::crossing(int a, int b) const {
   const Eigen::Vector3d lo = lo_[a].cwiseMax(lo_[b]), hi = hi_[a].cwiseMin(hi_[b]);
   std::vector<std::size_t> triangles;
   for (std::size_t t = 0; t < sb.triangles.size(); ++t) {
-    const Triangle& tri = sb.triangles[t];
+    const SurfaceTriangle& tri = sb.triangles[t];
     const Eigen::Vector3d tlo = xb[tri[0]].cwiseMin(xb[tri[1]]).cwiseMin(xb[tri[2]]);
     const Eigen::Vector3d thi = xb[tri[0]].cwiseMax(xb[tri[1]]).cwiseMax(xb[tri[2]]);
     if (boxes_meet(tlo, thi, lo, hi, 0.0)) triangles.push_back(t);
@@ -334,7 +334,7 @@ BodyOverlap BodyContactFinder::crossing(int a, int b) const {
     const Eigen::Vector3d elo = p.cwiseMin(q), ehi = p.cwiseMax(q);
     if (!boxes_meet(elo, ehi, lo, hi, 0.0)) continue;
     for (std::size_t t : triangles) {
-      const Triangle& tri = sb.triangles[t];
+      const SurfaceTriangle& tri = sb.triangles[t];
       if (segment_meets_triangle(p, q, xb[tri[0]], xb[tri[1]], xb[tri[2]])) {
         found.a = a;
         found.b = b;

@@ -80,7 +80,7 @@ class BodyContactFinder {
     Eigen::Vector3d p0 = Eigen::Vector3d::Zero();
     Eigen::Matrix3d A0 = Eigen::Matrix3d::Identity();
     std::vector<Eigen::Vector3d> X;  // rest coordinates of the vertices (principal frame)
-    std::vector<Triangle> triangles;
+    std::vector<SurfaceTriangle> triangles;
     std::vector<std::array<int, 2>> edges;          // every edge once
     std::vector<std::array<int, 2>> feature_edges;  // between triangles not coplanar
     double radius = 0.0;                            // max |X|

@@ -187,9 +187,9 @@ bool segment_meets_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
 }
 
 double winding_number(const Eigen::Vector3d& x, const std::vector<Eigen::Vector3d>& points,
-                      const std::vector<Triangle>& triangles) {
+                      const std::vector<SurfaceTriangle>& triangles) {
   double sum = 0.0;
-  for (const Triangle& t : triangles) {
+  for (const SurfaceTriangle& t : triangles) {
     const Eigen::Vector3d a = points[t[0]] - x, b = points[t[1]] - x, c = points[t[2]] - x;
     const double la = a.norm(), lb = b.norm(), lc = c.norm();
     const double numerator = a.dot(b.cross(c));

@@ -88,6 +88,6 @@ bool segment_meets_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
 // and divided by 4 pi: Van Oosterom and Strackee, "The solid angle of a
 // plane triangle", IEEE Trans. Biomed. Eng. 30(2), 1983).
 double winding_number(const Eigen::Vector3d& x, const std::vector<Eigen::Vector3d>& points,
-                      const std::vector<Triangle>& triangles);
+                      const std::vector<SurfaceTriangle>& triangles);
 
 }  // namespace springlab

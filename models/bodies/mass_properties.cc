@@ -65,13 +65,13 @@ void principal_frame(const Eigen::Matrix3d& C, Eigen::Matrix3d& R, Eigen::Vector
 }
 
 MassProperties mass_properties(const std::vector<Eigen::Vector3d>& vertices,
-                               const std::vector<Triangle>& triangles, double density) {
+                               const std::vector<SurfaceTriangle>& triangles, double density) {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& v : vertices) origin += v;
   if (!vertices.empty()) origin /= static_cast<double>(vertices.size());
   // integral of 1, x, y, z, x^2, y^2, z^2, xy, yz, zx (about `origin`)
   double in[10] = {};
-  for (const Triangle& t : triangles) {
+  for (const SurfaceTriangle& t : triangles) {
     const Eigen::Vector3d p0 = vertices[static_cast<std::size_t>(t[0])] - origin;
     const Eigen::Vector3d p1 = vertices[static_cast<std::size_t>(t[1])] - origin;
     const Eigen::Vector3d p2 = vertices[static_cast<std::size_t>(t[2])] - origin;
@@ -109,7 +109,7 @@ MassProperties mass_properties(const std::vector<Eigen::Vector3d>& vertices,
 }
 
 std::string surface_problem(const std::vector<Eigen::Vector3d>& vertices,
-                            const std::vector<Triangle>& triangles) {
+                            const std::vector<SurfaceTriangle>& triangles) {
   std::ostringstream why;
   const int n = static_cast<int>(vertices.size());
   if (triangles.size() < 4) {
@@ -120,7 +120,7 @@ std::string surface_problem(const std::vector<Eigen::Vector3d>& vertices,
   // consistently oriented.
   std::map<std::pair<int, int>, int> directed;
   for (std::size_t k = 0; k < triangles.size(); ++k) {
-    const Triangle& t = triangles[k];
+    const SurfaceTriangle& t = triangles[k];
     for (int c = 0; c < 3; ++c) {
       if (t[static_cast<std::size_t>(c)] < 0 || t[static_cast<std::size_t>(c)] >= n) {
         why << "triangles[" << k << "]: vertex " << t[static_cast<std::size_t>(c)]
@@ -180,7 +180,7 @@ std::string surface_problem(const std::vector<Eigen::Vector3d>& vertices,
 }
 
 void box_surface(const Eigen::Vector3d& size, std::vector<Eigen::Vector3d>& vertices,
-                 std::vector<Triangle>& triangles) {
+                 std::vector<SurfaceTriangle>& triangles) {
   vertices.clear();
   for (int k = 0; k < 8; ++k) {
     vertices.emplace_back((k & 1 ? 0.5 : -0.5) * size.x(), (k & 2 ? 0.5 : -0.5) * size.y(),
@@ -193,7 +193,7 @@ void box_surface(const Eigen::Vector3d& size, std::vector<Eigen::Vector3d>& vert
 }
 
 void cylinder_surface(double radius, double height, int segments,
-                      std::vector<Eigen::Vector3d>& vertices, std::vector<Triangle>& triangles) {
+                      std::vector<Eigen::Vector3d>& vertices, std::vector<SurfaceTriangle>& triangles) {
   vertices.clear();
   triangles.clear();
   const double h = 0.5 * height;

@@ -21,7 +21,10 @@
 
 namespace springlab {
 
-using Triangle = std::array<int, 3>;
+// A triangle of a body's closed surface: its three vertices' indices,
+// counter-clockwise seen from outside (models/fem/fem.h's Triangle is an
+// element).
+using SurfaceTriangle = std::array<int, 3>;
 
 struct MassProperties {
   double volume = 0.0;                                  // V [m^3]
@@ -41,7 +44,7 @@ struct MassProperties {
 // integrals are taken about the vertices' mean, so a body far from the
 // origin loses no digits to cancellation.
 MassProperties mass_properties(const std::vector<Eigen::Vector3d>& vertices,
-                               const std::vector<Triangle>& triangles, double density);
+                               const std::vector<SurfaceTriangle>& triangles, double density);
 
 // R and J of a symmetric second moment C: eigenvectors, then the column
 // permutation and signs that maximise trace(R) with det R = +1.
@@ -54,7 +57,7 @@ void principal_frame(const Eigen::Matrix3d& C, Eigen::Matrix3d& R, Eigen::Vector
 // orientation), a volume of zero (below 1e-12 of the bounding box's
 // diameter cubed) or negative (triangles clockwise seen from outside).
 std::string surface_problem(const std::vector<Eigen::Vector3d>& vertices,
-                            const std::vector<Triangle>& triangles);
+                            const std::vector<SurfaceTriangle>& triangles);
 
 // Closed surfaces of the built-in shapes, centred at the origin, outward
 // oriented: a box of side lengths `size` along x, y, z (8 vertices, 12
@@ -62,8 +65,8 @@ std::string surface_problem(const std::vector<Eigen::Vector3d>& vertices,
 // a prism over the regular `segments`-gon inscribed in the circle (the
 // vertices on the circle; 2 segments + 2 vertices).
 void box_surface(const Eigen::Vector3d& size, std::vector<Eigen::Vector3d>& vertices,
-                 std::vector<Triangle>& triangles);
+                 std::vector<SurfaceTriangle>& triangles);
 void cylinder_surface(double radius, double height, int segments,
-                      std::vector<Eigen::Vector3d>& vertices, std::vector<Triangle>& triangles);
+                      std::vector<Eigen::Vector3d>& vertices, std::vector<SurfaceTriangle>& triangles);
 
 }  // namespace springlab

@@ -1,6 +1,7 @@
 """Reading the data directory and writing the page (make_report.py's work)."""
 
 import argparse
+import multiprocessing
 import os
 import shutil
 import sys
@@ -58,6 +59,44 @@ def lab_html(lab, outdir, notes):
             "integrators live in the browser (WebAssembly), side by side, with the step size on "
             "a slider and its stability limit marked; drag the cloth with the mouse.</p>\n"
             % LAB_FILE)
+
+
+# What the forked workers of render_sections read (set just before the fork).
+_SECTIONS = None
+
+
+def _render_one(i):
+    """Section i in a worker: its HTML, its errors, and the figures and data
+    files it wrote (the parent adds them to its own lists)."""
+    experiments, ctx, firsts = _SECTIONS
+    errors = []
+    saved, copied = len(ctx.figs.saved), len(ctx.files.copied)
+    html = section(experiments[i], KINDS[experiments[i].kind], ctx, errors, firsts[i])
+    return html, errors, ctx.figs.saved[saved:], ctx.files.copied[copied:]
+
+
+def render_sections(experiments, ctx, firsts):
+    """Every experiment's section, in order, drawn on up to two CPUs at once
+    (forked workers: each section's figures depend only on its own data, so
+    the page is the same byte for byte as drawn one by one)."""
+    global _SECTIONS
+    workers = min(2, len(os.sched_getaffinity(0)), len(experiments))
+    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        results = []
+        for i, e in enumerate(experiments):
+            errors = []
+            results.append((section(e, KINDS[e.kind], ctx, errors, firsts[i]), errors, [], []))
+        return results
+    _SECTIONS = (experiments, ctx, firsts)
+    try:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            results = pool.map(_render_one, range(len(experiments)), chunksize=1)
+    finally:
+        _SECTIONS = None
+    for _, _, saved, copied in results:
+        ctx.figs.saved.extend(saved)
+        ctx.files.copied.extend(c for c in copied if c not in ctx.files.copied)
+    return results
 
 
 def main(argv=None):
@@ -124,11 +163,15 @@ def main(argv=None):
     errors = []
     toc = [("integrators", "The integrators")]
     body = [attempt(errors, "integrator table", integrators_html, integrators, names)]
-    first_of_kind = {}
+    first_of_kind, firsts = {}, []
     for e in experiments:
-        toc.append((e.name, e.title()))
-        body.append(section(e, KINDS[e.kind], ctx, errors, first_of_kind.get(e.kind)))
+        firsts.append(first_of_kind.get(e.kind))
         first_of_kind.setdefault(e.kind, (e.name, e.title()))
+    for e, (html, section_errors, _, _) in zip(experiments,
+                                                render_sections(experiments, ctx, firsts)):
+        toc.append((e.name, e.title()))
+        body.append(html)
+        errors.extend(section_errors)
     if bench is not None:
         toc.append(("bench", "Step cost (benchmarks)"))
         body.append('<section id="bench"><h2>Step cost <small>(%s)</small></h2>\n%s</section>\n'
