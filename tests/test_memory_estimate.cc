@@ -14,6 +14,7 @@
 
 #include "experiments/driver/memory_check.h"
 #include "experiments/driver/simulation.h"
+#include "integrators/registry/registry.h"
 #include "models/bodies/bodies.h"
 #include "models/bodies/body_contacts.h"
 #include "models/bodies/body_pair_blocks.h"
@@ -49,6 +50,34 @@ TEST(MemoryEstimate, OnlyAMethodThatAsksForAJacobianBuildsThePattern) {
     simulate(model, settings("implicit-euler"));
     EXPECT_TRUE(model.pattern_built());
   }
+}
+
+// The command line refuses a Newton matrix whose factor will not fit
+// (factor_fit_error) for the methods that say they factor it
+// (Integrator::factors_jacobian): each of them assembles the Jacobians and
+// builds the pattern in its first step, and with --solver quasi-newton
+// factors none.
+TEST(MemoryEstimate, AMethodThatFactorsTheJacobianAssemblesIt) {
+  const Scene scene = make_builtin_scene("cloth", {{"n", "6"}});
+  int factoring = 0;
+  for (const std::string& name : integrator_names()) {
+    SCOPED_TRACE(name);
+    const auto integrator = make_integrator(name);
+    IntegratorOptions options;
+    if (!integrator->factors_jacobian(options)) continue;
+    ++factoring;
+    const Model model(scene);
+    EXPECT_TRUE(integrator->assembles_jacobians(model));
+    RunSettings s = settings(name);
+    s.t_end = s.dt;
+    simulate(model, s);
+    EXPECT_TRUE(model.pattern_built());
+    options.solver = Solver::kQuasiNewton;
+    EXPECT_FALSE(integrator->factors_jacobian(options));
+  }
+  EXPECT_GE(factoring, 10);
+  EXPECT_FALSE(make_integrator("symplectic-euler")->factors_jacobian(IntegratorOptions{}));
+  EXPECT_FALSE(make_integrator("xpbd")->factors_jacobian(IntegratorOptions{}));
 }
 
 // The body-body kinds count the pairs their terms declare at the start
@@ -104,9 +133,11 @@ TEST(MemoryEstimate, RefusalsNameWhatWeighsMost) {
   const Model model(scene);
   const double explicit_bytes = estimate_model_memory(scene).bytes(false);
   // Symplectic Euler assembles nothing: no limit above the model refuses it.
-  EXPECT_NO_THROW(check_jacobian_memory(model, "symplectic-euler", "box-pile", 0.0));
+  EXPECT_NO_THROW(
+      check_jacobian_memory(model, *make_integrator("symplectic-euler"), "box-pile", 0.0));
   try {
-    check_jacobian_memory(model, "implicit-euler", "box-pile", 1.01 * explicit_bytes);
+    check_jacobian_memory(model, *make_integrator("implicit-euler"), "box-pile",
+                          1.01 * explicit_bytes);
     FAIL() << "not refused";
   } catch (const MemoryRefused& e) {
     const std::string what = e.what();

@@ -41,7 +41,6 @@
 #include "experiments/io/signals.h"
 #include "experiments/driver/simulation.h"
 #include "experiments/analysis/stability.h"
-#include "integrators/newton/velocity_implicit_method.h"
 #include "integrators/registry/plugins.h"
 #include "integrators/registry/registry.h"
 #include "integrators/linear/sparse_direct_solver.h"
@@ -234,12 +233,12 @@ struct CommonOptions {
   // Option values the method cannot take are refused (exit 1, before any
   // file is touched); the options it does not read are returned, one note
   // each (`run` prints them on stderr, Python warns).
-  std::vector<std::string> check_against_method(const Model& model) const {
-    const auto integrator = make_integrator(run.integrator);
-    if (std::string why = integrator->check_options(run.options, model.dofs()); !why.empty()) {
+  std::vector<std::string> check_against_method(const Model& model,
+                                                const Integrator& integrator) const {
+    if (std::string why = integrator.check_options(run.options, model.dofs()); !why.empty()) {
       throw UsageError(why);
     }
-    const std::vector<std::string> read = integrator->options_read();
+    const std::vector<std::string> read = integrator.options_read();
     std::string ignored;
     for (const OptionSpec& spec : integrator_options()) {
       const std::string option(spec.name);
@@ -267,20 +266,23 @@ void check_initial_energy(const Model& model, const std::string& scene_arg) {
 // one line naming the fix, before any output is opened (issue 38.6).
 std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
                                                       const RunSettings& run,
-                                                      const std::string& scene_arg);
+                                                      const std::string& scene_arg,
+                                                      std::unique_ptr<Integrator> integrator);
 
 // A Newton method whose matrix's factor will not fit in memory is refused
 // before any output, with the estimate and the limit (issue 38.1; the rule
 // is sparse_direct_solver.h's). Quasi-Newton factors a smaller matrix and
 // meets the check at run time only if it falls back to Newton.
+// `integrator`: the one make_integrator(run.integrator) the caller asked
+// about (check_against_method); it is the one that runs.
 std::unique_ptr<Integrator> prepare_or_refuse(const Model& model, const RunSettings& run,
-                                              const std::string& scene_arg) {
+                                              const std::string& scene_arg,
+                                              std::unique_ptr<Integrator> integrator) {
   // The Jacobian pattern, before the method builds it (memory_check.h).
-  check_jacobian_memory(model, run.integrator,
+  check_jacobian_memory(model, *integrator,
                         scene_arg.empty() ? "the scene" : printable(scene_arg));
-  std::unique_ptr<Integrator> integrator = prepare_or_refuse_pairing(model, run, scene_arg);
-  if (dynamic_cast<const VelocityImplicitMethod*>(integrator.get()) != nullptr &&
-      run.options.solver != Solver::kQuasiNewton) {
+  integrator = prepare_or_refuse_pairing(model, run, scene_arg, std::move(integrator));
+  if (integrator->factors_jacobian(run.options)) {
     const std::string why = factor_fit_error(model.jacobian_pattern());
     if (!why.empty()) {
       throw UsageError("--integrator " + run.integrator + ": " + why +
@@ -294,9 +296,10 @@ std::unique_ptr<Integrator> prepare_or_refuse(const Model& model, const RunSetti
 
 std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
                                                       const RunSettings& run,
-                                                      const std::string& scene_arg) {
+                                                      const std::string& scene_arg,
+                                                      std::unique_ptr<Integrator> integrator) {
   try {
-    return prepare_integrator(model, run);
+    return prepare_integrator(model, run, std::move(integrator));
   } catch (const RunRefused& e) {
     std::string why = e.what();
     const std::string own = run.integrator + ": ";
@@ -423,8 +426,9 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
-  print_notes(common.check_against_method(model));
-  std::unique_ptr<Integrator> integrator = prepare_or_refuse(model, common.run, common.scene);
+  std::unique_ptr<Integrator> integrator = make_integrator(common.run.integrator);
+  print_notes(common.check_against_method(model, *integrator));
+  integrator = prepare_or_refuse(model, common.run, common.scene, std::move(integrator));
   // docs/command-line.md: a method with substeps (xpbd) reports them per step.
   const std::vector<std::string> read = integrator->options_read();
   const int substeps = std::find(read.begin(), read.end(), "substeps") != read.end()
@@ -613,8 +617,11 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
   check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
-  print_notes(common.check_against_method(model));
-  prepare_or_refuse(model, common.run, common.scene);  // a refusal is not "diverged even at --dt-min"
+  std::unique_ptr<Integrator> integrator = make_integrator(common.run.integrator);
+  print_notes(common.check_against_method(model, *integrator));
+  // A refusal is not "diverged even at --dt-min"; each trial of the search
+  // then makes its own.
+  prepare_or_refuse(model, common.run, common.scene, std::move(integrator));
   s.run = common.run;
   std::unique_ptr<StabilityProgress> progress;
   if (::isatty(2)) {
@@ -824,7 +831,8 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  std::vector<std::string> method_notes = common.check_against_method(model);
+  std::vector<std::string> method_notes =
+      common.check_against_method(model, *make_integrator(common.run.integrator));
   if (notes != nullptr) {
     *notes = std::move(method_notes);
   } else {
@@ -835,7 +843,7 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
 
 std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& settings,
                                         const std::string& scene_arg) {
-  return prepare_or_refuse(model, settings, scene_arg);
+  return prepare_or_refuse(model, settings, scene_arg, make_integrator(settings.integrator));
 }
 
 Json verdict_json(const Verdict& v) {

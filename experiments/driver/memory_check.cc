@@ -1,7 +1,6 @@
 // The memory checks of memory_check.h.
 #include "experiments/driver/memory_check.h"
 
-#include "integrators/registry/registry.h"
 #include "integrators/linear/sparse_direct_solver.h"
 #include "models/model/model_memory.h"
 
@@ -31,17 +30,17 @@ void check_scene_memory(const Scene& scene, const std::string& label, double lim
                       " this process may use: make the scene smaller");
 }
 
-void check_jacobian_memory(const Model& model, const std::string& integrator,
+void check_jacobian_memory(const Model& model, const Integrator& integrator,
                            const std::string& label) {
   check_jacobian_memory(model, integrator, label, memory_limit_bytes());
 }
 
-void check_jacobian_memory(const Model& model, const std::string& integrator,
+void check_jacobian_memory(const Model& model, const Integrator& integrator,
                            const std::string& label, double limit) {
-  if (!is_integrator(integrator) || !make_integrator(integrator)->assembles_jacobians(model)) return;
+  if (!integrator.assembles_jacobians(model)) return;
   const MemoryEstimate e = estimate_model_memory(model.scene());
   if (!(e.bytes(true) > limit)) return;
-  throw MemoryRefused("--integrator " + integrator + ": " + label +
+  throw MemoryRefused("--integrator " + integrator.name() + ": " + label +
                       "'s model and Jacobian pattern would need " + estimate_text(e, true) +
                       ", more than the " + format_bytes(limit) +
                       " this process may use: make the scene smaller, or use a method that "

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "integrators/core/integrator.h"
 #include "models/model/model.h"
 #include "models/core/scene.h"
 
@@ -28,12 +29,13 @@ class MemoryRefused : public std::runtime_error {
 void check_scene_memory(const Scene& scene, const std::string& label);
 void check_scene_memory(const Scene& scene, const std::string& label, double limit);
 
-// Before a run of `integrator` on `model` makes its first Jacobian: where
-// the method assembles one (Integrator::assembles_jacobians), the model
-// with its pattern must fit. Throws MemoryRefused.
-void check_jacobian_memory(const Model& model, const std::string& integrator,
+// Before `integrator` (made, not yet initialized) runs on `model` and makes
+// its first Jacobian: where the method assembles one
+// (Integrator::assembles_jacobians), the model with its pattern must fit.
+// Throws MemoryRefused.
+void check_jacobian_memory(const Model& model, const Integrator& integrator,
                            const std::string& label);
-void check_jacobian_memory(const Model& model, const std::string& integrator,
+void check_jacobian_memory(const Model& model, const Integrator& integrator,
                            const std::string& label, double limit);
 
 }  // namespace springlab

@@ -92,7 +92,11 @@ IntegratorOptions run_options(const RunSettings& settings) {
 
 std::unique_ptr<Integrator> prepare_integrator(const Model& model,
                                                const RunSettings& settings) {
-  auto integrator = make_integrator(settings.integrator);
+  return prepare_integrator(model, settings, make_integrator(settings.integrator));
+}
+
+std::unique_ptr<Integrator> prepare_integrator(const Model& model, const RunSettings& settings,
+                                               std::unique_ptr<Integrator> integrator) {
   const StepResult step = integrator->initialize(model, 0.0, model.initial_positions(),
                                                  model.initial_velocities(), run_options(settings));
   if (!step.ok) throw RunRefused(step.message, step.remedy);

@@ -118,6 +118,10 @@ RunResult simulate(const Model& model, const RunSettings& settings,
                    std::unique_ptr<Integrator> prepared);
 std::unique_ptr<Integrator> prepare_integrator(const Model& model,
                                                const RunSettings& settings);
+// The same with the integrator the caller made (make_integrator(settings.integrator)),
+// so that the one object it asked about (options, memory) is the one that runs.
+std::unique_ptr<Integrator> prepare_integrator(const Model& model, const RunSettings& settings,
+                                               std::unique_ptr<Integrator> integrator);
 
 class StopRequested : public std::runtime_error {
  public:

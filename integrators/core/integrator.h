@@ -169,6 +169,12 @@ class Integrator {
   // memory estimate counts the pattern only then (issue 46.5). By default
   // the implicit methods that are not Jacobian-free.
   virtual bool assembles_jacobians(const MechanicalSystem& system) const;
+  // Whether a step with these options factors the whole Newton matrix of
+  // the system's Jacobian pattern, so that a caller can refuse a factor that
+  // will not fit in memory before the run (factor_fit_error). By default
+  // no; the velocity-implicit methods unless --solver quasi-newton (which
+  // factors a matrix of a third of the unknowns).
+  virtual bool factors_jacobian(const IntegratorOptions&) const { return false; }
   // The substeps one step takes with these options, for a method that reads
   // --substeps (`run --json` reports it); 1 for the others.
   virtual int substeps(const IntegratorOptions&) const { return 1; }

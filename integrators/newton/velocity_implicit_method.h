@@ -50,6 +50,11 @@
 namespace springlab {
 
 class VelocityImplicitMethod : public Integrator {
+ public:
+  bool factors_jacobian(const IntegratorOptions& options) const override {
+    return options.solver != Solver::kQuasiNewton;
+  }
+
  protected:
   using Integrator::Integrator;
 
