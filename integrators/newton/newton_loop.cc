@@ -27,7 +27,7 @@ StepResult NewtonLoop::solve(NewtonProblem& problem, const Pieces& pieces,
                              IntegratorStats& stats, Vector& v) {
   auto fail = [&](const std::string& why) {
     std::ostringstream message;
-    message << context.method << ": Newton failed at t = " << context.t << " (h = " << context.h
+    message << "Newton failed at t = " << context.t << " (h = " << context.h
             << "): " << why;
     return StepResult::failure(message.str());
   };

@@ -63,10 +63,9 @@ class NewtonLoop {
     // attempt from another state); nullptr: problem.start().
     const Vector* start = nullptr;
   };
-  // Who solves what, for a failure's message: "METHOD: Newton failed at
-  // t = T (h = H): why".
+  // Which step, for a failure's message: "Newton failed at t = T (h = H):
+  // why" (the method puts its name in front, once).
   struct Context {
-    const std::string& method;
     double t, h;
   };
   // The strategies the loop is given.

@@ -28,7 +28,7 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const
                                           Vector& v) {
   const NewtonLoop::Settings settings{
       .tol = options().newton_tol, .max_iterations = options().max_newton, .start = start};
-  const NewtonLoop::Context context{.method = name(), .t = t_, .h = step_.h()};
+  const NewtonLoop::Context context{.t = t_, .h = step_.h()};
   const bool symmetric = system().jacobian_symmetric();
   if (step_.scheme().discrete_gradient) {
     DiscreteGradientPhases policy(matrices, symmetric, step_);
@@ -74,20 +74,15 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
     result = second;
   }
   if (!result.ok) ++mutable_stats().nonlinear_failures;
+  // The attempts' reasons are composed without the method's name
+  // ("L-BFGS stalled ..., and Newton failed ..."), which goes in front once.
   if (!result.ok && !refused.empty() && result.message != refused) {
-    const std::string own = name() + ": ";
-    const std::string last = result.message.rfind(own, 0) == 0
-                                 ? result.message.substr(own.size())
-                                 : result.message;
-    result = StepResult::failure(refused + "; from the step's start state, " + last);
+    result = StepResult::failure(refused + "; from the step's start state, " + result.message);
   }
   if (!result.ok && !quasi_rejected.empty()) {
-    const std::string own = name() + ": ";  // Newton's message names the method too
-    const std::string newton_text = result.message.rfind(own, 0) == 0
-                                        ? result.message.substr(own.size())
-                                        : result.message;
-    result = StepResult::failure(quasi_rejected + ", and " + newton_text);
+    result = StepResult::failure(quasi_rejected + ", and " + result.message);
   }
+  if (!result.ok) result.message = name() + ": " + result.message;
   return result;
 }
 
@@ -104,7 +99,7 @@ StepResult VelocityImplicitMethod::checked_newton(NewtonPolicy::Matrices matrice
   const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
   if (rise.empty()) return result;
   std::ostringstream message;
-  message << name() << ": Newton's answer at t = " << t_ << " (h = " << step_.h() << ") "
+  message << "Newton's answer at t = " << t_ << " (h = " << step_.h() << ") "
           << rise
           << ": this method's step minimizes the incremental potential, so the answer is no "
              "solution (a point where the iteration stopped short, or a higher stationary "
@@ -126,7 +121,7 @@ StepResult VelocityImplicitMethod::quasi_newton(Vector& v, std::string& rejected
     // Newton solves the step; should it fail too, its message says that
     // L-BFGS stalled first.
     std::ostringstream message;
-    message << name() << ": L-BFGS stalled at t = " << t_ << " (h = " << step_.h()
+    message << "L-BFGS stalled at t = " << t_ << " (h = " << step_.h()
             << ": no descent, a failed search or --max-newton iterations)";
     rejected = message.str();
     return StepResult::failure(rejected);
@@ -134,7 +129,7 @@ StepResult VelocityImplicitMethod::quasi_newton(Vector& v, std::string& rejected
   const std::string rise = check_.judge(step_, v, options().newton_tol, r_end_, linear_);
   if (rise.empty()) return StepResult::success();
   std::ostringstream message;
-  message << name() << ": L-BFGS's step at t = " << t_ << " (h = " << step_.h()
+  message << "L-BFGS's step at t = " << t_ << " (h = " << step_.h()
           << ") " << rise << " (this method's step minimizes the incremental potential: not a "
              "solution)";
   rejected = message.str();
