@@ -87,7 +87,7 @@ std::optional<double> arrival(const std::vector<double>& t, const std::vector<do
 class GaugeWatch final : public Observer {
  public:
   GaugeWatch(const Model& model, const std::vector<Gauge>& gauges)
-      : model_(model), gauges_(gauges), height(gauges.size()) {}
+      : height(gauges.size()), model_(model), gauges_(gauges) {}
   void observe(double t_now, const Vector& x, const Vector&) override {
     const Eigen::MatrixXd positions = model_.scene_positions(x);
     t.push_back(t_now);

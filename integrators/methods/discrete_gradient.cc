@@ -19,7 +19,7 @@ DiscreteGradient::DiscreteGradient()
            .stability_function =
                [](std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }}) {}
 
-StepResult DiscreteGradient::substeps(double h, int n, const VelocityImplicitScheme& scheme) {
+StepResult DiscreteGradient::step_in_parts(double h, int n, const VelocityImplicitScheme& scheme) {
   const double t0 = t_, dt = h / n;
   x_start_ = x_;
   v_start_ = v_;
@@ -58,7 +58,7 @@ StepResult DiscreteGradient::do_step(double h) {
   // at 10 ms, none on the tumbling box at 10 ms; once in box-pile's runs
   // that then fail on a contact: docs/integrators.md.)
   for (int n = 2; n <= 8; n *= 2) {
-    if (substeps(h, n, scheme).ok) return StepResult::success();
+    if (step_in_parts(h, n, scheme).ok) return StepResult::success();
   }
   scheme.own_discrete_gradients = false;
   scheme.definite_fallback = true;

@@ -90,7 +90,7 @@ class DiscreteGradient final : public VelocityImplicitMethod {
   // One step of h as n substeps with the scheme, from (t_, x_, v_); on
   // success x_ and v_ hold its end (t_ is left to advance_to), on failure
   // they are as before.
-  StepResult substeps(double h, int n, const VelocityImplicitScheme& scheme);
+  StepResult step_in_parts(double h, int n, const VelocityImplicitScheme& scheme);
 
   Vector v_new_, x_start_, v_start_;
   long generic_steps_ = 0;
