@@ -190,6 +190,16 @@ TEST(Verdicts, TheIssuesFluidBlowUpsDiverge) {
     EXPECT_NE(r.failure.find(c.integrator == "xpbd" ? "more --substeps" : "a smaller --dt"),
               std::string::npos)
         << r.failure;
+    // Outside the walls' box: which side, and the three ways out.
+    if (r.verdict->rule == VerdictRule::kFluidOutside && r.verdict->plane < 0) {
+      const std::string side = std::string(r.verdict->side % 2 == 1 ? "+" : "-") +
+                               "xyz"[r.verdict->side / 2] + " side";
+      EXPECT_NE(r.failure.find("(beyond its " + side + ")"), std::string::npos) << r.failure;
+      EXPECT_NE(r.failure.find("left the tank: flung out by a blow-up, through a wall, or "
+                               "thrown over one"),
+                std::string::npos)
+          << r.failure;
+    }
   }
   // Below the CFL step the dam break completes, its energy falling.
   const Model dam(builtin("dam-break", {{"spacing", "0.02"}}));
@@ -228,7 +238,18 @@ TEST(Verdicts, TheFluidsRuleMeasuresTheWallsBoxAndTheDensity) {
     EXPECT_NEAR(measured[0].value, f * L, 1e-12);
     EXPECT_EQ(measured[0].where, 0);
     EXPECT_EQ(measured[0].exceeded(), f > 1.0);
+    EXPECT_EQ(measured[0].side, 3);  // the +y side
   }
+  // Beyond the -x wall by 1.2 L: the side the message names.
+  double left = INFINITY;
+  for (const Particle& p : scene.particles) {
+    if (p.fixed) left = std::min(left, p.x.x());
+  }
+  Vector x = x0;
+  x[0] = left - 1.2 * L;
+  model.measure_divergence(x, v0, 0.0, measured);
+  EXPECT_NEAR(measured[0].value, 1.2 * L, 1e-12);
+  EXPECT_EQ(measured[0].side, 0);  // the -x side
 }
 
 // ------------------------------------------------ bodies (issue 46 items 3, 4)

@@ -51,6 +51,9 @@ struct Verdict {
   // kFluidOutside: the index of the plane a particle is behind (-1: the
   // walls' box).
   int plane = -1;
+  // kFluidOutside beyond the walls' box: the side it is furthest beyond,
+  // 2 r + 1 for the +r side of axis r, 2 r for the -r side; -1: none.
+  int side = -1;
   bool exceeded() const { return value > bound; }
 };
 

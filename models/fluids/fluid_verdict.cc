@@ -66,27 +66,34 @@ class FluidDivergenceRule final : public DivergenceRule {
         // How far beyond the bound (<= 0 within it), relative to the margin,
         // so that fluids of several sizes compare: value and bound are in
         // metres of the worst one.
-        auto consider = [&](double beyond, int plane) {
+        auto consider = [&](double beyond, int plane, int side) {
           if (beyond - w.margin > outside.value - outside.bound || !any_place_rule) {
             outside.value = beyond;
             outside.bound = w.margin;
             outside.where = where;
             outside.plane = plane;
+            outside.side = side;
             any_place_rule = true;
           }
         };
         if (w.has_walls) {
-          double d2 = 0.0;
+          double d2 = 0.0, furthest = 0.0;
+          int side = -1;
           for (int r = 0; r < dim_; ++r) {
-            const double d = std::max({w.lo[r] - x[r], x[r] - w.hi[r], 0.0});
+            const double below = w.lo[r] - x[r], above = x[r] - w.hi[r];
+            const double d = std::max({below, above, 0.0});
             d2 += d * d;
+            if (d > furthest) {
+              furthest = d;
+              side = 2 * r + (above > below ? 1 : 0);
+            }
           }
-          consider(std::sqrt(d2), -1);
+          consider(std::sqrt(d2), -1, side);
         }
         for (std::size_t k = 0; k < planes_.size(); ++k) {
           double gap = -planes_[k].offset;
           for (int r = 0; r < dim_; ++r) gap += planes_[k].normal[r] * x[r];
-          consider(std::max(-gap, 0.0), static_cast<int>(k));
+          consider(std::max(-gap, 0.0), static_cast<int>(k), -1);
         }
       }
     }
