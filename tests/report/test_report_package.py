@@ -205,6 +205,49 @@ class EnergySentences(unittest.TestCase):
         self.assertEqual(first, second)
 
 
+class SectionsOnTwoCpus(unittest.TestCase):
+    """make_report.py draws the sections in two forked workers: the page, its
+    figures and data files are the same bytes as drawn one by one."""
+
+    def setUp(self):
+        self.s = Scratch()
+        self.affinity = report_main.os.sched_getaffinity
+        self.get_context = report_main.multiprocessing.get_context
+        self.pools = []
+
+        def counted(method):
+            self.pools.append(method)
+            return self.get_context(method)
+        report_main.multiprocessing.get_context = counted
+
+    def tearDown(self):
+        report_main.os.sched_getaffinity = self.affinity
+        report_main.multiprocessing.get_context = self.get_context
+        self.s.close()
+
+    def files(self, cpus):
+        report_main.os.sched_getaffinity = lambda _pid: set(range(cpus))
+        out = self.s.dir / "out"
+        shutil.rmtree(out, ignore_errors=True)
+        status, _ = render(self.s)
+        self.assertEqual(status, 0)
+        return {str(p.relative_to(out)): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+
+    def test_two_workers_draw_what_one_draws(self):
+        t = [0.1 * k for k in range(60)]
+        energy_data(self.s, {"symplectic-euler": (t, [1 + 0.1 * math.sin(x) for x in t]),
+                             "implicit-euler": (t, [math.exp(-0.3 * x) for x in t])})
+        second = json.loads((self.s.dir / "energy.json").read_text())
+        second["name"] = "energy-again"
+        self.s.json("energy-again.json", second)
+        one = self.files(1)
+        self.assertEqual(self.pools, [])  # one CPU: drawn in this process
+        two = self.files(2)
+        self.assertEqual(self.pools, ["fork"])
+        self.assertEqual(sum(name.endswith(".png") for name in two), 2)
+        self.assertEqual(one, two)
+
+
 class OwnMethods(unittest.TestCase):
     """A method an experiment brought (a plug-in's, a Python class's) is
     listed in its settings' "own_integrators": drawn in its family beside
