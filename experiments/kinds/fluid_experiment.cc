@@ -39,7 +39,6 @@
 #include <sstream>
 #include <string>
 
-
 #include "experiments/analysis/stability.h"
 #include "experiments/io/output_files.h"
 #include "experiments/kinds/experiment.h"

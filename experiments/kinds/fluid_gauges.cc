@@ -5,7 +5,6 @@
 #include <optional>
 #include <sstream>
 
-
 #include "experiments/kinds/experiment_support.h"
 #include "experiments/kinds/fluid_measures.h"
 #include "experiments/kinds/reference_file.h"

@@ -38,7 +38,7 @@ struct Body {
   enum class Shape { kMesh, kBox, kCylinder };
   Shape shape = Shape::kBox;
   std::vector<Eigen::Vector3d> vertices;  // kMesh
-  std::vector<SurfaceTriangle> triangles;        // kMesh
+  std::vector<SurfaceTriangle> triangles;  // kMesh
   Eigen::Vector3d size = Eigen::Vector3d::Ones();  // kBox: side lengths along x, y, z [m]
   double radius = 0.5, height = 1.0;               // kCylinder, about z [m]
   int segments = kDefaultCylinderSegments;         // kCylinder

@@ -67,6 +67,7 @@ std::string surface_problem(const std::vector<Eigen::Vector3d>& vertices,
 void box_surface(const Eigen::Vector3d& size, std::vector<Eigen::Vector3d>& vertices,
                  std::vector<SurfaceTriangle>& triangles);
 void cylinder_surface(double radius, double height, int segments,
-                      std::vector<Eigen::Vector3d>& vertices, std::vector<SurfaceTriangle>& triangles);
+                      std::vector<Eigen::Vector3d>& vertices,
+                      std::vector<SurfaceTriangle>& triangles);
 
 }  // namespace springlab
