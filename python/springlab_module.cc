@@ -79,7 +79,7 @@ std::string option_text(const py::handle& value) {
 class Recorder final : public Observer {
  public:
   explicit Recorder(const Model& model)
-      : model_(model), layout_(body_layout(model.scene(), model.free_particle_count())) {}
+      : model_(model), layout_(body_layout(model.scene(), model.particle_order())) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     t_.push_back(t);
     x_.push_back(model_.scene_positions(x));
@@ -292,7 +292,8 @@ PYBIND11_MODULE(springlab, m) {
         check_scene_memory(scene, "scene '" + scene.name + "'");  // before the model
         const Model model(scene);
         std::vector<std::string> notes;
-        const RunSettings settings = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
+        CheckedRun checked = run_settings_for(model, integrator, dt, t_end, every, typed, &notes);
+        const RunSettings& settings = checked.settings;
         for (const std::string& note : notes) {  // `run`'s "springlab: note: ..." as warnings
           PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1);
         }
@@ -318,7 +319,8 @@ PYBIND11_MODULE(springlab, m) {
         // A pairing the method refuses (xpbd and a neo-Hookean material, the
         // barrier with a projection method) raises springlab.Error, as the
         // command line refuses it; a failure during the run is a result.
-        std::unique_ptr<Integrator> prepared = prepare_run(model, interruptible_settings, "");
+        std::unique_ptr<Integrator> prepared =
+            prepare_run(model, interruptible_settings, "", std::move(checked.integrator));
         const RunResult r = interruptible<RunResult>(
             [&] { return simulate(model, interruptible_settings, {&recorder}, std::move(prepared)); },
             stop);

@@ -33,7 +33,7 @@ LabPanel::LabPanel(const PanelSettings& settings) {
   }
   const StepResult start = integrator_->initialize(
       *cursor_, 0.0, model_->initial_positions(), model_->initial_velocities(), settings.options);
-  if (!start.ok) throw RunRefused(start.message, start.remedy);
+  if (!start.ok) throw RunRefused(start.message, start.refused);
   energies_.emplace(model_->energies(model_->initial_positions(), model_->initial_velocities()));
   check_ = std::make_unique<DivergenceCheck>(*model_, settings.blowup * model_->energy_scale(),
                                              *energies_, integrator_->overshoot_steps());

@@ -301,9 +301,7 @@ std::unique_ptr<Integrator> prepare_or_refuse_pairing(const Model& model,
   try {
     return prepare_integrator(model, run, std::move(integrator));
   } catch (const RunRefused& e) {
-    std::string why = e.what();
-    const std::string own = run.integrator + ": ";
-    if (why.rfind(own, 0) == 0) why.erase(0, own.size());
+    std::string why = e.reason();
     // A built-in scene: the parameter that makes the pairing work.
     const BuiltinScene* builtin = nullptr;
     struct stat st {};
@@ -801,10 +799,10 @@ Scene resolve_scene(const std::string& scene_arg, const std::vector<std::string>
   throw SceneError(printable(scene_arg) + ": " + why + like + " (built-in scenes: " + list + ")");
 }
 
-RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,
-                             double t_end, int every,
-                             const std::vector<std::pair<std::string, std::string>>& options,
-                             std::vector<std::string>* notes) {
+CheckedRun run_settings_for(const Model& model, const std::string& integrator, double dt,
+                            double t_end, int every,
+                            const std::vector<std::pair<std::string, std::string>>& options,
+                            std::vector<std::string>* notes) {
   CLI::App app{"springlab run"};
   app.option_defaults()->always_capture_default();
   CommonOptions common;
@@ -831,19 +829,20 @@ RunSettings run_settings_for(const Model& model, const std::string& integrator, 
   common.validate();
   require_positive("--dt", common.run.dt);
   if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  std::vector<std::string> method_notes =
-      common.check_against_method(model, *make_integrator(common.run.integrator));
+  CheckedRun checked{common.run, make_integrator(common.run.integrator)};
+  std::vector<std::string> method_notes = common.check_against_method(model, *checked.integrator);
   if (notes != nullptr) {
     *notes = std::move(method_notes);
   } else {
     print_notes(method_notes);
   }
-  return common.run;
+  return checked;
 }
 
 std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& settings,
-                                        const std::string& scene_arg) {
-  return prepare_or_refuse(model, settings, scene_arg, make_integrator(settings.integrator));
+                                        const std::string& scene_arg,
+                                        std::unique_ptr<Integrator> integrator) {
+  return prepare_or_refuse(model, settings, scene_arg, std::move(integrator));
 }
 
 Json verdict_json(const Verdict& v) {

@@ -28,18 +28,25 @@ int run_cli(int argc, char** argv);
 // one line the command line prints after "springlab: error: ". Options the
 // method does not read are named in `notes` (one sentence each, as `run`
 // prints them after "springlab: note: "; on stderr when notes is nullptr).
-RunSettings run_settings_for(const Model& model, const std::string& integrator, double dt,
-                             double t_end, int every,
-                             const std::vector<std::pair<std::string, std::string>>& options,
-                             std::vector<std::string>* notes = nullptr);
+// `integrator` is the one object the options were checked against; it is
+// the one to hand to prepare_run, as the command line does (one per run).
+struct CheckedRun {
+  RunSettings settings;
+  std::unique_ptr<Integrator> integrator;
+};
+CheckedRun run_settings_for(const Model& model, const std::string& integrator, double dt,
+                            double t_end, int every,
+                            const std::vector<std::pair<std::string, std::string>>& options,
+                            std::vector<std::string>* notes = nullptr);
 
-// simulate()'s integrator for `run`, bound to the model's initial state
-// before any output is opened (prepare_integrator): a pairing the method
-// refuses throws std::runtime_error with `run`'s one line ("--integrator
-// xpbd: ..."; for a built-in scene named by `scene_arg`, the -p value that
-// fixes it; "" for none).
+// simulate()'s integrator for `run` (run_settings_for's), bound to the
+// model's initial state before any output is opened (prepare_integrator): a
+// pairing the method refuses throws std::runtime_error with `run`'s one line
+// ("--integrator xpbd: ..."; for a built-in scene named by `scene_arg`, the
+// -p value that fixes it; "" for none).
 std::unique_ptr<Integrator> prepare_run(const Model& model, const RunSettings& settings,
-                                        const std::string& scene_arg);
+                                        const std::string& scene_arg,
+                                        std::unique_ptr<Integrator> integrator);
 
 // The statistics every integrator reports, by the names of `run --json`.
 nlohmann::ordered_json stats_json(const IntegratorStats& s);

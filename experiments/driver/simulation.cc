@@ -99,7 +99,12 @@ std::unique_ptr<Integrator> prepare_integrator(const Model& model, const RunSett
                                                std::unique_ptr<Integrator> integrator) {
   const StepResult step = integrator->initialize(model, 0.0, model.initial_positions(),
                                                  model.initial_velocities(), run_options(settings));
-  if (!step.ok) throw RunRefused(step.message, step.remedy);
+  // Every method's do_initialize refuses with StepResult::refusal; a start
+  // that fails otherwise (an integrator bound twice) gives its message.
+  if (!step.ok) {
+    throw RunRefused(step.message,
+                     step.refused.text.empty() ? Refusal{step.message, {}} : step.refused);
+  }
   return integrator;
 }
 

@@ -95,16 +95,18 @@ RunResult simulate(const Model& model, const RunSettings& settings,
 
 // A pairing the method refuses before its first step (a material it has no
 // form for, the barrier with a projection method): prepare_integrator's
-// error. what() is the method's one line ("xpbd: ... use ...").
-// remedy(): the scene setting that would make it work, as data (or empty).
+// error. what() is the method's one line ("xpbd: ... use ..."); reason()
+// the same sentence without the method's name, and remedy() the scene
+// setting that would make it work (or empty), both as the method gave them.
 class RunRefused : public std::runtime_error {
  public:
-  explicit RunRefused(const std::string& what, SceneRemedy remedy = {})
-      : std::runtime_error(what), remedy_(std::move(remedy)) {}
-  const SceneRemedy& remedy() const { return remedy_; }
+  explicit RunRefused(const std::string& what, Refusal refused = {})
+      : std::runtime_error(what), refused_(std::move(refused)) {}
+  const std::string& reason() const { return refused_.text; }
+  const SceneRemedy& remedy() const { return refused_.remedy; }
 
  private:
-  SceneRemedy remedy_;
+  Refusal refused_;
 };
 
 // What simulate() does before its first step: the settings' integrator,

@@ -53,13 +53,15 @@ struct FallbackCount {
 struct StepResult {
   bool ok = true;
   std::string message;  // why it failed, naming the call / condition
-  // A refusal before the first step: the scene setting that would make the
-  // pairing work (models/core/refusal.h), or empty.
-  SceneRemedy remedy;
+  // A refusal before the first step, as data (models/core/refusal.h): the
+  // sentence without the method's name (message is "name: " + it) and the
+  // scene setting that would make the pairing work, or empty.
+  Refusal refused;
   static StepResult success() { return {}; }
   static StepResult failure(std::string why) { return {false, std::move(why), {}}; }
-  static StepResult refusal(std::string why, SceneRemedy remedy) {
-    return {false, std::move(why), std::move(remedy)};
+  static StepResult refusal(const std::string& method, Refusal why) {
+    std::string message = method + ": " + why.text;
+    return {false, std::move(message), std::move(why)};
   }
 };
 

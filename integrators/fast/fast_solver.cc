@@ -15,7 +15,7 @@ StepResult FastSolver::do_initialize() {
            ? views_->position_based_form(constraints_, elements_, position_projections_, why)
            : views_->projective_form(constraints_, elements_, why));
   if (!has_form) {
-    return StepResult::refusal(name() + ": " + why.text, why.remedy);
+    return StepResult::refusal(name(), std::move(why));
   }
   views_->plane_constraints(planes_);
   for (const PlaneConstraint& plane : planes_) {
@@ -23,10 +23,10 @@ StepResult FastSolver::do_initialize() {
       // A projection puts a particle on the plane, where the barrier's
       // energy is infinite.
       return StepResult::refusal(
-          name() + ": this scene's contact is the barrier, whose energy is infinite on the plane, "
+          name(), {"this scene's contact is the barrier, whose energy is infinite on the plane, "
                    "where a projection puts a particle; use the penalty contact with " + name() +
-              ", or implicit-euler with the barrier",
-          SceneRemedy{"contact", "0", "penalty"});
+                       ", or implicit-euler with the barrier",
+                   SceneRemedy{"contact", "0", "penalty"}});
     }
   }
   const Eigen::Index n = system().dofs() / dim_;

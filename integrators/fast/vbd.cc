@@ -48,7 +48,7 @@ StepResult Vbd::do_initialize() {
   view_ = views != nullptr ? views->vertex_block_view() : nullptr;
   Refusal why{"this system has no per-particle form; use implicit-euler", {}};
   if (view_ == nullptr || !view_->vertex_form(why)) {
-    return StepResult::refusal(name() + ": " + why.text, why.remedy);
+    return StepResult::refusal(name(), std::move(why));
   }
   dim_ = view_->dimension_of_state();
   free_ = system().dofs() / dim_;

@@ -71,7 +71,7 @@ StepResult NewmarkFamily::do_initialize() {
   StepResult base = VelocityImplicitMethod::do_initialize();
   if (!base.ok) return base;
   if (std::string why = check_options(options(), x_.size()); !why.empty()) {
-    return StepResult::failure(why);
+    return StepResult::refusal(name(), {why, {}});
   }
   p_ = parameters(options());
   overshoot_ = newmark_overshoot_steps(p_);

@@ -119,17 +119,20 @@ StepResult SundialsIntegrator::do_initialize() {
   yp_.reset();
   log_.last.clear();
   analytic_jacobians_ = 0;
+  // What keeps it from starting on this system is a refusal (integrator.h
+  // StepResult::refusal): the sentence without the name, as data.
   if (std::string why = check_options(options(), n()); !why.empty()) {
-    return StepResult::failure(name() + ": " + why);
+    return StepResult::refusal(name(), {why, {}});
   }
   if (method_.newton_matrix && system().pattern_varies()) {
     // Its Newton matrix (first_order_jacobian.h) and KLU's analysis keep
     // the pattern of the first step.
-    return StepResult::failure(
-        name() + ": this system's Jacobian pattern changes as " + system().pattern_change() +
-        ", and SUNDIALS' Newton matrices keep the pattern of the first step: "
-        "use arkode-erk (adaptive, explicit), or implicit-euler, bdf2 or another "
-        "implicit method of springlab's own");
+    return StepResult::refusal(
+        name(), {"this system's Jacobian pattern changes as " + system().pattern_change() +
+                     ", and SUNDIALS' Newton matrices keep the pattern of the first step: "
+                     "use arkode-erk (adaptive, explicit), or implicit-euler, bdf2 or another "
+                     "implicit method of springlab's own",
+                 {}});
   }
   step_limit_ = sundials_step_limit(options(), 2 * n());
   try {
@@ -143,7 +146,7 @@ StepResult SundialsIntegrator::do_initialize() {
     create();
     configure();
   } catch (const sundials::Failure& e) {
-    return StepResult::failure(name() + ": " + e.what());
+    return StepResult::refusal(name(), {e.what(), {}});
   }
   return StepResult::success();
 }
