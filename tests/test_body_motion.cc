@@ -42,7 +42,7 @@ TEST(BodyMotion, FramesHoldTheBodiesSurfaceVerticesAndTheSettingsTheirFaces) {
   s.dt = 0.01;
   s.t_end = 0.1;
   const RunResult r = simulate(model, s);
-  const BodyLayout layout = body_layout(scene, model.free_particle_count());
+  const BodyLayout layout = body_layout(scene, model.particle_order());
   int i = 1;
   for (std::size_t b = 0; b < 2; ++b) {
     const BodyState st = body_state(layout.bodies[b], layout.first[b], r.x_final.data(),

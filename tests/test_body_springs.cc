@@ -78,7 +78,7 @@ Eigen::Vector3d end_point(const Model& model, const Vector& x, const SpringEnd& 
     // (The tests' particles are fixed: at their scene place.)
     return scene.particles[static_cast<std::size_t>(e.particle)].x;
   }
-  const BodyLayout layout = body_layout(scene, model.free_particle_count());
+  const BodyLayout layout = body_layout(scene, model.particle_order());
   const RigidBody& body = layout.bodies[static_cast<std::size_t>(e.body)];
   const BodyState s =
       body_state(body, layout.first[static_cast<std::size_t>(e.body)], x.data(), x.data());

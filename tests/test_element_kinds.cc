@@ -279,5 +279,55 @@ TEST(ElementKinds, EveryKindIsCompleteAndColumnsAgree) {
   }
 }
 
+// A kind's own unknowns (element_kind.h OwnUnknowns, issue 47 item 3) enter
+// the model through the hook alone: after the free particles, each kind's
+// in one run in registry order, their start and mass the hook's, counted in
+// the model's size, and refused by a per-particle method with the kind's
+// sentence. Every kind that declares them is checked, with every kind's
+// random instance in one 3-D scene.
+TEST(ElementKinds, OwnUnknownsComeThroughTheHook) {
+  int kinds_with_own = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const Scene s = testing::random_scene(element_kinds(), 3, seed);
+    const Model model(s);
+    const ParticleOrder& order = model.particle_order();
+    int next = order.free_particles, own = 0;
+    bool refused_by_own = false;
+    for (const ElementKind* kind : element_kinds()) {
+      const OwnUnknowns& hook = kind->own_unknowns;
+      if (hook.count == nullptr) {
+        EXPECT_EQ(order.first_own(kind->name), -1) << kind->name;
+        continue;
+      }
+      SCOPED_TRACE(std::string(kind->name) + ", seed " + std::to_string(seed));
+      kinds_with_own += seed == 1 ? 1 : 0;
+      ASSERT_NE(hook.initial_state, nullptr);
+      ASSERT_NE(hook.add_free_mass, nullptr);
+      ASSERT_NE(hook.start_points, nullptr);
+      EXPECT_FALSE(hook.not_per_particle.empty());
+      EXPECT_EQ(order.first_own(kind->name), next);
+      const int count = hook.count(s);
+      const Eigen::Index at = static_cast<Eigen::Index>(next) * 3, size = count * 3;
+      Vector x0 = Vector::Zero(size), v0 = Vector::Zero(size), mass = Vector::Zero(size);
+      hook.initial_state(s, x0.data(), v0.data(), mass.data());
+      EXPECT_EQ(model.initial_positions().segment(at, size), x0);
+      EXPECT_EQ(model.initial_velocities().segment(at, size), v0);
+      EXPECT_EQ(model.mass().segment(at, size), mass);
+      EXPECT_TRUE((mass.array() > 0.0).all());
+      Refusal why;
+      if (count > 0 && !refused_by_own) {
+        EXPECT_FALSE(model.vertex_form(why));
+        EXPECT_EQ(why.text, hook.not_per_particle);
+        refused_by_own = true;
+      }
+      next += count;
+      own += count;
+    }
+    EXPECT_EQ(order.own_particles, own);
+    EXPECT_EQ(model.dofs(), static_cast<Eigen::Index>(order.free_particles + own) * 3);
+  }
+  EXPECT_GE(kinds_with_own, 1);  // the rigid bodies
+}
+
 }  // namespace
 }  // namespace springlab::test_element_kinds

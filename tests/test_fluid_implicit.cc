@@ -31,7 +31,7 @@ TEST(FluidPressureHessian, ColumnAssemblyEqualsThePlainOne) {
     SparseMatrix dfdx;
     model.jacobians(0.0, x, v, &dfdx, nullptr);  // updates the particles at x
     const SparseMatrix& pattern = model.jacobian_pattern();
-    SphParticles& fluid = *model.particle_order().sph.front();
+    SphParticles& fluid = *shared_sph_particles(model.scene(), 0, model.particle_order());
     for (bool definite : {false, true}) {
       std::vector<double> column(static_cast<std::size_t>(pattern.nonZeros()), 0.0);
       std::vector<double> plain(column.size(), 0.0);

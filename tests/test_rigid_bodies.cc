@@ -426,7 +426,7 @@ TEST(RigidBodies, AxisymmetricBodyPrecessesAtTheClosedFormRate) {
 // relative over the same steps. The discrete gradient also keeps the
 // energy to its Newton tolerance (1e-10 relative).
 Eigen::Vector3d momentum(const Model& model, const Vector& x, const Vector& v) {
-  const BodyLayout layout = body_layout(model.scene(), model.free_particle_count());
+  const BodyLayout layout = body_layout(model.scene(), model.particle_order());
   return body_state(layout.bodies[0], layout.first[0], x.data(), v.data()).angular_momentum;
 }
 

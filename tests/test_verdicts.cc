@@ -337,7 +337,7 @@ TEST(Verdicts, DiscreteGradientKeepsTheAngularMomentumWhenNewtonFails) {
   const RunResult r = simulate(model, settings("discrete-gradient", 0.05, 2.0));
   ASSERT_EQ(r.status, RunStatus::kCompleted) << r.failure;
   EXPECT_GT(r.stats.nonlinear_failures, 0) << "the case must exercise the fallback";
-  const BodyLayout layout = body_layout(model.scene(), model.free_particle_count());
+  const BodyLayout layout = body_layout(model.scene(), model.particle_order());
   const BodyState s0 = body_state(layout.bodies[0], layout.first[0], model.initial_positions().data(),
                                   model.initial_velocities().data());
   const BodyState s = body_state(layout.bodies[0], layout.first[0], r.x_final.data(),

@@ -469,7 +469,7 @@ ClaimResult check_momentum(const CheckSubject& s) {
   {
     const Scene scene = make_builtin_scene("tumbling-box");
     const Model model(scene);
-    const BodyLayout layout = body_layout(scene, model.free_particle_count());
+    const BodyLayout layout = body_layout(scene, model.particle_order());
     const RigidBody& body = layout.bodies.at(0);
     const int first = layout.first.at(0);
     const BodyState s0 = body_state(body, first, model.initial_positions().data(),

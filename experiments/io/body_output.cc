@@ -18,7 +18,7 @@ nlohmann::ordered_json matrix_json(const Eigen::Matrix3d& m) {
 
 nlohmann::ordered_json bodies_json(const Model& model, const Vector& x, const Vector& v) {
   auto out = nlohmann::ordered_json::array();
-  const BodyLayout layout = body_layout(model.scene(), model.free_particle_count());
+  const BodyLayout layout = body_layout(model.scene(), model.particle_order());
   for (std::size_t b = 0; b < layout.bodies.size(); ++b) {
     const BodyState s = body_state(layout.bodies[b], layout.first[b], x.data(), v.data());
     nlohmann::ordered_json j;

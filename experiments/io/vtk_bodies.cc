@@ -2,8 +2,8 @@
 
 namespace springlab {
 
-VtkBodies::VtkBodies(const Scene& scene, int free_particles)
-    : layout_(body_layout(scene, free_particles)) {
+VtkBodies::VtkBodies(const Scene& scene, int first_unknown)
+    : layout_(body_layout(scene, first_unknown)) {
   for (const RigidBody& b : layout_.bodies) points_ += static_cast<int>(b.X.size());
 }
 

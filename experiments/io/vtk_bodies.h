@@ -15,7 +15,7 @@ namespace springlab {
 
 class VtkBodies {
  public:
-  VtkBodies(const Scene& scene, int free_particles);
+  VtkBodies(const Scene& scene, int first_unknown);
   int points() const { return points_; }
   // Appends each body's triangles, numbering its points from `first_point`.
   void append_cells(int first_point, std::vector<Cell>& cells) const;

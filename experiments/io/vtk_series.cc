@@ -141,7 +141,7 @@ void VtkSeries::check_replaceable(const std::vector<std::string>& old) const {
 
 VtkSeries::VtkSeries(const Model& model, const Scene& scene, std::string dir)
     : model_(model), dir_(std::move(dir)), stem_(vtk_stem(scene.name)),
-      bodies_(scene, model.free_particle_count()) {
+      bodies_(scene, model.particle_order().first_own(kBodyKind)) {
   if (dir_.empty()) throw std::runtime_error("--vtk: the folder name is empty");
   while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
   struct stat st {};

@@ -26,7 +26,7 @@ constexpr int kPastBlowupFrames = 3;
 class MotionRows final : public Observer {
  public:
   MotionRows(const Model& model, std::string prefix, TaskOutput& out)
-      : model_(model), bodies_(model.scene(), model.free_particle_count()),
+      : model_(model), bodies_(model.scene(), model.particle_order().first_own(kBodyKind)),
         prefix_(std::move(prefix)), out_(out) {}
   void observe(double t, const Vector& x, const Vector& v) override {
     if (t < from_ || !x.allFinite() || !v.allFinite()) return;

@@ -60,7 +60,7 @@ struct BoxFacts {
 };
 
 BoxFacts box_facts(const Model& model) {
-  const BodyLayout layout = body_layout(model.scene(), model.free_particle_count());
+  const BodyLayout layout = body_layout(model.scene(), model.particle_order());
   BoxFacts f;
   f.body = layout.bodies.at(0);
   f.first = layout.first.at(0);
@@ -185,7 +185,7 @@ class PileWatch final : public Observer {
  public:
   PileWatch(const Model& model, double t_end, double sample, std::string prefix,
             std::vector<std::string>& rows)
-      : model_(model), layout_(body_layout(model.scene(), model.free_particle_count())),
+      : model_(model), layout_(body_layout(model.scene(), model.particle_order())),
         finder_(model.scene(), layout_),
         energies_(model.energies(model.initial_positions(), model.initial_velocities())),
         t_end_(t_end), sample_(sample), prefix_(std::move(prefix)), rows_(rows) {}

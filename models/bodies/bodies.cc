@@ -113,14 +113,18 @@ int body_pseudo_particles(const Scene& scene) {
   return n;
 }
 
-BodyLayout body_layout(const Scene& scene, int free_particles) {
+BodyLayout body_layout(const Scene& scene, int first_unknown) {
   BodyLayout layout;
   for (const Body& body : scene.get<Bodies>()) {
     layout.bodies.push_back(rigid_body(body));
-    layout.first.push_back(body.fixed ? -1 : free_particles + layout.pseudo_particles);
+    layout.first.push_back(body.fixed ? -1 : first_unknown + layout.pseudo_particles);
     if (!body.fixed) layout.pseudo_particles += 4;
   }
   return layout;
+}
+
+BodyLayout body_layout(const Scene& scene, const ParticleOrder& order) {
+  return body_layout(scene, order.first_own(kBodyKind));
 }
 
 void body_initial_state(const RigidBody& body, double* x, double* v, double* mass) {
@@ -380,7 +384,7 @@ class RigidityForce final : public ForceTerm {
 
 std::unique_ptr<ForceTerm> make_rigidity_force(const Scene& scene, const ParticleOrder& order) {
   if (body_pseudo_particles(scene) == 0) return nullptr;
-  return std::make_unique<RigidityForce>(body_layout(scene, order.free_particles));
+  return std::make_unique<RigidityForce>(body_layout(scene, order));
 }
 
 // ---- Reading, checking, writing. ----
@@ -755,6 +759,36 @@ void add_random_body(Scene& scene, std::mt19937& rng, RandomStates states) {
   add_random_body_with(scene, rng, states, true);
 }
 
+namespace {
+
+// Its own unknowns (element_kind.h OwnUnknowns): p and A of each free body,
+// 4 pseudo-particles of 3, from x0 on.
+void bodies_initial_state(const Scene& scene, double* x0, double* v0, double* mass) {
+  const BodyLayout layout = body_layout(scene, 0);
+  for (std::size_t b = 0; b < layout.bodies.size(); ++b) {
+    if (layout.first[b] < 0) continue;
+    const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(layout.first[b]) * 3;
+    body_initial_state(layout.bodies[b], x0 + at, v0 + at, mass + at);
+  }
+}
+
+void add_free_bodies_mass(const Scene& scene, double& sum) {
+  const BodyLayout layout = body_layout(scene, 0);
+  for (std::size_t b = 0; b < layout.bodies.size(); ++b) {
+    if (layout.first[b] >= 0) sum += layout.bodies[b].mass.mass;
+  }
+}
+
+// Every body's vertices x = p0 + A0 X, a fixed body's flagged.
+void body_start_points(const Scene& scene, std::vector<StartPoint>& out) {
+  for (const Body& body : scene.get<Bodies>()) {
+    const RigidBody b = rigid_body(body);
+    for (const Eigen::Vector3d& X : b.X) out.push_back({b.p0 + b.A0 * X, b.fixed});
+  }
+}
+
+}  // namespace
+
 // Its divergence rule: rigidity strain and, unforced, energy (body_verdict.cc).
 std::unique_ptr<DivergenceRule> make_body_divergence_rule(const Scene& scene,
                                                           const ParticleOrder& order,
@@ -763,12 +797,20 @@ extern const char kBodyDivergenceSentence[];
 
 const ElementKind& body_kind() {
   static const ElementKind kind = {
-      .name = "body",
+      .name = kBodyKind,
       .refers_to_particles = true,
       .keys = {{.name = "bodies", .cap = kMaxSceneBodies, .count = count_bodies}},
       .read = read_bodies,
       .validate = validate_bodies,
       .write = write_bodies,
+      .own_unknowns = {.count = body_pseudo_particles,
+                       .initial_state = bodies_initial_state,
+                       .add_free_mass = add_free_bodies_mass,
+                       .start_points = body_start_points,
+                       .not_per_particle =
+                           "this scene's rigid bodies have no per-particle form (vbd moves one "
+                           "particle at a time; a body's 12 unknowns are coupled by its "
+                           "rigidity); use implicit-euler"},
       .make = make_rigidity_force,
       .energy = {.name = "rigidity", .counts_with_spring = true},
       .divergence_rule = make_body_divergence_rule,

@@ -15,9 +15,11 @@
 #include <Eigen/Core>
 #include <array>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "models/bodies/mass_properties.h"
+#include "models/core/force_term.h"
 
 namespace springlab {
 
@@ -87,14 +89,18 @@ struct RigidBody {
 RigidBody rigid_body(const Body& body);
 
 // The bodies of a scene, derived (in scene order), and the internal index of
-// each one's p pseudo-particle (-1: a fixed body), given the number of free
-// particles.
+// each one's p pseudo-particle (-1: a fixed body), given where the bodies'
+// unknowns start (0 where only the bodies' shapes are wanted).
 struct BodyLayout {
   std::vector<RigidBody> bodies;
   std::vector<int> first;  // internal index of p; a_i at first + 1 + i
   int pseudo_particles = 0;
 };
-BodyLayout body_layout(const Scene& scene, int free_particles);
+BodyLayout body_layout(const Scene& scene, int first_unknown);
+// The same for one model's internal order, where the body kind's own
+// unknowns (element_kind.h OwnUnknowns) start at order.first_own(kBodyKind).
+inline constexpr std::string_view kBodyKind = "body";
+BodyLayout body_layout(const Scene& scene, const ParticleOrder& order);
 
 // 4 per free body.
 int body_pseudo_particles(const Scene& scene);

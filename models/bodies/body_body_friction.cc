@@ -59,8 +59,8 @@ class BodyBodyFrictionForce final : public ForceTerm {
   BodyBodyFrictionForce(const Scene& scene, const BodyLayout& layout, const ParticleOrder& order)
       : finder_(scene, layout), law_(scene.get<Contact>()), eps_(scene.get<Contact>().smoothing),
         g_(scene.get<Gravity>().acceleration.norm()),
-        begin_(3 * static_cast<std::size_t>(order.free_particles)),
-        count_(3 * static_cast<std::size_t>(order.body_particles)) {
+        begin_(3 * static_cast<std::size_t>(order.first_own(kBodyKind))),
+        count_(3 * static_cast<std::size_t>(layout.pseudo_particles)) {
     finder_.place(nullptr);
     blocks_.set(BodyPairBlocks::first_pairs(finder_, law_.distance, fixed_pattern_));
   }
@@ -269,7 +269,7 @@ bool has_body_friction(const Scene& scene) {
 std::unique_ptr<ForceTerm> make_body_body_friction(const Scene& scene,
                                                    const ParticleOrder& order) {
   if (!has_body_friction(scene)) return nullptr;
-  return std::make_unique<BodyBodyFrictionForce>(scene, body_layout(scene, order.free_particles),
+  return std::make_unique<BodyBodyFrictionForce>(scene, body_layout(scene, order),
                                                  order);
 }
 

@@ -67,7 +67,7 @@ class BodyGravityForce final : public ForceTerm {
 std::unique_ptr<ForceTerm> make_body_gravity(const Scene& scene, const ParticleOrder& order) {
   const Eigen::Vector3d& g = scene.get<Gravity>().acceleration;
   if (g.isZero() || body_pseudo_particles(scene) == 0) return nullptr;
-  return std::make_unique<BodyGravityForce>(body_layout(scene, order.free_particles), g);
+  return std::make_unique<BodyGravityForce>(body_layout(scene, order), g);
 }
 
 // ---- Surface vertices. ----
@@ -235,7 +235,7 @@ class BodyContactForce final : public ForceTerm {
 
 std::unique_ptr<ForceTerm> make_body_contact(const Scene& scene, const ParticleOrder& order) {
   if (scene.get<Planes>().empty() || body_pseudo_particles(scene) == 0) return nullptr;
-  return std::make_unique<BodyContactForce>(body_layout(scene, order.free_particles),
+  return std::make_unique<BodyContactForce>(body_layout(scene, order),
                                             scene.get<Planes>(), scene.get<Contact>());
 }
 
@@ -368,7 +368,7 @@ std::unique_ptr<ForceTerm> make_body_friction(const Scene& scene, const Particle
   const bool any = std::any_of(planes.begin(), planes.end(),
                                [](const Plane& p) { return p.friction > 0.0; });
   if (!any || body_pseudo_particles(scene) == 0) return nullptr;
-  return std::make_unique<BodyFrictionForce>(body_layout(scene, order.free_particles), planes,
+  return std::make_unique<BodyFrictionForce>(body_layout(scene, order), planes,
                                              scene.get<Contact>());
 }
 

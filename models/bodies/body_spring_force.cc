@@ -87,7 +87,7 @@ EndMap end_map(const Scene& scene, const ParticleOrder& order, const BodyLayout&
 class BodySpringForce final : public ForceTerm {
  public:
   BodySpringForce(const Scene& scene, const ParticleOrder& order) {
-    const BodyLayout layout = body_layout(scene, order.free_particles);
+    const BodyLayout layout = body_layout(scene, order);
     for (const BodySpring& s : scene.get<BodySprings>()) {
       SpringData d{end_map(scene, order, layout, s.i), end_map(scene, order, layout, s.j), s.k,
                    s.rest, {}};

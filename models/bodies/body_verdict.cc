@@ -84,7 +84,7 @@ const char kBodyDivergenceSentence[] =
 std::unique_ptr<DivergenceRule> make_body_divergence_rule(const Scene& scene,
                                                           const ParticleOrder& order,
                                                           const VerdictScale& scale) {
-  const BodyLayout layout = body_layout(scene, order.free_particles);
+  const BodyLayout layout = body_layout(scene, order);
   std::vector<BodyDivergenceRule::Free> free;
   for (std::size_t b = 0; b < layout.bodies.size(); ++b) {
     if (layout.first[b] < 0) continue;

@@ -64,6 +64,40 @@ struct Cell {
   std::array<int, 4> nodes{};
 };
 
+// A point of a kind's elements at the start, for the extent of motion d of
+// the energy scale E_s (scene_extent.h): where it is, and whether it can fall.
+struct StartPoint {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  bool fixed = false;
+};
+
+// Unknowns of a kind's own (issue 47 item 3): a kind whose elements move by
+// coordinates of their own rather than by the scene's particles (a free
+// rigid body's p and A, 12 unknowns: 4 "pseudo-particles" of 3) declares
+// them here, and the model places them after the free particles, kinds in
+// registry order (ParticleOrder::first_own), fills their start and mass
+// from initial_state, and counts them in E_s. Its terms find their first
+// unknown with order.first_own(kind name). A fluid needs none: its unknowns
+// are its particles', and its changing neighbours are its term's
+// pattern_varies() (force_term.h).
+struct OwnUnknowns {
+  // How many pseudo-particles of `dimension` unknowns the scene's elements
+  // add (0: none). nullptr: the kind has no unknowns of its own.
+  int (*count)(const Scene& scene) = nullptr;
+  // Their initial positions, velocities and masses, count * dimension
+  // values each, written from x0, v0, mass (the kind's first slot).
+  void (*initial_state)(const Scene& scene, double* x0, double* v0, double* mass) = nullptr;
+  // Adds to `sum` the mass they move (a body's mass once, not its
+  // inertias), which E_s weighs with gravity and wind as it does the free
+  // particles'.
+  void (*add_free_mass)(const Scene& scene, double& sum) = nullptr;
+  // Appends their elements' points at the start (a body's vertices).
+  void (*start_points)(const Scene& scene, std::vector<StartPoint>& out) = nullptr;
+  // Why a method that moves one particle at a time (vbd) cannot move them,
+  // naming what couples them and what to use instead.
+  std::string_view not_per_particle = {};
+};
+
 // Which states a random instance may be in (the shared derivative tests).
 enum class RandomStates {
   kAny,       // anything the kind allows: stretched and compressed springs, ...
@@ -92,6 +126,9 @@ struct ElementKind {
   // scene_to_json writes them; reading them back gives the same scene.
   void (*write)(const Scene& scene, std::vector<std::pair<std::string, std::string>>& entries) =
       nullptr;
+
+  // Unknowns of its own, beside the particles' (none unless declared).
+  OwnUnknowns own_unknowns = {};
 
   // The force. nullptr for a kind that only holds data for others.
   ForceFactory make = nullptr;

@@ -26,24 +26,44 @@
 
 namespace springlab {
 
-class SphParticles;
+// Something the terms of one model share, made by the first that needs it
+// (ParticleOrder::shared).
+class SharedByTerms {
+ public:
+  virtual ~SharedByTerms() = default;
+};
 
 // How scene particle indices map to the model's internal order (free first).
 struct ParticleOrder {
   int dim = 2;
   int free_particles = 0;
   std::vector<int> internal_of_scene;  // scene index -> internal index
-  std::vector<int> scene_of_internal;  // internal index -> scene index (-1: a body's unknowns)
-  // The free rigid bodies' unknowns (bodies.h), 4 "pseudo-particles" per
-  // body, at internal indices [free_particles, free_particles +
-  // body_particles): after the free particles, before the fixed ones.
-  int body_particles = 0;
-  // The fluids' particles as SPH sees them (sph_particles.h), one slot per
-  // fluid of the scene, shared by the terms of one model that read them
-  // (a fluid's pressure and its viscosity: one neighbour search per
-  // configuration, not one per term); the first term to need one makes it
-  // (shared_sph_particles).
-  mutable std::vector<std::shared_ptr<SphParticles>> sph;
+  std::vector<int> scene_of_internal;  // internal index -> scene index (-1: a kind's own unknowns)
+  // The kinds' own unknowns (element_kind.h OwnUnknowns: a free rigid
+  // body's 12), as "pseudo-particles" of dim unknowns at internal indices
+  // [free_particles, free_particles + own_particles): after the free
+  // particles, before the fixed ones, each kind's in one run starting at
+  // first_own(its name).
+  int own_particles = 0;
+  std::vector<std::pair<std::string_view, int>> own_first;  // kind name, first internal index
+  // Where the kind's own unknowns start; -1 for a kind that declares none.
+  int first_own(std::string_view kind) const {
+    for (const auto& [name, first] : own_first) {
+      if (name == kind) return first;
+    }
+    return -1;
+  }
+  // What the terms of one model share, by a key of the kind's choosing: a
+  // fluid's particles as SPH sees them (sph_particles.h), read by its
+  // pressure and its viscosity, one neighbour search per configuration, not
+  // one per term. The first term to need one makes it.
+  mutable std::vector<std::pair<std::string, std::shared_ptr<SharedByTerms>>> shared;
+  std::shared_ptr<SharedByTerms> find_shared(const std::string& key) const {
+    for (const auto& [k, object] : shared) {
+      if (k == key) return object;
+    }
+    return nullptr;
+  }
 };
 
 // A read-only view of the configuration at which forces are evaluated.

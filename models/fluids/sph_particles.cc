@@ -79,13 +79,12 @@ double lattice_mass(double rho0, double spacing, int dimension) {
 
 std::shared_ptr<SphParticles> shared_sph_particles(const Scene& scene, std::size_t k,
                                                    const ParticleOrder& order) {
-  const Fluids& fluids = scene.get<Fluids>();
-  if (order.sph.size() != fluids.size()) order.sph.resize(fluids.size());
-  if (!order.sph[k]) {
-    order.sph[k] = std::make_shared<SphParticles>(
-        make_sph_particles(scene, fluids[k], order.internal_of_scene));
-  }
-  return order.sph[k];
+  const std::string key = "fluid " + std::to_string(k);
+  if (auto made = std::dynamic_pointer_cast<SphParticles>(order.find_shared(key))) return made;
+  auto particles = std::make_shared<SphParticles>(
+      make_sph_particles(scene, scene.get<Fluids>()[k], order.internal_of_scene));
+  order.shared.emplace_back(key, particles);
+  return particles;
 }
 
 FluidFields fluid_fields(const Scene& scene, const Fluid& fluid, const double* x) {

@@ -21,7 +21,7 @@
 
 namespace springlab {
 
-class SphParticles {
+class SphParticles final : public SharedByTerms {
  public:
   // `index[a]`: where local particle a's coordinates start in the arrays
   // update() reads, divided by dim (the model's internal index, or the scene
@@ -65,7 +65,7 @@ SphParticles make_sph_particles(const Scene& scene, const Fluid& fluid,
                                 const std::vector<int>& internal_of_scene);
 
 // Those of the scene's fluid number k for one model's terms: made on the
-// first call, then the same object (ParticleOrder::sph), so that terms
+// first call, then the same object (ParticleOrder::shared, key "fluid k"), so that terms
 // evaluated at one configuration share its search.
 std::shared_ptr<SphParticles> shared_sph_particles(const Scene& scene, std::size_t k,
                                                    const ParticleOrder& order);

@@ -8,7 +8,6 @@
 
 #include <Eigen/SparseCore>
 
-#include "models/bodies/bodies.h"
 #include "models/core/element_kind.h"
 #include "models/core/sparse_pattern.h"
 #include "models/model/element_registry.h"
@@ -35,10 +34,15 @@ ParticleOrder make_order(const Scene& scene) {
     }
     if (pass == 0) {
       order.free_particles = static_cast<int>(order.scene_of_internal.size());
-      // The free bodies' unknowns follow the free particles (bodies.h).
-      order.body_particles = body_pseudo_particles(scene);
+      // The kinds' own unknowns follow the free particles (element_kind.h
+      // OwnUnknowns), each kind's in one run.
+      for (const ElementKind* kind : element_kinds()) {
+        if (kind->own_unknowns.count == nullptr) continue;
+        order.own_first.emplace_back(kind->name, order.free_particles + order.own_particles);
+        order.own_particles += kind->own_unknowns.count(scene);
+      }
       order.scene_of_internal.insert(order.scene_of_internal.end(),
-                                     static_cast<std::size_t>(order.body_particles), -1);
+                                     static_cast<std::size_t>(order.own_particles), -1);
     }
   }
   return order;
@@ -53,7 +57,7 @@ bool in_part(const ForceTerm& term, ForcePart part) {
 Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   const int dim = order_.dim;
   const int all = static_cast<int>(order_.scene_of_internal.size());
-  const int unknown_particles = order_.free_particles + order_.body_particles;
+  const int unknown_particles = order_.free_particles + order_.own_particles;
   const Eigen::Index n = static_cast<Eigen::Index>(unknown_particles) * dim;
 
   mass_.resize(n);
@@ -62,15 +66,21 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   x_all_.setZero(static_cast<Eigen::Index>(all) * dim);
   v_all_.setZero(x_all_.size());
   f_all_.setZero(x_all_.size());
-  const BodyLayout bodies = body_layout(scene_, order_.free_particles);
-  for (std::size_t b = 0; b < bodies.bodies.size(); ++b) {
-    if (bodies.first[b] < 0) continue;
-    const Eigen::Index at = static_cast<Eigen::Index>(bodies.first[b]) * dim;
-    body_initial_state(bodies.bodies[b], x0_.data() + at, v0_.data() + at, mass_.data() + at);
-    x_all_.segment(at, 12) = x0_.segment(at, 12);
+  // The kinds' own unknowns (a free body's p and A), from the kind.
+  std::vector<StartPoint> points;  // their elements' points, for E_s below
+  for (const ElementKind* kind : element_kinds()) {
+    const OwnUnknowns& own = kind->own_unknowns;
+    if (own.count == nullptr) continue;
+    // Its elements' points, those that cannot move too (a fixed body's).
+    if (own.start_points != nullptr) own.start_points(scene_, points);
+    const Eigen::Index at = static_cast<Eigen::Index>(order_.first_own(kind->name)) * dim;
+    const Eigen::Index size = static_cast<Eigen::Index>(own.count(scene_)) * dim;
+    if (size == 0) continue;
+    own.initial_state(scene_, x0_.data() + at, v0_.data() + at, mass_.data() + at);
+    x_all_.segment(at, size) = x0_.segment(at, size);
   }
   for (int p = 0; p < all; ++p) {
-    if (order_.scene_of_internal[p] < 0) continue;  // a body's unknowns (above)
+    if (order_.scene_of_internal[p] < 0) continue;  // a kind's own unknowns (above)
     const Particle& particle = scene_.particles[static_cast<std::size_t>(order_.scene_of_internal[p])];
     for (int r = 0; r < dim; ++r) {
       x_all_[p * dim + r] = particle.x[r];
@@ -118,7 +128,7 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   // docs/command-line.md "Divergence": E_s = T(0) + U_spring(0) + sum_free m_i (|g| d +
   // |w_max|^2 / 2), d the scene's extent of motion (scene_extent.h); each kind gives its term
   // per unit of free mass (gravity |g| d, wind |w_max|^2 / 2).
-  const double diameter = extent_of_motion(scene_, bodies);
+  const double diameter = extent_of_motion(scene_, points);
   double per_mass = 0.0;
   for (const ElementKind* kind : element_kinds()) {
     if (kind->energy_scale_per_mass != nullptr) {
@@ -127,8 +137,8 @@ Model::Model(const Scene& scene) : scene_(scene), order_(make_order(scene)) {
   }
   const Energies e0 = energies(x0_, v0_);
   double free_mass = mass_.head(static_cast<Eigen::Index>(order_.free_particles) * dim).sum() / dim;
-  for (std::size_t b = 0; b < bodies.bodies.size(); ++b) {
-    if (bodies.first[b] >= 0) free_mass += bodies.bodies[b].mass.mass;
+  for (const ElementKind* kind : element_kinds()) {
+    if (kind->own_unknowns.add_free_mass != nullptr) kind->own_unknowns.add_free_mass(scene_, free_mass);
   }
   energy_scale_ = e0.kinetic_and_spring() + free_mass * per_mass;
 
@@ -154,7 +164,7 @@ void Model::measure_divergence(const Vector& x, const Vector& v, double total,
 // term declares. Values stay zero here; terms cache their slots in it.
 void Model::build_pattern() const {
   const int dim = order_.dim;
-  const int unknown_particles = order_.free_particles + order_.body_particles;
+  const int unknown_particles = order_.free_particles + order_.own_particles;
   const Eigen::Index n = static_cast<Eigen::Index>(unknown_particles) * dim;
   JacobianPatternBuilder builder(dim);
   for (int p = 0; p < unknown_particles; ++p) builder.add_block(p, p);

@@ -6,14 +6,18 @@
 #include <limits>
 #include <string>
 
+#include "models/core/element_kind.h"
 #include "models/model/model.h"
+#include "models/model/element_registry.h"
 
 namespace springlab {
 
 bool Model::vertex_form(Refusal& why) const {
-  if (order_.body_particles > 0) {
-    why.text = "this scene's rigid bodies have no per-particle form (vbd moves one particle at a "
-          "time; a body's 12 unknowns are coupled by its rigidity); use implicit-euler";
+  // A kind's own unknowns (element_kind.h OwnUnknowns) are not particles.
+  for (const ElementKind* kind : element_kinds()) {
+    const OwnUnknowns& own = kind->own_unknowns;
+    if (own.count == nullptr || own.count(scene_) == 0) continue;
+    why.text = std::string(own.not_per_particle);
     return false;
   }
   for (const auto& term : terms_) {

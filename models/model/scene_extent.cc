@@ -8,7 +8,7 @@
 
 namespace springlab {
 
-double extent_of_motion(const Scene& scene, const BodyLayout& bodies) {
+double extent_of_motion(const Scene& scene, const std::vector<StartPoint>& points) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
   std::vector<Eigen::Vector3d> free;  // the points that can fall
   for (const Particle& p : scene.particles) {
@@ -16,13 +16,10 @@ double extent_of_motion(const Scene& scene, const BodyLayout& bodies) {
     hi = hi.cwiseMax(p.x);
     if (!p.fixed) free.push_back(p.x);
   }
-  for (const RigidBody& b : bodies.bodies) {
-    for (const Eigen::Vector3d& X : b.X) {
-      const Eigen::Vector3d x = b.p0 + b.A0 * X;
-      lo = lo.cwiseMin(x);
-      hi = hi.cwiseMax(x);
-      if (!b.fixed) free.push_back(x);
-    }
+  for (const StartPoint& point : points) {
+    lo = lo.cwiseMin(point.x);
+    hi = hi.cwiseMax(point.x);
+    if (!point.fixed) free.push_back(point.x);
   }
   const Eigen::Vector3d g = scene.get<Gravity>().acceleration;
   const Planes* planes = scene.find<Planes>();
@@ -49,7 +46,7 @@ double extent_of_motion(const Scene& scene, const BodyLayout& bodies) {
     }
   }
   if (!(hi.x() >= lo.x())) return 0.0;  // nothing in the scene
-  if (!bodies.bodies.empty()) return (hi - lo).norm();
+  if (!points.empty()) return (hi - lo).norm();  // a kind's own points are 3-D
   double d2 = 0.0;
   for (int r = 0; r < scene.dimension; ++r) d2 += (hi[r] - lo[r]) * (hi[r] - lo[r]);
   return std::sqrt(d2);

@@ -1,8 +1,8 @@
 // The scene's extent of motion (docs/command-line.md "Divergence"): the
 // length d in the energy scale's gravity term, E_s = ... + sum_free m |g| d.
 // d is the diameter of the box that holds
-//   - the initial positions of every particle and every body's surface
-//     vertices, and
+//   - the initial positions of every particle and of the kinds' own points
+//     (`points`: a body's surface vertices, element_kind.h OwnUnknowns), and
 //   - under gravity, where each free one of them lands when it falls along
 //     g onto the nearest contact plane below it that faces up (its foot
 //     there),
@@ -12,11 +12,13 @@
 // positions.
 #pragma once
 
-#include "models/bodies/bodies.h"
+#include <vector>
+
+#include "models/core/element_kind.h"
 #include "models/core/scene.h"
 
 namespace springlab {
 
-double extent_of_motion(const Scene& scene, const BodyLayout& bodies);
+double extent_of_motion(const Scene& scene, const std::vector<StartPoint>& points);
 
 }  // namespace springlab
