@@ -265,6 +265,23 @@ void register_step_benchmarks() {
           ->MinTime(0.5);
     }
   }
+  // cvode-bdf's Newton matrix solved by KLU on the 2n x 2n first-order
+  // matrix and by the reduced solver on M - gamma D - gamma^2 K
+  // (integrators/sundials/reduced_newton_solver.h; the default above 100
+  // unknowns), side by side on the cloth up to 64 (KLU takes seconds a
+  // step there).
+  for (const SceneCase& c : all_cases()) {
+    if (c.scene != "cloth" || c.n > 64) continue;
+    for (const char* solver : {"klu", "reduced"}) {
+      IntegratorOptions options;
+      options.linear_solver = solver;
+      benchmark::RegisterBenchmark(
+          ("BM_Step/cvode-bdf:" + std::string(solver) + "/" + c.path()).c_str(),
+          [c, options](benchmark::State& s) { step_benchmark(s, "cvode-bdf", c, options); })
+          ->Unit(benchmark::kMicrosecond)
+          ->MinTime(0.5);
+    }
+  }
 }
 
 }  // namespace springlab::bench

@@ -120,17 +120,18 @@ INSTANTIATE_TEST_SUITE_P(
         Refusal{"DifferenceQuotientsWithKlu", run_args("cvode-bdf", {"--dq-jacobian", "--linear-solver", "klu"}),
                 "--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as dense matrices: add "
                 "--linear-solver dense or gmres"},
-        Refusal{"DifferenceQuotientsWithAutoKlu",
+        Refusal{"DifferenceQuotientsWithAutoReduced",
                 {"run", "cloth", "-p", "n=8", "--integrator", "ida", "--dq-jacobian", "--dt", "0.1",
                  "--t-end", "1", "--energy", "e.csv"},
                 "--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as dense matrices "
-                "(--linear-solver auto picks klu above 100 unknowns; this system has 372): add "
+                "(--linear-solver auto picks reduced above 100 unknowns; this system has 372): add "
                 "--linear-solver dense or gmres"},
         Refusal{"DenseTooLarge",
                 {"run", "cloth", "-p", "n=40", "--integrator", "cvode-bdf", "--linear-solver", "dense",
                  "--dt", "0.1", "--t-end", "1", "--energy", "e.csv"},
                 "--linear-solver dense: a 9588 x 9588 Newton matrix, over the cap of 1000 unknowns for "
-                "a dense one (each factorization would take seconds): use --linear-solver klu or gmres"},
+                "a dense one (each factorization would take seconds): use --linear-solver reduced, klu "
+                "or gmres"},
         Refusal{"ToleranceBelowRoundoff", run_args("cvode-bdf", {"--rtol", "1e-300"}),
                 "--rtol 1e-300: below double precision's unit roundoff (2.2e-16), a tolerance no solver "
                 "can meet: use --rtol 1e-14 or more"},

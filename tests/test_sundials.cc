@@ -3,16 +3,25 @@
 // Jacobian really used, linear solvers agreeing, failures as results.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <random>
 #include <set>
 #include <thread>
 
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
 #include "experiments/driver/simulation.h"
 #include "integrators/registry/registry.h"
+#include "integrators/sundials/reduced_newton_solver.h"
 #include "integrators/sundials/sundials_integrator.h"
+#include "integrators/sundials/sundials_support.h"
 #include "models/scenes/builtin_scenes.h"
 #include "models/model/model.h"
 #include "registry_suite.h"
@@ -143,7 +152,7 @@ TEST_P(AdaptiveImplicitIntegrator, DifferenceQuotientJacobianGivesTheSameAnswer)
 TEST_P(AdaptiveImplicitIntegrator, LinearSolversAgree) {
   const Model model(make_builtin_scene("cloth", {{"n", "6"}, {"drag", "0.01"}}));
   Vector first;
-  for (const char* solver : {"dense", "klu", "gmres"}) {
+  for (const char* solver : {"dense", "klu", "gmres", "reduced"}) {
     RunSettings s = adaptive(GetParam(), 1e-8, 0.05, 0.15);
     s.options.linear_solver = solver;
     const RunResult r = simulate(model, s);
@@ -156,17 +165,79 @@ TEST_P(AdaptiveImplicitIntegrator, LinearSolversAgree) {
   }
 }
 
-TEST_P(AdaptiveImplicitIntegrator, KluRefusesDifferenceQuotients) {
+TEST_P(AdaptiveImplicitIntegrator, KluAndReducedRefuseDifferenceQuotients) {
   const Model model(testing::swinging_spring());
-  RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 1.0);
-  s.options.linear_solver = "klu";
-  s.options.dq_jacobian = true;
-  const RunResult r = simulate(model, s);
-  ASSERT_EQ(r.status, RunStatus::kFailed);
-  EXPECT_NE(r.failure.find("--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as "
-                           "dense matrices: add --linear-solver dense or gmres"),
-            std::string::npos)
-      << r.failure;
+  for (const char* solver : {"klu", "reduced"}) {
+    RunSettings s = adaptive(GetParam(), 1e-6, 0.1, 1.0);
+    s.options.linear_solver = solver;
+    s.options.dq_jacobian = true;
+    const RunResult r = simulate(model, s);
+    ASSERT_EQ(r.status, RunStatus::kFailed) << solver;
+    EXPECT_NE(r.failure.find("--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as "
+                             "dense matrices: add --linear-solver dense or gmres"),
+              std::string::npos)
+        << r.failure;
+  }
+}
+
+// The reduced solver (reduced_newton_solver.h) is an exact rewriting of the
+// first-order Newton system: its answer equals a dense LU solve of the full
+// 2n x 2n matrix to round-off, for CVODE's I - gamma J (after SUNDIALS'
+// own scaling, SUNMatScaleAddI) and IDA's G(cj), on a cloth with drag
+// (a nonzero dF/dv) and with compressed springs (K indefinite).
+TEST(ReducedNewtonSolver, EqualsTheFullFirstOrderSolve) {
+  const Model model(make_builtin_scene("cloth", {{"n", "4"}, {"drag", "0.3"}}));
+  const Eigen::Index n = model.dofs();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Vector x = model.initial_positions(), v = model.initial_velocities();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    x[i] += 0.02 * u(rng);  // some springs compressed
+    v[i] += u(rng);
+  }
+  SparseMatrix dfdx, dfdv;
+  model.jacobians(0.0, x, v, &dfdx, &dfdv);
+  ASSERT_GT(dfdv.norm(), 0.0);
+  sundials::FirstOrderJacobian jacobian(model);
+  sundials::ContextPtr context;
+  {
+    SUNContext c = nullptr;
+    ASSERT_EQ(SUNContext_Create(nullptr, &c), 0);
+    context.reset(c);
+  }
+  const sundials::ReducedSystem system{&model, &dfdx, &dfdv, &jacobian};
+  sundials::MatrixPtr A(sundials::make_reduced_matrix(system, context.get()));
+  sundials::LinearSolverPtr solver(sundials::make_reduced_solver(system, context.get()));
+  sundials::MatrixPtr dense(SUNDenseMatrix(2 * n, 2 * n, context.get()));
+  sundials::VectorPtr b = sundials::make_vector(2 * n, context.get());
+  sundials::VectorPtr out = sundials::make_vector(2 * n, context.get());
+  sundials::VectorPtr back = sundials::make_vector(2 * n, context.get());
+  Eigen::Map<Vector>(N_VGetArrayPointer(b.get()), 2 * n) = Vector::NullaryExpr(2 * n, [&] { return u(rng); });
+  for (const bool dae : {false, true}) {
+    SCOPED_TRACE(dae ? "IDA's G(cj)" : "CVODE's I - gamma J");
+    const double gamma = 0.01, cj = 1.0 / gamma;
+    Eigen::MatrixXd full;
+    if (dae) {
+      sundials::set_dae_jacobian(A.get(), cj);
+      jacobian.fill_dae(dfdx, dfdv, cj, dense.get());
+    } else {
+      sundials::set_ode_jacobian(A.get());
+      ASSERT_EQ(SUNMatScaleAddI(-gamma, A.get()), 0);  // as CVODE's setup does
+      jacobian.fill_ode(dfdx, dfdv, dense.get());
+      ASSERT_EQ(SUNMatScaleAddI(-gamma, dense.get()), 0);
+    }
+    full = Eigen::Map<Eigen::MatrixXd>(SUNDenseMatrix_Data(dense.get()), 2 * n, 2 * n);
+    ASSERT_EQ(SUNLinSolSetup(solver.get(), A.get()), 0);
+    ASSERT_EQ(SUNLinSolSolve(solver.get(), A.get(), out.get(), b.get(), 0.0), 0);
+    const Eigen::Map<const Vector> rhs(N_VGetArrayPointer(b.get()), 2 * n);
+    const Eigen::Map<const Vector> reduced(N_VGetArrayPointer(out.get()), 2 * n);
+    const Vector exact = full.partialPivLu().solve(rhs);
+    EXPECT_LT((reduced - exact).norm(), 1e-10 * exact.norm());
+    // The placeholder's product is the full matrix's.
+    ASSERT_EQ(SUNMatMatvec(A.get(), out.get(), back.get()), 0);
+    const Eigen::Map<const Vector> product(N_VGetArrayPointer(back.get()), 2 * n);
+    EXPECT_LT((product - full * reduced).norm(), 1e-12 * (full * reduced).norm());
+  }
 }
 
 // --max-order is checked against the method before any run (issue 17,
@@ -252,7 +323,8 @@ TEST(SundialsWorkLimit, HopelessRunFailsAtTheScaledLimit) {
 }
 
 // --linear-solver dense is refused above kMaxDenseUnknowns first-order
-// unknowns, --dq-jacobian where auto picks KLU (above 100 unknowns).
+// unknowns, --dq-jacobian where auto picks the reduced solver (above 100
+// unknowns).
 TEST(SundialsOptions, DenseSizeCapAndDifferenceQuotientsWithAuto) {
   const auto bdf = make_integrator("cvode-bdf");
   IntegratorOptions o;
@@ -260,14 +332,14 @@ TEST(SundialsOptions, DenseSizeCapAndDifferenceQuotientsWithAuto) {
   EXPECT_EQ(bdf->check_options(o, kMaxDenseUnknowns / 2), "");
   EXPECT_EQ(bdf->check_options(o, kMaxDenseUnknowns / 2 + 1),
             "--linear-solver dense: a 1002 x 1002 Newton matrix, over the cap of 1000 unknowns "
-            "for a dense one (each factorization would take seconds): use --linear-solver klu "
-            "or gmres");
+            "for a dense one (each factorization would take seconds): use --linear-solver "
+            "reduced, klu or gmres");
   o.linear_solver = "auto";
   o.dq_jacobian = true;
   EXPECT_EQ(bdf->check_options(o, 50), "");  // 100 unknowns: dense
   EXPECT_EQ(bdf->check_options(o, 51),
             "--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as dense matrices "
-            "(--linear-solver auto picks klu above 100 unknowns; this system has 102): add "
+            "(--linear-solver auto picks reduced above 100 unknowns; this system has 102): add "
             "--linear-solver dense or gmres");
   o.linear_solver = "gmres";
   EXPECT_EQ(bdf->check_options(o, 5000), "");

@@ -105,13 +105,13 @@ const std::vector<OptionSpec>& integrator_options() {
        .default_text = "the method's",
        .help = "adaptive methods: highest order (ARKODE: the method's order)"},
       {.name = "linear-solver", .range = Range::kChoice,
-       .choices = {"auto", "dense", "klu", "gmres"},
-       .help = "implicit adaptive methods: dense, klu, gmres or auto (dense up to 100 unknowns, "
-               "klu above)",
+       .choices = {"auto", "dense", "klu", "gmres", "reduced"},
+       .help = "implicit adaptive methods: dense, klu, gmres, reduced (the n x n matrix "
+               "M - gamma D - gamma^2 K) or auto (dense up to 100 unknowns, reduced above)",
        .get = [](const O& o) { return o.linear_solver; },
        .set =
            [](O& o, const std::string& v) {
-             for (const char* c : {"auto", "dense", "klu", "gmres"}) {
+             for (const char* c : {"auto", "dense", "klu", "gmres", "reduced"}) {
                if (v == c) {
                  o.linear_solver = v;
                  return true;

@@ -88,7 +88,11 @@ int IdaIntegrator::jacobian(double t, double cj, N_Vector y, N_Vector, N_Vector,
                             void* self, N_Vector, N_Vector, N_Vector) {
   auto* me = static_cast<IdaIntegrator*>(self);
   me->evaluate_jacobians(ForcePart::kAll, t, y);
-  me->jacobian_->fill_dae(me->dfdx_, me->dfdv_, cj, G);
+  if (sundials::is_reduced(G)) {
+    sundials::set_dae_jacobian(G, cj);  // dF/dx, dF/dv stay in dfdx_, dfdv_
+  } else {
+    me->jacobian_->fill_dae(me->dfdx_, me->dfdv_, cj, G);
+  }
   return 0;
 }
 

@@ -88,10 +88,10 @@ std::string SundialsIntegrator::check_options(const IntegratorOptions& o, Eigen:
     return e.what();
   }
   const std::string picked =
-      o.linear_solver == "auto" ? " (--linear-solver auto picks klu above 100 unknowns; this system has " +
+      o.linear_solver == "auto" ? " (--linear-solver auto picks reduced above 100 unknowns; this system has " +
                                       std::to_string(unknowns) + ")"
                                 : "";
-  if (o.dq_jacobian && kind == LinearSolverKind::kKlu) {
+  if (o.dq_jacobian && (kind == LinearSolverKind::kKlu || kind == LinearSolverKind::kReduced)) {
     return "--dq-jacobian: SUNDIALS forms difference-quotient Jacobians only as dense matrices" +
            picked + ": add --linear-solver dense or gmres";
   }
@@ -99,7 +99,7 @@ std::string SundialsIntegrator::check_options(const IntegratorOptions& o, Eigen:
     return "--linear-solver dense: a " + std::to_string(unknowns) + " x " + std::to_string(unknowns) +
            " Newton matrix, over the cap of " + std::to_string(kMaxDenseUnknowns) +
            " unknowns for a dense one (each factorization would take seconds): use --linear-solver "
-           "klu or gmres";
+           "reduced, klu or gmres";
   }
   return {};
 }
@@ -246,8 +246,10 @@ SundialsIntegrator::LinearSolverKind SundialsIntegrator::linear_solver_kind(cons
   if (choice == "dense") return LinearSolverKind::kDense;
   if (choice == "klu") return LinearSolverKind::kKlu;
   if (choice == "gmres") return LinearSolverKind::kGmres;
-  if (choice == "auto") return unknowns <= 100 ? LinearSolverKind::kDense : LinearSolverKind::kKlu;
-  throw sundials::Failure("--linear-solver: unknown '" + choice + "' (dense, klu, gmres, auto)");
+  if (choice == "reduced") return LinearSolverKind::kReduced;
+  if (choice == "auto") return unknowns <= 100 ? LinearSolverKind::kDense : LinearSolverKind::kReduced;
+  throw sundials::Failure("--linear-solver: unknown '" + choice +
+                          "' (dense, klu, gmres, reduced, auto)");
 }
 
 SundialsIntegrator::LinearSolverKind SundialsIntegrator::linear_solver_kind() const {
@@ -279,6 +281,13 @@ void SundialsIntegrator::create_linear_solver(LinearSolverKind kind) {
     case LinearSolverKind::kGmres:
       linear_solver_.reset(
           check_created(SUNLinSol_SPGMR(y_.get(), SUN_PREC_NONE, 0, ctx), "SUNLinSol_SPGMR"));
+      return;
+    case LinearSolverKind::kReduced:
+      // The n x n matrix M - gamma D - gamma^2 K (reduced_newton_solver.h).
+      reduced_ = {&system(), &dfdx_, &dfdv_, jacobian_.get()};
+      matrix_.reset(check_created(sundials::make_reduced_matrix(reduced_, ctx), "SUNMatNewEmpty"));
+      linear_solver_.reset(
+          check_created(sundials::make_reduced_solver(reduced_, ctx), "SUNLinSolNewEmpty"));
       return;
   }
 }
@@ -335,7 +344,11 @@ int SundialsIntegrator::ode_jacobian(double t, N_Vector y, N_Vector, SUNMatrix J
                                      N_Vector, N_Vector, N_Vector) {
   auto* me = static_cast<SundialsIntegrator*>(self);
   me->evaluate_jacobians(me->implicit_part_, t, y);
-  me->jacobian_->fill_ode(me->dfdx_, me->dfdv_, J);
+  if (sundials::is_reduced(J)) {
+    sundials::set_ode_jacobian(J);  // dF/dx, dF/dv stay in dfdx_, dfdv_
+  } else {
+    me->jacobian_->fill_ode(me->dfdx_, me->dfdv_, J);
+  }
   return 0;
 }
 

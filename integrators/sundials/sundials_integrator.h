@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "integrators/sundials/first_order_jacobian.h"
+#include "integrators/sundials/reduced_newton_solver.h"
 #include "integrators/core/integrator.h"
 #include "integrators/sundials/sundials_support.h"
 
@@ -84,7 +85,7 @@ class SundialsIntegrator : public Integrator {
   SundialsIntegrator(IntegratorInfo info, const SundialsCalls& calls, SundialsMethod method);
   ~SundialsIntegrator() override;
 
-  enum class LinearSolverKind { kNone, kDense, kKlu, kGmres };
+  enum class LinearSolverKind { kNone, kDense, kKlu, kGmres, kReduced };
 
   // Hooks for each package. create() makes the solver memory for the
   // current state (first adopt(), then the package's Init), throwing
@@ -96,7 +97,8 @@ class SundialsIntegrator : public Integrator {
   // Takes ownership of the package's memory and routes its errors to log_.
   void adopt(void* memory, sundials::SolverMemory::FreeFn free_fn);
 
-  // --linear-solver, resolved ("auto": dense up to 100 unknowns, KLU above).
+  // --linear-solver, resolved ("auto": dense up to 100 unknowns, the reduced
+  // solver above: reduced_newton_solver.h).
   LinearSolverKind linear_solver_kind() const;
   static LinearSolverKind linear_solver_kind(const std::string& choice, Eigen::Index unknowns);
 
@@ -130,6 +132,7 @@ class SundialsIntegrator : public Integrator {
   sundials::ErrorLog log_;
   std::unique_ptr<sundials::FirstOrderJacobian> jacobian_;
   SparseMatrix dfdx_, dfdv_;
+  sundials::ReducedSystem reduced_;  // what --linear-solver reduced reads
   ForcePart implicit_part_ = ForcePart::kAll;  // what the Newton matrix differentiates
 
  private:
