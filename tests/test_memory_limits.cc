@@ -197,6 +197,27 @@ TEST_F(MemoryLimitsCli, BlockOverTheLimitIsRefusedUpFront) {
   EXPECT_EQ(r.out, "");
 }
 
+// SUNDIALS' reduced solver factors the same matrix: refused up front too,
+// with its own way out (GMRES factors nothing).
+TEST_F(MemoryLimitsCli, CvodeBdfOverTheLimitIsRefusedUpFront) {
+  const std::vector<std::string> args = {"run", "block", "-p", "n=20", "--integrator",
+                                         "cvode-bdf", "--dt", "1e-3", "--t-end", "1e-3"};
+  const ProcessResult r = run_limited(args, 420e6);
+  ASSERT_TRUE(r.exited) << describe(args, r);
+  EXPECT_EQ(r.status, 1) << describe(args, r);
+  const std::vector<std::string> err = lines(r.err);
+  ASSERT_EQ(err.size(), 1u) << describe(args, r);
+  EXPECT_EQ(err[0].rfind("springlab: error: --integrator cvode-bdf: the factor of the 27783 "
+                         "x 27783 matrix needs about ",
+                         0),
+            0u)
+      << err[0];
+  EXPECT_NE(err[0].find("use a coarser mesh, --linear-solver gmres (it factors nothing)"),
+            std::string::npos)
+      << err[0];
+  EXPECT_EQ(r.out, "");
+}
+
 // Every limit from too little for the scene to enough: an error line and
 // exit 1, or a run that failed saying "out of memory", or a completed run;
 // never a signal or a hang.

@@ -80,6 +80,13 @@ class SundialsIntegrator : public Integrator {
   StepResult advance_to(double t_out) final;
   std::string check_options(const IntegratorOptions& options, Eigen::Index dofs) const override;
   std::vector<std::string> options_read() const override;
+  // The reduced solver factors M - gamma D - gamma^2 K on the model's
+  // pattern (auto's choice above 100 unknowns; below, the dense matrix is
+  // small), so the memory rule for such a factor applies to it.
+  bool factors_jacobian(const IntegratorOptions& options) const override {
+    return method_.newton_matrix &&
+           (options.linear_solver == "reduced" || options.linear_solver == "auto");
+  }
 
  protected:
   SundialsIntegrator(IntegratorInfo info, const SundialsCalls& calls, SundialsMethod method);
