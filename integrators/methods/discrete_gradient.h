@@ -52,7 +52,7 @@
 // rule's own energy error is smaller still.
 //
 // Newton (newton_loop.h) solves the step with the DiscreteGradientPhases
-// policy (newton_policy.h). The residual is not the gradient of a
+// policy (discrete_gradient.cc, a NewtonPolicy of newton_policy.h). The residual is not the gradient of a
 // potential, but with the correction's coefficient frozen it is that of the
 // midpoint's potential plus c |D|^2: where the forces derive from potentials
 // Newton first minimizes that (robust far from the solution), then, once a
@@ -85,6 +85,10 @@ class DiscreteGradient final : public VelocityImplicitMethod {
 
  protected:
   StepResult do_step(double h) override;
+  // Its Newton runs in two phases (the .cc: the frozen potential, then
+  // Newton on r).
+  std::unique_ptr<NewtonPolicy> newton_policy(NewtonPolicy::Matrices matrices, bool symmetric,
+                                              VelocityStep& step) override;
 
  private:
   // One step of h as n substeps with the scheme, from (t_, x_, v_); on

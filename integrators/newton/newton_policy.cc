@@ -33,46 +33,4 @@ void NewtonPolicy::step_taken(NewtonMode& mode, double alpha) {
   if (symmetric_) mode.definite = alpha < 1.0 || definite_only_;
 }
 
-void DiscreteGradientPhases::start(bool has_potential, NewtonMode& mode) {
-  NewtonPolicy::start(has_potential, mode);
-  has_potential_ = has_potential;
-  newton_phase_ = false;
-  step_.freeze(mode.minimize);
-  step_.set_frozen_coefficient(0.0);
-}
-
-void DiscreteGradientPhases::begin_iteration(NewtonMode& mode, NewtonIterate& it) {
-  if (has_potential_) {
-    mode.minimize = !newton_phase_;
-    step_.freeze(mode.minimize);
-    mode.careful = mode.careful || newton_phase_;
-  }
-  // The coefficient at this v: the potential and r of the next iterations
-  // use it.
-  step_.update_frozen(it.r, it.phi);
-}
-
-bool DiscreteGradientPhases::retry_not_descending(NewtonMode& mode) {
-  if (NewtonPolicy::retry_not_descending(mode)) return true;
-  if (!step_.frozen()) return false;
-  newton_phase_ = true;  // the frozen potential is only a guide: Newton on r
-  return true;
-}
-
-bool DiscreteGradientPhases::retry_search_failed(NewtonMode& mode, NewtonProblem& problem,
-                                                 NewtonIterate& it) {
-  if (!newton_phase_) return NewtonPolicy::retry_search_failed(mode, problem, it);
-  // Back to the frozen potential, from v.
-  newton_phase_ = false;
-  mode.careful = false;
-  step_.refreeze_at(it.v, it.r);
-  it.phi = step_.potential(it.v, it.magnitude);
-  return true;
-}
-
-void DiscreteGradientPhases::step_taken(NewtonMode& mode, double alpha) {
-  if (has_potential_ && !newton_phase_ && alpha == 1.0 && !mode.definite) newton_phase_ = true;
-  NewtonPolicy::step_taken(mode, alpha);
-}
-
 }  // namespace springlab

@@ -68,29 +68,4 @@ class NewtonPolicy {
   const bool symmetric_;
 };
 
-// The discrete gradient on the potential path (discrete_gradient.h): its
-// residual is no gradient, but with the correction's coefficient frozen it
-// is that of the midpoint's potential + c |D|^2. Phase 1 minimizes that
-// potential with the coefficient frozen at each iteration's start (robust
-// far from the solution); once a full exact update is taken, phase 2 is
-// Newton with the exact Jacobian (the rank-one term included) and a search
-// on ||r||, quadratic near the solution; back to phase 1 when that search
-// fails, and to phase 2 when phase 1's update does not descend even with
-// the definite matrix.
-class DiscreteGradientPhases final : public NewtonPolicy {
- public:
-  DiscreteGradientPhases(Matrices matrices, bool symmetric, VelocityStep& step)
-      : NewtonPolicy(matrices, symmetric), step_(step) {}
-  void start(bool has_potential, NewtonMode& mode) override;
-  void begin_iteration(NewtonMode& mode, NewtonIterate& it) override;
-  bool retry_not_descending(NewtonMode& mode) override;
-  bool retry_search_failed(NewtonMode& mode, NewtonProblem& problem, NewtonIterate& it) override;
-  void step_taken(NewtonMode& mode, double alpha) override;
-
- private:
-  VelocityStep& step_;
-  bool has_potential_ = false;
-  bool newton_phase_ = false;  // phase 2
-};
-
 }  // namespace springlab

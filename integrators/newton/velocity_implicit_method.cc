@@ -29,13 +29,9 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const
   const NewtonLoop::Settings settings{
       .tol = options().newton_tol, .max_iterations = options().max_newton, .start = start};
   const NewtonLoop::Context context{.t = t_, .h = step_.h()};
-  const bool symmetric = system().jacobian_symmetric();
-  if (step_.scheme().discrete_gradient) {
-    DiscreteGradientPhases policy(matrices, symmetric, step_);
-    return newton_.solve(step_, {policy, linear_, search_}, settings, context, mutable_stats(), v);
-  }
-  NewtonPolicy policy(matrices, symmetric);
-  return newton_.solve(step_, {policy, linear_, search_}, settings, context, mutable_stats(), v);
+  const std::unique_ptr<NewtonPolicy> policy =
+      newton_policy(matrices, system().jacobian_symmetric(), step_);
+  return newton_.solve(step_, {*policy, linear_, search_}, settings, context, mutable_stats(), v);
 }
 
 StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplicitScheme& s,

@@ -10,8 +10,8 @@
 //   the line search    LineSearch: Armijo on the potential or ||r||, the
 //                      barrier's step cap, negative curvature
 //   the policy         NewtonPolicy: exact / definite matrices and the
-//                      fallbacks (DiscreteGradientPhases for Gonzalez's
-//                      method)
+//                      fallbacks; a method may give its own
+//                      (newton_policy() below: the discrete gradient's)
 //
 // and, for the step as a whole, two more strategies:
 //   - quasi-Newton (--solver quasi-newton, quasi_newton.h): L-BFGS on the
@@ -39,6 +39,7 @@
 // compare this one with, is reference_backward_euler.h.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "integrators/newton/incremental_potential_check.h"
@@ -79,6 +80,16 @@ class VelocityImplicitMethod : public Integrator {
   // False (with `error`) when the matrix is singular or dv not finite.
   bool solve_linearized(double t, const Vector& x, const Vector& v, const Vector& f, double h,
                         double b, double c, bool definite, Vector& dv, std::string& error);
+
+  // The Newton policy of this method's steps (newton_policy.h): the plain
+  // one here; a method whose residual is no gradient gives its own (the
+  // discrete gradient's two phases, discrete_gradient.cc). `step`: the
+  // step begun, which the policy may steer.
+  virtual std::unique_ptr<NewtonPolicy> newton_policy(NewtonPolicy::Matrices matrices,
+                                                      bool symmetric, VelocityStep& step) {
+    (void)step;
+    return std::make_unique<NewtonPolicy>(matrices, symmetric);
+  }
 
  private:
   // Newton on the step begun in step_, with the given matrices.

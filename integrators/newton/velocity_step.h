@@ -126,8 +126,8 @@ class VelocityStep final : public NewtonProblem {
   // rounding of x* (|dV| <= |F| . |dx|). Two force evaluations.
   double stored_magnitude();
 
-  // The discrete gradient's correction coefficient (DiscreteGradientPhases,
-  // newton_policy.h): frozen (Phi then includes c |D|^2, r its gradient) or
+  // The discrete gradient's correction coefficient (its Newton policy,
+  // DiscreteGradientPhases in methods/discrete_gradient.cc): frozen (Phi then includes c |D|^2, r its gradient) or
   // not, and its value.
   void freeze(bool frozen) { frozen_ = frozen; }
   bool frozen() const { return frozen_; }
