@@ -285,14 +285,12 @@ std::unique_ptr<Integrator> prepare_or_refuse(const Model& model, const RunSetti
   if (integrator->factors_jacobian(run.options)) {
     const std::string why = factor_fit_error(model.jacobian_pattern());
     if (!why.empty()) {
-      // The method's own way out: the option it reads that factors less.
-      const std::vector<std::string> read = integrator->options_read();
-      const bool sundials = std::count(read.begin(), read.end(), "linear-solver") > 0;
+      // The method's own way out: the option with which it factors none.
+      IntegratorOptions without = run.options;
+      const std::string option = integrator->factor_free_option(without);
       throw UsageError("--integrator " + run.integrator + ": " + why + ": use a coarser mesh, " +
-                       (sundials ? std::string("--linear-solver gmres (it factors nothing)")
-                                 : std::string("--solver quasi-newton (it factors a matrix of a "
-                                               "third of the unknowns)")) +
-                       ", or a method that factors none (rk4, xpbd, projective-dynamics)");
+                       (option.empty() ? "" : option + ", ") +
+                       "or a method that factors none (rk4, xpbd, projective-dynamics)");
     }
   }
   return integrator;

@@ -177,6 +177,10 @@ class Integrator {
   // no; the velocity-implicit methods unless --solver quasi-newton (which
   // factors a matrix of a third of the unknowns).
   virtual bool factors_jacobian(const IntegratorOptions&) const { return false; }
+  // The option that makes such a method factor no Jacobian of the model's
+  // pattern, set in `options`, and how the refusal of a factor too large
+  // names it ("--solver quasi-newton (...)"); "" when it has none.
+  virtual std::string factor_free_option(IntegratorOptions& /*options*/) const { return {}; }
   // The substeps one step takes with these options, for a method that reads
   // --substeps (`run --json` reports it); 1 for the others.
   virtual int substeps(const IntegratorOptions&) const { return 1; }

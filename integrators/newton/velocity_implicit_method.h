@@ -55,6 +55,10 @@ class VelocityImplicitMethod : public Integrator {
   bool factors_jacobian(const IntegratorOptions& options) const override {
     return options.solver != Solver::kQuasiNewton;
   }
+  std::string factor_free_option(IntegratorOptions& options) const override {
+    options.solver = Solver::kQuasiNewton;
+    return "--solver quasi-newton (it factors a matrix of a third of the unknowns)";
+  }
 
  protected:
   using Integrator::Integrator;

@@ -87,6 +87,10 @@ class SundialsIntegrator : public Integrator {
     return method_.newton_matrix &&
            (options.linear_solver == "reduced" || options.linear_solver == "auto");
   }
+  std::string factor_free_option(IntegratorOptions& options) const override {
+    options.linear_solver = "gmres";
+    return "--linear-solver gmres (it factors nothing)";
+  }
 
  protected:
   SundialsIntegrator(IntegratorInfo info, const SundialsCalls& calls, SundialsMethod method);
