@@ -51,20 +51,22 @@
 // V(y) - V(x) (tiny steps, equilibrium): there it is noise, and the midpoint
 // rule's own energy error is smaller still.
 //
-// Newton (newton_loop.h) solves the step with the DiscreteGradientPhases
-// policy (discrete_gradient.cc, a NewtonPolicy of newton_policy.h). The residual is not the gradient of a
-// potential, but with the correction's coefficient frozen it is that of the
-// midpoint's potential plus c |D|^2: where the forces derive from potentials
-// Newton first minimizes that (robust far from the solution), then, once a
-// full update is taken, iterates on r with the exact matrix -- the midpoint
-// rule's M - h/2 dF/dv - h^2/4 dF/dx plus the correction's derivative, a
-// diagonal shift and a rank-one term solved by Sherman and Morrison -- and a
-// line search on ||r|| (quadratic near the solution). Order 2 (as the
+// The step's equations with the correction, and the Newton policy that
+// solves them, are discrete_gradient_step.h. The residual is not the
+// gradient of a potential, but with the correction's coefficient frozen it
+// is that of the midpoint's potential plus c |D|^2: where the forces derive
+// from potentials Newton first minimizes that (robust far from the
+// solution), then, once a full update is taken, iterates on r with the
+// exact matrix -- the midpoint rule's M - h/2 dF/dv - h^2/4 dF/dx plus the
+// correction's derivative, a diagonal shift and a rank-one term solved by
+// Sherman and Morrison -- and a line search on ||r|| (quadratic near the
+// solution). Order 2 (as the
 // midpoint rule: the correction is O(h^3) per step); A-stable, and on the
 // linear oscillator (V quadratic: the correction vanishes) it is the
 // midpoint rule, R(z) = (1 + z/2) / (1 - z/2).
 #pragma once
 
+#include "integrators/methods/discrete_gradient_step.h"
 #include "integrators/newton/velocity_implicit_method.h"
 
 namespace springlab {
@@ -85,10 +87,11 @@ class DiscreteGradient final : public VelocityImplicitMethod {
 
  protected:
   StepResult do_step(double h) override;
-  // Its Newton runs in two phases (the .cc: the frozen potential, then
-  // Newton on r).
-  std::unique_ptr<NewtonPolicy> newton_policy(NewtonPolicy::Matrices matrices, bool symmetric,
-                                              VelocityStep& step) override;
+  // The midpoint step with Gonzalez's correction (discrete_gradient_step.h),
+  // solved in two phases (the frozen potential, then Newton on r).
+  NewtonProblem& newton_problem(VelocityStep& step) override;
+  std::unique_ptr<NewtonPolicy> newton_policy(NewtonPolicy::Matrices matrices,
+                                              bool symmetric) override;
 
  private:
   // One step of h as n substeps with the scheme, from (t_, x_, v_); on
@@ -96,6 +99,8 @@ class DiscreteGradient final : public VelocityImplicitMethod {
   // they are as before.
   StepResult step_in_parts(double h, int n, const VelocityImplicitScheme& scheme);
 
+  DiscreteGradientStep gonzalez_;
+  bool own_gradients_ = true;  // the forces' own discrete gradients in this step
   Vector v_new_, x_start_, v_start_;
   long generic_steps_ = 0;
 };

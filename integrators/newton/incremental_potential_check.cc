@@ -14,9 +14,9 @@ using newton::kRoundoff;
 
 }  // namespace
 
-void IncrementalPotentialCheck::begin(VelocityStep& step, double tol) {
+void IncrementalPotentialCheck::begin(VelocityStep& step, double tol, bool solved_as_is) {
   const VelocityImplicitScheme& s = step.scheme();
-  active_ = step.has_potential() && !s.discrete_gradient;
+  active_ = step.has_potential() && solved_as_is;
   if (!active_) return;
   // v_kept: x*(v) = x_n + x_o + h (a v_n + b v) = x_n.
   const Vector& v_n = step.v_n();

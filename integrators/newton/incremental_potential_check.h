@@ -62,9 +62,10 @@ namespace springlab {
 class IncrementalPotentialCheck {
  public:
   // Before the solve of the step begun in `step`: Phi at the two guesses
-  // when the step minimizes Phi (has_potential, not the discrete gradient).
-  // `tol`: the solve's tolerance (m/s).
-  void begin(VelocityStep& step, double tol);
+  // when the step minimizes Phi (has_potential, and `solved_as_is`: Newton
+  // solves the step itself, not a method's problem around it, such as the
+  // discrete gradient's). `tol`: the solve's tolerance (m/s).
+  void begin(VelocityStep& step, double tol, bool solved_as_is);
   // Whether this step's answers are judged (it minimizes Phi).
   bool active() const { return active_; }
   // v_kept (after begin(), where active()): Newton's second start.

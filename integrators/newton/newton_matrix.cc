@@ -33,10 +33,7 @@ void NewtonMatrix::assemble(bool definite, SparseMatrix& out) {
   } else {
     for (Eigen::Index k = 0; k < nnz; ++k) pj[k] = cx * px[k];
   }
-  if (p.start != nullptr) {
-    model.system().add_own_discrete_gradient_jacobian_difference(p.t, *p.start, *p.x, *p.end,
-                                                                 definite, cx, out);
-  }
+  if (p.term != nullptr) p.term->add(p.t, *p.x, definite, cx, out);
   out.diagonal() += model.system().mass();
 }
 

@@ -52,6 +52,20 @@ class DefiniteMatrixSource {
   virtual long pattern_version() const { return 0; }
 };
 
+// A term a method puts in J's dF/dx part in place of some forces' own (the
+// discrete gradient's: the derivative of those forces' own discrete
+// gradients with respect to the step's end, methods/discrete_gradient_step.h).
+class JacobianTerm {
+ public:
+  virtual ~JacobianTerm() = default;
+  // out += cx (the term - those forces' dF/dx) at (t, x), of the exact or
+  // the definite matrix.
+  virtual void add(double t, const Vector& x, bool definite, double cx,
+                   SparseMatrix& out) const = 0;
+  // Whether J keeps the symmetry of the model's Jacobians with it.
+  virtual bool symmetric(bool definite) const = 0;
+};
+
 class NewtonMatrix final : public DefiniteMatrixSource {
  public:
   // The point, the step h and the weighted coefficients b = w b_s and
@@ -61,13 +75,8 @@ class NewtonMatrix final : public DefiniteMatrixSource {
     const Vector* x = nullptr;
     const Vector* v = nullptr;
     double h = 0.0, b = 0.0, c = 0.0;
-    // The discrete-gradient step with the forces' own discrete gradients
-    // (velocity_step.h): its start x_n and end y. J then has, for those
-    // forces, the derivative of their discrete gradient with respect to x
-    // in place of their dF/dx (MechanicalSystem::
-    // add_own_discrete_gradient_jacobian_difference); dfdx() keeps dF/dx.
-    const Vector* start = nullptr;
-    const Vector* end = nullptr;
+    // A method's own term (nullptr: none); dfdx() keeps dF/dx.
+    const JacobianTerm* term = nullptr;
   };
   void set_point(const Point& point) { point_ = point; }
   // out = J at the point, of the exact or the definite Jacobians; dF/dx

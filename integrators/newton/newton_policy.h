@@ -24,7 +24,7 @@
 #pragma once
 
 #include "integrators/newton/newton_problem.h"
-#include "integrators/newton/velocity_step.h"
+#include "integrators/newton/newton_problem.h"
 
 namespace springlab {
 

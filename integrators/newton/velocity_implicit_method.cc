@@ -30,16 +30,18 @@ StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const
       .tol = options().newton_tol, .max_iterations = options().max_newton, .start = start};
   const NewtonLoop::Context context{.t = t_, .h = step_.h()};
   const std::unique_ptr<NewtonPolicy> policy =
-      newton_policy(matrices, system().jacobian_symmetric(), step_);
-  return newton_.solve(step_, {*policy, linear_, search_}, settings, context, mutable_stats(), v);
+      newton_policy(matrices, system().jacobian_symmetric());
+  return newton_.solve(*problem_, {*policy, linear_, search_}, settings, context, mutable_stats(),
+                       v);
 }
 
 StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplicitScheme& s,
                                                   Vector& v, bool quasi) {
   const LaggedNormalForces lag(system(), x_, &v_, h);
   step_.begin(t_, x_, v_, h, s);
+  problem_ = &newton_problem(step_);
   const bool lbfgs = quasi && system().derives_from_potentials();
-  check_.begin(step_, options().newton_tol);
+  check_.begin(step_, options().newton_tol, problem_ == &step_);
   std::string quasi_rejected;  // why L-BFGS's answer was not taken
   // L-BFGS needs the potential; where it stalls, Newton solves the step.
   if (lbfgs) {

@@ -4,7 +4,9 @@
 // velocity-implicit step (velocity_step.h) for the new velocity by Newton
 // (newton_loop.h), given its pieces:
 //
-//   the problem        VelocityStep: r(v), J(v), the incremental potential
+//   the problem        VelocityStep: r(v), J(v), the incremental potential;
+//                      a method may change it (newton_problem() below:
+//                      the discrete gradient's correction)
 //   the linear solver  NewtonLinearSolver: CG with a kept Cholesky factor,
 //                      MINRES, LDL^T, LU
 //   the line search    LineSearch: Armijo on the potential or ||r||, the
@@ -85,13 +87,17 @@ class VelocityImplicitMethod : public Integrator {
   bool solve_linearized(double t, const Vector& x, const Vector& v, const Vector& f, double h,
                         double b, double c, bool definite, Vector& dv, std::string& error);
 
+  // The problem Newton solves for the step just begun in `step`: the step
+  // itself here; a method that changes the step's equations gives its own
+  // around it (the discrete gradient's correction, discrete_gradient_step.h).
+  // The answer to another problem is not judged by the step's incremental
+  // potential (incremental_potential_check.h): its r is no gradient of it.
+  virtual NewtonProblem& newton_problem(VelocityStep& step) { return step; }
   // The Newton policy of this method's steps (newton_policy.h): the plain
   // one here; a method whose residual is no gradient gives its own (the
-  // discrete gradient's two phases, discrete_gradient.cc). `step`: the
-  // step begun, which the policy may steer.
+  // discrete gradient's two phases, discrete_gradient_step.h).
   virtual std::unique_ptr<NewtonPolicy> newton_policy(NewtonPolicy::Matrices matrices,
-                                                      bool symmetric, VelocityStep& step) {
-    (void)step;
+                                                      bool symmetric) {
     return std::make_unique<NewtonPolicy>(matrices, symmetric);
   }
 
@@ -111,6 +117,7 @@ class VelocityImplicitMethod : public Integrator {
   NewtonLinearSolver linear_;
   LineSearch search_;
   VelocityStep step_;
+  NewtonProblem* problem_ = &step_;  // newton_problem() of the step begun
   NewtonLoop newton_;
   Lbfgs lbfgs_;
   IncrementalPotentialCheck check_;

@@ -11,7 +11,8 @@
 // model's pattern: newton_matrix.h). Backward Euler is (a, b, c) = (0, 1, 1)
 // at t* = t_n + h, w = 1, v_c = v_n, x_o = 0; the implicit midpoint rule is
 // (1/4, 1/4, 1/2) at t* = t_n + h/2; the discrete gradient adds Gonzalez's
-// correction to the midpoint rule (discrete_gradient.h). The second-order
+// correction to the midpoint rule, in a problem of its own around this one
+// (methods/discrete_gradient_step.h). The second-order
 // and multistep methods (newmark_family.h, bdf2.h, tr_bdf2.h) set a force
 // weight w, an inertial centre v_c and a position offset x_o fixed within
 // the step (their predictors: a_n, x_{n-1}, a stage's state).
@@ -37,18 +38,11 @@ namespace springlab {
 struct VelocityImplicitScheme {
   double t_eval_offset;  // t* = t_n + t_eval_offset * h
   double a, b, c;        // see the header comment
-  // Gonzalez's discrete gradient of V in place of grad V(x*) (needs the
-  // midpoint's (a, b, c) = (1/4, 1/4, 1/2), t* = t_n + h/2).
-  bool discrete_gradient = false;
-  // With it, the forces' own exact discrete gradients where they have one
-  // (ForceTerm::has_discrete_gradient: the rigidity); false: Gonzalez's
-  // for every force.
-  bool own_discrete_gradients = true;
   // Whether a step whose Newton fails may be solved by the definite
   // ("projected") Newton (velocity_implicit_method.h). The discrete
   // gradient with forces' own discrete gradients turns it off: its definite
-  // Newton never leaves the frozen potential (newton_policy.h), whose
-  // solution is Gonzalez's generic discrete gradient, not the step's.
+  // Newton never leaves the frozen potential (discrete_gradient_step.h),
+  // whose solution is Gonzalez's generic discrete gradient, not the step's.
   bool definite_fallback = true;
   // The step's end is x_{n+1} = x_n + end (x* - x_n): 1 where the forces
   // are evaluated at the end (implicit Euler), 2 at the midpoint.
@@ -71,6 +65,17 @@ class VelocityStep final : public NewtonProblem {
   const Vector& x() const { return *x_; }  // x_n
   const Vector& v_n() const { return *v_; }  // (start() may differ: below)
   const MechanicalSystem& system() const { return model_->system(); }
+  const CountedModel& model() const { return *model_; }
+  double t_star() const { return t_ + s_.t_eval_offset * h_; }
+  // v_c (v_n where the scheme names none).
+  const Vector& inertia() const { return s_.inertia != nullptr ? *s_.inertia : *v_; }
+  // The stage x*, v* of the last residual() or stage(), and F there (of
+  // the last residual()).
+  const Vector& stage_x() const { return xs_; }
+  const Vector& stage_v() const { return vs_; }
+  const Vector& stage_force() const { return f_; }
+  // dF/dx of the last matrix().
+  const SparseMatrix& dfdx() const { return matrix_->dfdx(); }
 
   // v_n; where the system has a trust region (MechanicalSystem::
   // has_trust_region: a fluid) and v_n's stage moves a particle beyond it
@@ -94,7 +99,12 @@ class VelocityStep final : public NewtonProblem {
   bool has_potential() const override;
   double potential(const Vector& v, double& magnitude) override;
   void matrix(const Vector& v, bool definite, NewtonLinearSolver& linear) override;
-  RankOne rank_one() const override;
+  // matrix(), and the matrix it assembled (a method's problem around this
+  // one adds its own terms to it: discrete_gradient_step.h).
+  SparseMatrix& assemble(const Vector& v, bool definite, NewtonLinearSolver& linear);
+  // A term of the method's in J's dF/dx part (newton_matrix.h) for the
+  // next matrix() of this step; nullptr: none.
+  void set_jacobian_term(const JacobianTerm* term) { term_ = term; }
   bool has_forbidden_states() const override;
   // The fraction of dv at which the first gap of the stage -- or, for the
   // midpoint methods, of the step's end -- would close
@@ -110,7 +120,10 @@ class VelocityStep final : public NewtonProblem {
   // The contacts between bodies found again at the stage x*(v)
   // (MechanicalSystem::follow_lagged_contacts), unless r or Phi at v would
   // then not be finite or the step's end not allowed.
-  bool follow(const Vector& v) override;
+  bool follow(const Vector& v) override { return follow(v, *this); }
+  // The same, with the r and Phi of `problem` (this step, or a method's
+  // problem around it) checked at v.
+  bool follow(const Vector& v, NewtonProblem& problem);
   // How many times follow() has set the step up again (over all steps).
   long follows() const { return follows_; }
 
@@ -126,20 +139,6 @@ class VelocityStep final : public NewtonProblem {
   // rounding of x* (|dV| <= |F| . |dx|). Two force evaluations.
   double stored_magnitude();
 
-  // The discrete gradient's correction coefficient (its Newton policy,
-  // DiscreteGradientPhases in methods/discrete_gradient.cc): frozen (Phi then includes c |D|^2, r its gradient) or
-  // not, and its value.
-  void freeze(bool frozen) { frozen_ = frozen; }
-  bool frozen() const { return frozen_; }
-  void set_frozen_coefficient(double c) { frozen_c_ = c; }
-  // At the start of an iteration on the frozen potential: the coefficient
-  // at the last residual()'s v, and r and Phi with it. At the first
-  // iteration off it: r of the step at that v (where some forces have
-  // their own discrete gradient, which the frozen potential leaves out).
-  void update_frozen(Vector& r, double& phi);
-  // r at v with the coefficient of v, then frozen at that value.
-  void refreeze_at(const Vector& v, Vector& r);
-
  private:
   const CountedModel* model_ = nullptr;
   NewtonMatrix* matrix_ = nullptr;
@@ -152,24 +151,7 @@ class VelocityStep final : public NewtonProblem {
   Vector x_cap_, dx_cap_;  // the step cap's state and step (admissible_fraction)
   bool rest_start_ = false;  // start() is start_, not v_n
   Vector start_;
-  // The discrete gradient's: D = y - x_n, y = x_n + D, the correction's
-  // coefficient c (0: left out), F at y, the rank-one term's vector z.
-  Vector delta_, y_, f_end_, z_;
-  double correction_ = 0.0;
-  // F with the own discrete gradients in place of those forces' midpoint
-  // values (MechanicalSystem::add_own_discrete_gradient_difference), when
-  // the last residual() used them (own_).
-  Vector f_own_;
-  bool own_ = false;
-  // Gonzalez's coefficient at the last stage, with the force f (F, or F
-  // with the own discrete gradients); 0 below round-off.
-  double coefficient(double t, const Vector& f) const;
-  bool rank_one_ = false;  // the last matrix() has the term h c D's derivative
-  // On the potential path the coefficient is frozen for each iteration
-  // (r is then the gradient of the midpoint's potential + c |D|^2).
-  bool frozen_ = false;
-  double frozen_c_ = 0.0;
-  double v_start_potential_ = 0.0;  // V(t*, x_n): the discrete gradient's
+  const JacobianTerm* term_ = nullptr;
   long follows_ = 0;
 };
 
