@@ -367,15 +367,17 @@ class ProgressLine final : public Observer {
   bool shown_ = false;
 };
 
-int command_run(CommonOptions& common, const std::string& energy_path,
-                const std::string& trajectory_path, const std::string& vtk_dir) {
-  common.validate();
-  require_positive("--dt", common.run.dt);
-  if (common.run.every < 1) throw UsageError("--every: must be >= 1");
-  // Two outputs at one path: refused before the run (issue 46.11: --energy
-  // and --vtk at one new path ran the whole run, then failed).
+// The paths `run` writes to ("" where not asked for).
+struct RunPaths {
+  std::string energy, trajectory, vtk;
+  bool any() const { return !energy.empty() || !trajectory.empty() || !vtk.empty(); }
+};
+
+// Two outputs at one path: refused before the run (issue 46.11: --energy
+// and --vtk at one new path ran the whole run, then failed).
+void check_distinct_outputs(const RunPaths& paths) {
   const std::pair<const char*, const std::string*> outputs[] = {
-      {"--energy", &energy_path}, {"--trajectory", &trajectory_path}, {"--vtk", &vtk_dir}};
+      {"--energy", &paths.energy}, {"--trajectory", &paths.trajectory}, {"--vtk", &paths.vtk}};
   for (std::size_t a = 0; a < 3; ++a) {
     for (std::size_t b = a + 1; b < 3; ++b) {
       const std::string &pa = *outputs[a].second, &pb = *outputs[b].second;
@@ -386,15 +388,11 @@ int command_run(CommonOptions& common, const std::string& energy_path,
       }
     }
   }
-  const Scene scene = resolve_scene(common.scene, common.parameters);
-  TimeGrid grid;
-  try {
-    grid = make_time_grid(common.run.dt, common.run.t_end);  // refused before any output exists
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--dt, --t-end: ") + e.what());
-  }
-  // Row caps from the scene alone, before its model takes any memory.
-  const double times = output_times(grid, common.run.every);
+}
+
+// More rows than a file may hold: refused from the scene alone, before its
+// model takes any memory.
+void check_output_rows(const RunPaths& paths, const Scene& scene, double times) {
   auto check_rows = [&](const char* option, double rows, const std::string& what) {
     if (rows > kMaxOutputRows) {
       std::ostringstream m;
@@ -404,25 +402,138 @@ int command_run(CommonOptions& common, const std::string& energy_path,
       throw UsageError(m.str());
     }
   };
-  if (!energy_path.empty()) {
-    check_rows("--energy", times, std::to_string(static_cast<long long>(times)) + " output times");
-  }
-  if (!trajectory_path.empty()) {
-    const double particles = static_cast<double>(scene.particles.size());
+  const std::string count = std::to_string(static_cast<long long>(times));
+  const double particles = static_cast<double>(scene.particles.size());
+  if (!paths.energy.empty()) check_rows("--energy", times, count + " output times");
+  if (!paths.trajectory.empty()) {
     check_rows("--trajectory", times * particles,
-               std::to_string(scene.particles.size()) + " particles x " +
-                   std::to_string(static_cast<long long>(times)) + " output times");
+               std::to_string(scene.particles.size()) + " particles x " + count + " output times");
   }
-  if (!vtk_dir.empty()) {
+  if (!paths.vtk.empty()) {
     if (times > kMaxVtkFrames) {
-      throw UsageError("--vtk: would write " + std::to_string(static_cast<long long>(times)) +
-                       " frames, over the cap of " + std::to_string(kMaxVtkFrames) +
-                       ": write every K-th step with --every");
+      throw UsageError("--vtk: would write " + count + " frames, over the cap of " +
+                       std::to_string(kMaxVtkFrames) + ": write every K-th step with --every");
     }
-    check_rows("--vtk", times * static_cast<double>(scene.particles.size()),
-               std::to_string(scene.particles.size()) + " points x " +
-                   std::to_string(static_cast<long long>(times)) + " frames");
+    check_rows("--vtk", times * particles,
+               std::to_string(scene.particles.size()) + " points x " + count + " frames");
   }
+}
+
+// The files of a run, opened (regular files as temporaries) before any
+// step runs and published after the last, with the progress line.
+struct RunOutputs {
+  std::unique_ptr<OutputFile> energy_file, trajectory_file;
+  std::unique_ptr<Observer> energy_csv, trajectory_csv, progress;
+  std::unique_ptr<VtkSeries> vtk;
+  std::vector<Observer*> observers;
+
+  RunOutputs(const RunPaths& paths, const Model& model, const Scene& scene,
+             const RunSettings& run) {
+    if (!paths.energy.empty()) {
+      energy_file = std::make_unique<OutputFile>(paths.energy);
+      energy_csv = std::make_unique<EnergyCsv>(model, *energy_file);
+      observers.push_back(energy_csv.get());
+    }
+    if (!paths.trajectory.empty()) {
+      trajectory_file = std::make_unique<OutputFile>(paths.trajectory);
+      trajectory_csv = std::make_unique<TrajectoryCsv>(model, *trajectory_file);
+      observers.push_back(trajectory_csv.get());
+    }
+    if (!paths.vtk.empty()) {
+      vtk = std::make_unique<VtkSeries>(model, scene, paths.vtk);
+      observers.push_back(vtk.get());
+    }
+    if (::isatty(2)) {
+      progress = std::make_unique<ProgressLine>(run.integrator, run.t_end);
+      observers.push_back(progress.get());
+    }
+  }
+
+  // A run that diverged or failed still publishes its files: they hold the
+  // rows up to its last good state (t_final), and the summary says so.
+  void publish() {
+    progress.reset();  // clears its line
+    for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
+      if (f != nullptr) f->finish();
+    }
+    for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
+      if (f != nullptr) f->publish();
+    }
+    if (vtk) vtk->publish();
+  }
+};
+
+// `run --json`'s one object (docs/command-line.md).
+std::string run_summary_json(const Scene& scene, const Model& model, const RunResult& r,
+                             int substeps, bool any_output) {
+  Json j;
+  j["scene"] = scene.name;
+  j["integrator"] = r.integrator;
+  j["dt"] = r.dt;
+  j["t_end"] = r.t_end;
+  j["status"] = to_string(r.status);
+  const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
+  for (const auto& [key, value] : stats.items()) j[key] = value;
+  if (substeps > 0) j["substeps"] = substeps;
+  j["wall_seconds"] = r.wall_seconds;
+  j["diverged"] = r.diverged();
+  j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
+  j["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
+  if (r.verdict) j["verdict"] = verdict_json(*r.verdict);
+  j["warnings"] = warning_texts(r.warnings, r.integrator);
+  j["t_final"] = r.t_final;
+  j["outputs_complete"] = r.status == RunStatus::kCompleted;
+  j["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
+  j["energy_initial"] = r.energy_initial;
+  j["energy_final"] = r.energy_final;
+  j["energy_scale"] = model.energy_scale();
+  j["energy_columns"] = model.energy_columns();  // of --energy, after t
+  j["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
+                          {"v", rows(model.scene_velocities(r.v_final))}};
+  if (Json bodies = bodies_json(model, r.x_final, r.v_final); !bodies.empty()) {
+    j["bodies"] = std::move(bodies);
+  }
+  return j.dump(-1, ' ', false, Json::error_handler_t::replace) + '\n';
+}
+
+// `run`'s summary for a reader.
+std::string run_summary_text(const Scene& scene, const Model& model, const RunResult& r,
+                             bool any_output) {
+  std::ostringstream out;
+  out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles";
+  for (const ElementCount& c : element_counts(scene)) out << ", " << c.count << ' ' << c.key;
+  out << '\n'
+      << "integrator " << r.integrator << ", dt " << r.dt << ", t_end " << r.t_end << '\n'
+      << "status " << to_string(r.status);
+  if (r.diverged_at) out << " at t = " << *r.diverged_at;
+  if (!r.failure.empty()) out << ": " << r.failure;
+  out << '\n';
+  const IntegratorStats& s = r.stats;
+  out << "steps " << s.steps << ", rejected " << s.rejected_steps << ", force evals "
+      << s.force_evals << ", jacobian evals " << s.jacobian_evals << ", linear solves "
+      << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
+      << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
+      << "), wall " << r.wall_seconds << " s\n";
+  for (const std::string& w : warning_texts(r.warnings, r.integrator)) out << "warning: " << w << '\n';
+  if (any_output && r.status != RunStatus::kCompleted) {
+    out << "output files incomplete: rows up to t = " << r.t_final << ", the last good state\n";
+  }
+  return out.str();
+}
+
+int command_run(CommonOptions& common, const RunPaths& paths) {
+  common.validate();
+  require_positive("--dt", common.run.dt);
+  if (common.run.every < 1) throw UsageError("--every: must be >= 1");
+  check_distinct_outputs(paths);
+  const Scene scene = resolve_scene(common.scene, common.parameters);
+  TimeGrid grid;
+  try {
+    grid = make_time_grid(common.run.dt, common.run.t_end);  // refused before any output exists
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--dt, --t-end: ") + e.what());
+  }
+  check_output_rows(paths, scene, output_times(grid, common.run.every));
   check_scene_memory(scene, printable(common.scene));  // before the model (memory_check.h)
   const Model model(scene);
   check_initial_energy(model, common.scene);
@@ -434,96 +545,11 @@ int command_run(CommonOptions& common, const std::string& energy_path,
   const int substeps = std::find(read.begin(), read.end(), "substeps") != read.end()
                            ? integrator->substeps(common.run.options)
                            : 0;
-
-  // Files are opened (regular files as temporaries) before any step runs.
-  std::unique_ptr<OutputFile> energy_file, trajectory_file;
-  std::unique_ptr<Observer> energy_csv, trajectory_csv, progress;
-  std::unique_ptr<VtkSeries> vtk;
-  std::vector<Observer*> observers;
-  if (!energy_path.empty()) {
-    energy_file = std::make_unique<OutputFile>(energy_path);
-    energy_csv = std::make_unique<EnergyCsv>(model, *energy_file);
-    observers.push_back(energy_csv.get());
-  }
-  if (!trajectory_path.empty()) {
-    trajectory_file = std::make_unique<OutputFile>(trajectory_path);
-    trajectory_csv = std::make_unique<TrajectoryCsv>(model, *trajectory_file);
-    observers.push_back(trajectory_csv.get());
-  }
-  if (!vtk_dir.empty()) {
-    vtk = std::make_unique<VtkSeries>(model, scene, vtk_dir);
-    observers.push_back(vtk.get());
-  }
-  if (::isatty(2)) {
-    progress = std::make_unique<ProgressLine>(common.run.integrator, common.run.t_end);
-    observers.push_back(progress.get());
-  }
-
-  const RunResult r = simulate(model, common.run, observers, std::move(integrator));
-  progress.reset();  // clears its line
-  for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
-    if (f != nullptr) f->finish();
-  }
-  for (OutputFile* f : {energy_file.get(), trajectory_file.get()}) {
-    if (f != nullptr) f->publish();
-  }
-  if (vtk) vtk->publish();
-
-  // A run that diverged or failed still publishes its files: they hold the
-  // rows up to its last good state (t_final), and the summary says so.
-  const bool any_output = energy_file != nullptr || trajectory_file != nullptr || vtk != nullptr;
-  const bool outputs_complete = r.status == RunStatus::kCompleted;
-  std::ostringstream out;
-  if (common.json) {
-    Json j;
-    j["scene"] = scene.name;
-    j["integrator"] = r.integrator;
-    j["dt"] = r.dt;
-    j["t_end"] = r.t_end;
-    j["status"] = to_string(r.status);
-    const Json stats = stats_json(r.stats);  // named: a temporary would die before the loop
-    for (const auto& [key, value] : stats.items()) j[key] = value;
-    if (substeps > 0) j["substeps"] = substeps;
-    j["wall_seconds"] = r.wall_seconds;
-    j["diverged"] = r.diverged();
-    j["diverged_at"] = r.diverged_at ? Json(*r.diverged_at) : Json(nullptr);
-    j["failure"] = r.failure.empty() ? Json(nullptr) : Json(r.failure);
-    if (r.verdict) j["verdict"] = verdict_json(*r.verdict);
-    j["warnings"] = warning_texts(r.warnings, r.integrator);
-    j["t_final"] = r.t_final;
-    j["outputs_complete"] = outputs_complete;
-    j["last_output_t"] = any_output ? Json(r.t_final) : Json(nullptr);
-    j["energy_initial"] = r.energy_initial;
-    j["energy_final"] = r.energy_final;
-    j["energy_scale"] = model.energy_scale();
-    j["energy_columns"] = model.energy_columns();  // of --energy, after t
-    j["final_state"] = Json{{"x", rows(model.scene_positions(r.x_final))},
-                            {"v", rows(model.scene_velocities(r.v_final))}};
-    if (Json bodies = bodies_json(model, r.x_final, r.v_final); !bodies.empty()) {
-      j["bodies"] = std::move(bodies);
-    }
-    out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
-  } else {
-    out << "scene " << scene.name << ", " << model.free_particle_count() << " free particles";
-    for (const ElementCount& c : element_counts(scene)) out << ", " << c.count << ' ' << c.key;
-    out << '\n'
-        << "integrator " << r.integrator << ", dt " << r.dt << ", t_end " << r.t_end << '\n'
-        << "status " << to_string(r.status);
-    if (r.diverged_at) out << " at t = " << *r.diverged_at;
-    if (!r.failure.empty()) out << ": " << r.failure;
-    out << '\n';
-    const IntegratorStats& s = r.stats;
-    out << "steps " << s.steps << ", rejected " << s.rejected_steps << ", force evals "
-        << s.force_evals << ", jacobian evals " << s.jacobian_evals << ", linear solves "
-        << s.linear_solves << ", newton iterations " << s.newton_iterations << '\n'
-        << "energy " << r.energy_initial << " -> " << r.energy_final << " (t = " << r.t_final
-        << "), wall " << r.wall_seconds << " s\n";
-    for (const std::string& w : warning_texts(r.warnings, r.integrator)) out << "warning: " << w << '\n';
-    if (any_output && !outputs_complete) {
-      out << "output files incomplete: rows up to t = " << r.t_final << ", the last good state\n";
-    }
-  }
-  write_stdout(out.str());
+  RunOutputs outputs(paths, model, scene, common.run);
+  const RunResult r = simulate(model, common.run, outputs.observers, std::move(integrator));
+  outputs.publish();
+  write_stdout(common.json ? run_summary_json(scene, model, r, substeps, paths.any())
+                           : run_summary_text(scene, model, r, paths.any()));
   return 0;
 }
 
@@ -598,6 +624,84 @@ class StabilityProgress final : public Observer {
   std::thread ticker_;  // last: started once the rest is set
 };
 
+// `stability --json`'s one object (docs/command-line.md).
+std::string stability_summary_json(const Scene& scene, const StabilitySettings& s,
+                                   const StabilityResult& r) {
+  const TheoryLimit& theory = r.theory;
+  static const char* outcomes[] = {"bracketed", "stable up to dt_max", "unstable at dt_min"};
+  Json j;
+  j["scene"] = scene.name;
+  j["integrator"] = r.integrator;
+  j["t_end"] = s.run.t_end;
+  j["max_stable_dt"] = r.max_stable_dt;
+  j["bracket"] = Json::array({r.lo, r.hi});
+  j["outcome"] = outcomes[static_cast<int>(r.outcome)];
+  j["runs"] = r.runs;
+  j["min_steps"] = s.min_steps;
+  j["min_periods"] = s.min_periods;
+  j["trial_t_end"] = r.lo_run_time > 0.0 ? Json(r.lo_run_time) : Json(nullptr);
+  j["w_max"] = r.mode.w;
+  j["damping"] = r.mode.damping;
+  j["theory_dt"] = theory.dt ? Json(*theory.dt) : Json(nullptr);
+  j["theory"] = theory.rule;
+  if (theory.dt) j["ratio"] = r.max_stable_dt / *theory.dt;
+  return j.dump(-1, ' ', false, Json::error_handler_t::replace) + '\n';
+}
+
+// `stability`'s answer for a reader: the limit, what it means, and theory's.
+std::string stability_summary_text(const Scene& scene, const StabilitySettings& s,
+                                   const StabilityResult& r) {
+  const double w = r.mode.w;
+  const TheoryLimit& theory = r.theory;
+  std::ostringstream out;
+  const char* runs = r.runs == 1 ? " run" : " runs";
+  out << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end << ": ";
+  switch (r.outcome) {
+    case StabilityOutcome::kBracketed:
+      if (r.no_stable_step) {
+        // Issue 52: not "largest stable dt" beside "unstable at every step".
+        out << "no step is stable without damping (every undamped mode grows at every step); "
+               "the largest step whose trial stayed within the blow-up bound is "
+            << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi << "], " << r.runs
+            << runs << "): it shrinks as the trial grows, a property of --t-end and --blowup, "
+               "not a stability limit\n";
+        break;
+      }
+      out << "largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi
+          << "], " << r.runs << runs << ")\n";
+      if (r.growth_at_lo > 1.0 + 1e-9) {
+        out << "at " << r.lo << " the fastest mode's energy still grows x" << r.growth_at_lo
+            << " per step: unstable, but too slowly to pass the blow-up bound within the trial "
+               "(a longer --t-end or a smaller --blowup reads nearer the limit)\n";
+      }
+      break;
+    case StabilityOutcome::kStableUpToDtMax:
+      out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << runs << ")\n";
+      break;
+    case StabilityOutcome::kUnstableAtDtMin:
+      out << "diverged even at --dt-min " << s.dt_min << " (" << r.runs << runs << ")\n";
+      break;
+  }
+  if (r.lo_run_time > s.run.t_end) {
+    out << "the trial at " << r.lo << " ran " << r.lo_run_time
+        << " s, past --t-end: every trial runs at least " << s.min_steps << " steps and "
+        << s.min_periods << " periods of the fastest mode\n";
+  }
+  out << "w_max " << w << " rad/s";
+  if (r.mode.damping > 0.0) out << ", damping " << r.mode.damping << " 1/s";
+  out << "; theory: ";
+  if (theory.dt) {
+    out << "dt* = " << *theory.dt << " (" << theory.rule << ")";
+    if (r.outcome == StabilityOutcome::kBracketed) {
+      out << ", measured / theory " << r.max_stable_dt / *theory.dt;
+    }
+    out << '\n';
+  } else {
+    out << theory.rule << '\n';
+  }
+  return out.str();
+}
+
 int command_stability(CommonOptions& common, StabilitySettings& s) {
   common.validate();
   require_positive("--dt-min", s.dt_min);
@@ -636,76 +740,8 @@ int command_stability(CommonOptions& common, StabilitySettings& s) {
     throw UsageError(e.what());  // a trial longer than t_end with no valid grid
   }
   progress.reset();  // clears its line
-  const double w = r.mode.w;
-  const TheoryLimit& theory = r.theory;
-  std::ostringstream out;
-  if (common.json) {
-    static const char* outcomes[] = {"bracketed", "stable up to dt_max", "unstable at dt_min"};
-    Json j;
-    j["scene"] = scene.name;
-    j["integrator"] = r.integrator;
-    j["t_end"] = s.run.t_end;
-    j["max_stable_dt"] = r.max_stable_dt;
-    j["bracket"] = Json::array({r.lo, r.hi});
-    j["outcome"] = outcomes[static_cast<int>(r.outcome)];
-    j["runs"] = r.runs;
-    j["min_steps"] = s.min_steps;
-    j["min_periods"] = s.min_periods;
-    j["trial_t_end"] = r.lo_run_time > 0.0 ? Json(r.lo_run_time) : Json(nullptr);
-    j["w_max"] = w;
-    j["damping"] = r.mode.damping;
-    j["theory_dt"] = theory.dt ? Json(*theory.dt) : Json(nullptr);
-    j["theory"] = theory.rule;
-    if (theory.dt) j["ratio"] = r.max_stable_dt / *theory.dt;
-    out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << '\n';
-  } else {
-    const char* runs = r.runs == 1 ? " run" : " runs";
-    out << r.integrator << " on " << scene.name << " for t_end " << s.run.t_end << ": ";
-    switch (r.outcome) {
-      case StabilityOutcome::kBracketed:
-        if (r.no_stable_step) {
-          // Issue 52: not "largest stable dt" beside "unstable at every step".
-          out << "no step is stable without damping (every undamped mode grows at every step); "
-                 "the largest step whose trial stayed within the blow-up bound is "
-              << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi << "], " << r.runs
-              << runs << "): it shrinks as the trial grows, a property of --t-end and --blowup, "
-                 "not a stability limit\n";
-          break;
-        }
-        out << "largest stable dt " << r.max_stable_dt << " (bracket [" << r.lo << ", " << r.hi
-            << "], " << r.runs << runs << ")\n";
-        if (r.growth_at_lo > 1.0 + 1e-9) {
-          out << "at " << r.lo << " the fastest mode's energy still grows x" << r.growth_at_lo
-              << " per step: unstable, but too slowly to pass the blow-up bound within the trial "
-                 "(a longer --t-end or a smaller --blowup reads nearer the limit)\n";
-        }
-        break;
-      case StabilityOutcome::kStableUpToDtMax:
-        out << "no step diverged up to --dt-max " << s.dt_max << " (" << r.runs << runs << ")\n";
-        break;
-      case StabilityOutcome::kUnstableAtDtMin:
-        out << "diverged even at --dt-min " << s.dt_min << " (" << r.runs << runs << ")\n";
-        break;
-    }
-    if (r.lo_run_time > s.run.t_end) {
-      out << "the trial at " << r.lo << " ran " << r.lo_run_time
-          << " s, past --t-end: every trial runs at least " << s.min_steps << " steps and "
-          << s.min_periods << " periods of the fastest mode\n";
-    }
-    out << "w_max " << w << " rad/s";
-    if (r.mode.damping > 0.0) out << ", damping " << r.mode.damping << " 1/s";
-    out << "; theory: ";
-    if (theory.dt) {
-      out << "dt* = " << *theory.dt << " (" << theory.rule << ")";
-      if (r.outcome == StabilityOutcome::kBracketed) {
-        out << ", measured / theory " << r.max_stable_dt / *theory.dt;
-      }
-      out << '\n';
-    } else {
-      out << theory.rule << '\n';
-    }
-  }
-  write_stdout(out.str());
+  write_stdout(common.json ? stability_summary_json(scene, s, r)
+                           : stability_summary_text(scene, s, r));
   return 0;
 }
 
@@ -952,7 +988,7 @@ int run_cli(int argc, char** argv) {
           throw UsageError(std::string(option) + ": the " + what + " name is empty");
         }
       }
-      return command_run(run_options, energy_path, trajectory_path, vtk_dir);
+      return command_run(run_options, {energy_path, trajectory_path, vtk_dir});
     }
     if (*stability) return command_stability(stability_options, stability_settings);
     if (*scene) {
