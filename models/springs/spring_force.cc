@@ -12,14 +12,14 @@
 #include <vector>
 
 #include <Eigen/Core>
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
 
 #include "models/core/element_kind.h"
+#include "models/springs/kernels/spring_scales.h"
+#include "models/springs/kernels/vertex_spring_lanes.h"
 #include "models/springs/spring_force.h"
 #include "models/springs/springs.h"
 #include "models/springs/vertex_pairs.h"
+#include "models/springs/vertex_spring.h"
 
 namespace springlab {
 
@@ -65,64 +65,6 @@ std::vector<SpringData> sorted_for_locality(std::vector<SpringData> springs) {
     return p.a != q.a ? p.a < q.a : p.b < q.b;
   });
   return springs;
-}
-
-// scale[j] = k[j] (1 - rest[j] / sqrt(l2[j])) for j < m: the square roots and
-// divisions that bound the cost of a force evaluation (hooke_force, above,
-// is the same formula for one spring, written plainly). Every variant below
-// rounds each lane exactly as this scalar formula does (IEEE sqrt, div, sub,
-// mul; no fused multiply-add), so forces are the same bit for bit whichever
-// variant the CPU runs.
-using ScaleKernel = void (*)(const double* k, const double* rest, const double* l2,
-                             double* scale, int m);
-
-void spring_scales_portable(const double* k, const double* rest, const double* l2,
-                            double* scale, int m) {
-  // Eigen packets: as many lanes as the compiler's target ISA has.
-  using Map = Eigen::Map<const Eigen::ArrayXd>;
-  Eigen::Map<Eigen::ArrayXd>(scale, m) = Map(k, m) * (1.0 - Map(rest, m) / Map(l2, m).sqrt());
-}
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-// A default x86-64 build targets SSE2, two lanes per sqrt/div instruction.
-// Where the CPU has AVX (4 lanes) or AVX-512 (8), the divider finishes a block
-// in about half or a quarter of the time (measured on the bench machine, a
-// Zen 4: 3.6, 1.9 and 0.9 ns per spring), so pick the variant at run time.
-__attribute__((target("avx"))) void spring_scales_avx(const double* k, const double* rest,
-                                                      const double* l2, double* scale, int m) {
-  const __m256d one = _mm256_set1_pd(1.0);
-  int j = 0;
-  for (; j + 4 <= m; j += 4) {
-    const __m256d l = _mm256_sqrt_pd(_mm256_loadu_pd(l2 + j));
-    const __m256d ratio = _mm256_div_pd(_mm256_loadu_pd(rest + j), l);
-    _mm256_storeu_pd(scale + j, _mm256_mul_pd(_mm256_loadu_pd(k + j), _mm256_sub_pd(one, ratio)));
-  }
-  for (; j < m; ++j) scale[j] = k[j] * (1.0 - rest[j] / std::sqrt(l2[j]));
-}
-
-__attribute__((target("avx512f"))) void spring_scales_avx512(const double* k, const double* rest,
-                                                             const double* l2, double* scale,
-                                                             int m) {
-  const __m512d one = _mm512_set1_pd(1.0);
-  int j = 0;
-  for (; j + 8 <= m; j += 8) {
-    // The zero-masking form with every lane selected is _mm512_sqrt_pd; the
-    // plain one trips GCC 12's -Wmaybe-uninitialized inside its own header.
-    const __m512d l = _mm512_maskz_sqrt_pd(0xFF, _mm512_loadu_pd(l2 + j));
-    const __m512d ratio = _mm512_div_pd(_mm512_loadu_pd(rest + j), l);
-    _mm512_storeu_pd(scale + j, _mm512_mul_pd(_mm512_loadu_pd(k + j), _mm512_sub_pd(one, ratio)));
-  }
-  for (; j < m; ++j) scale[j] = k[j] * (1.0 - rest[j] / std::sqrt(l2[j]));
-}
-#endif
-
-ScaleKernel pick_scale_kernel() {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx512f")) return spring_scales_avx512;
-  if (__builtin_cpu_supports("avx")) return spring_scales_avx;
-#endif
-  return spring_scales_portable;
 }
 
 class SpringForce final : public ForceTerm {
@@ -208,7 +150,9 @@ class SpringForce final : public ForceTerm {
     } else if (definite) {
       add_vertex_blocks_d<3, true>(c, particles, count, out);
     } else {
-      add_vertex_blocks_lanes3(c, particles, count, out);
+      // Two springs at once (kernels/vertex_spring_lanes.h).
+      add_vertex_blocks_lanes3(c.x, particles, count, vertex_first_.data(),
+                               vertex_springs_.data(), out);
     }
   }
 
@@ -332,12 +276,6 @@ class SpringForce final : public ForceTerm {
     }
   }
 
-  // One spring as a particle's vertex block reads it: the other end's
-  // offset (other * dim) into x, k and k L.
-  struct VertexSpring {
-    int other;
-    double k, kL;
-  };
   void build_vertex_springs() const {
     std::vector<std::pair<int, int>> ends;
     ends.reserve(springs_.size());
@@ -350,56 +288,6 @@ class SpringForce final : public ForceTerm {
       vertex_springs_.push_back({e.other * dim_, s.k, s.k * s.rest});
     }
     vertex_first_ = pairs.first;
-  }
-
-  // With d = x_p - x_o, l = |d|, t = k (1 - L/l) = k - k L / l (the
-  // transverse stiffness, and the force's scale: F_p = -t d):
-  //   K = (k - t) d d^T / l^2 + t I = k L d d^T / l^3 + t I,
-  // summed as A = sum a d d^T (a = k L / l^3) and T = sum t,
-  // dF_p/dx_p = -(A + T I): one square root and one division per spring
-  // (1 / l). Definite: t clamped at 0, then a = k / l^2.
-  template <int D, bool kDefinite>
-  static void add_vertex_spring(const double* x, const double (&xp)[D], const VertexSpring& s,
-                                double (&f)[D], double (&A)[D][D], double& T) {
-    const double* xo = x + s.other;
-    double d[D];
-    double l2 = 0.0;
-    for (int r = 0; r < D; ++r) {
-      d[r] = xp[r] - xo[r];
-      l2 += d[r] * d[r];
-    }
-    if (!(l2 > 0.0)) {  // no direction: F = 0; K = k I if L = 0, else 0
-      if (s.kL == 0.0) T += s.k;
-      return;
-    }
-    const double inv_l = 1.0 / std::sqrt(l2);
-    const double t = s.k - s.kL * inv_l;
-    for (int r = 0; r < D; ++r) f[r] -= t * d[r];
-    const double inv_l2 = inv_l * inv_l;
-    double a = s.kL * inv_l2 * inv_l;
-    if (kDefinite && t < 0.0) {
-      a = s.k * inv_l2;
-    } else {
-      T += t;
-    }
-    double ad[D];
-    for (int r = 0; r < D; ++r) ad[r] = a * d[r];
-    for (int r = 0; r < D; ++r) {
-      for (int q = r; q < D; ++q) A[r][q] += ad[r] * d[q];
-    }
-  }
-
-  template <int D>
-  static void write_vertex_block(const double (&f)[D], const double (&A)[D][D], double T,
-                                 double* fp, double* K) {
-    for (int r = 0; r < D; ++r) {
-      fp[r] += f[r];
-      K[r * D + r] -= A[r][r] + T;
-      for (int q = r + 1; q < D; ++q) {
-        K[r * D + q] -= A[r][q];
-        K[q * D + r] -= A[r][q];
-      }
-    }
   }
 
   // The plain loop (every dimension, definite or not).
@@ -422,81 +310,6 @@ class SpringForce final : public ForceTerm {
     }
   }
 
-  // The exact blocks of 3-D springs, two springs at once in the lanes of a
-  // two-double vector (GCC's and Clang's vector extension: SSE2 on the
-  // default target, WebAssembly's SIMD or scalars elsewhere): the same
-  // formulas, each lane rounded as add_vertex_spring rounds it, the lanes
-  // summed at the end (so the sums differ from the plain loop's in the last
-  // bits), T folded into A's diagonal. vbd's sweeps spend most of their
-  // time here: built from registers (not an Eigen::Array2d filled through
-  // memory, which made each vector load wait for the two scalar stores
-  // before it: perf, cloth 64), 61 -> 39 instructions per spring.
-  using Pair2 = double __attribute__((vector_size(16)));
-  static Pair2 sqrt2(Pair2 v) {
-#if defined(__x86_64__)
-    return _mm_sqrt_pd(v);
-#else
-    return Pair2{std::sqrt(v[0]), std::sqrt(v[1])};
-#endif
-  }
-  void add_vertex_blocks_lanes3(const Configuration& c, const int* particles, int count,
-                                const VertexBlocks& out) const {
-    const VertexSpring* springs = vertex_springs_.data();
-    const double* x = c.x;
-    const Pair2 zero = {0.0, 0.0};
-    for (int n = 0; n < count; ++n) {
-      const int p = particles[n];
-      const double xp[3] = {x[p * 3], x[p * 3 + 1], x[p * 3 + 2]};
-      const Pair2 xp0 = {xp[0], xp[0]}, xp1 = {xp[1], xp[1]}, xp2 = {xp[2], xp[2]};
-      Pair2 f0 = zero, f1 = zero, f2 = zero;
-      Pair2 a00 = zero, a01 = zero, a02 = zero, a11 = zero, a12 = zero, a22 = zero;
-      double f[3] = {};
-      double A[3][3] = {};
-      double T = 0.0;
-      int e = vertex_first_[static_cast<std::size_t>(p)];
-      const int end = vertex_first_[static_cast<std::size_t>(p) + 1];
-      for (; e + 2 <= end; e += 2) {
-        const VertexSpring& s = springs[e];
-        const VertexSpring& u = springs[e + 1];
-        const double* xs = x + s.other;
-        const double* xu = x + u.other;
-        const Pair2 d0 = xp0 - Pair2{xs[0], xu[0]};
-        const Pair2 d1 = xp1 - Pair2{xs[1], xu[1]};
-        const Pair2 d2 = xp2 - Pair2{xs[2], xu[2]};
-        const Pair2 l2 = d0 * d0 + d1 * d1 + d2 * d2;
-        if (!(l2[0] > 0.0 && l2[1] > 0.0)) {  // a spring without direction: one at a time
-          add_vertex_spring<3, false>(x, xp, s, f, A, T);
-          add_vertex_spring<3, false>(x, xp, u, f, A, T);
-          continue;
-        }
-        const Pair2 inv_l = 1.0 / sqrt2(l2);
-        const Pair2 kL = {s.kL, u.kL};
-        const Pair2 t = Pair2{s.k, u.k} - kL * inv_l;
-        f0 -= t * d0;
-        f1 -= t * d1;
-        f2 -= t * d2;
-        const Pair2 a = kL * (inv_l * inv_l) * inv_l;
-        const Pair2 ad0 = a * d0, ad1 = a * d1, ad2 = a * d2;
-        a00 += ad0 * d0 + t;
-        a01 += ad0 * d1;
-        a02 += ad0 * d2;
-        a11 += ad1 * d1 + t;
-        a12 += ad1 * d2;
-        a22 += ad2 * d2 + t;
-      }
-      if (e < end) add_vertex_spring<3, false>(x, xp, springs[e], f, A, T);
-      f[0] += f0[0] + f0[1];
-      f[1] += f1[0] + f1[1];
-      f[2] += f2[0] + f2[1];
-      A[0][0] += a00[0] + a00[1];
-      A[0][1] += a01[0] + a01[1];
-      A[0][2] += a02[0] + a02[1];
-      A[1][1] += a11[0] + a11[1];
-      A[1][2] += a12[0] + a12[1];
-      A[2][2] += a22[0] + a22[1];
-      write_vertex_block<3>(f, A, T, out.f + n * 3, out.dfdx + n * 9);
-    }
-  }
   mutable std::vector<int> vertex_first_;  // built at the first vertex block
   mutable std::vector<VertexSpring> vertex_springs_;
 
