@@ -8,7 +8,6 @@
 // StepResult, never thrown, never abort()/exit().
 #pragma once
 
-#include <atomic>
 #include <complex>
 #include <functional>
 #include <limits>
