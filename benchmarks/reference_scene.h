@@ -1,6 +1,6 @@
 // reference_scene.h: what the plain reference programs of benchmarks/
 // (xpbd_reference.cc, pd_reference.cc, newton_reference.cc,
-// lbfgs_reference.cc) share, so that each file holds its method and little
+// lbfgs_reference.cc, vbd_reference.cc) share, so that each file holds its method and little
 // else: the command line, the mass-spring scene file, the energies, the time
 // loop with the divergence test `springlab run` applies, the springs'
 // Laplacian matrix, and the output (one JSON line, the final positions).

@@ -1,6 +1,8 @@
 // vbd_reference: a plain vertex block descent on a mass-spring scene,
 // written for comparison only (issue 51). It shares no code with
-// springlab's solvers: one file, a scene file in, a few numbers out, so that
+// springlab's solvers: one file (and the references' reference_scene.h: the
+// command line, the scene file, the energies, the time loop and the output),
+// a scene file in, a few numbers out, so that
 // `springlab run --integrator vbd` can be timed and checked against it
 // (benchmarks/bench_fast_reference.cc).
 //
@@ -38,105 +40,59 @@
 // With --positions FILE it also writes the final positions, one line
 // "i,x,y[,z]" per particle (scene index, %.17g).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include <Eigen/Dense>
-#include <nlohmann/json.hpp>
 
-namespace {
-
-struct Spring {
-  int i, j;
-  double k, rest;
-};
-
-double vec(const nlohmann::json& j, int r) { return r < static_cast<int>(j.size()) ? j[r].get<double>() : 0.0; }
-
-}  // namespace
+#include "reference_scene.h"
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: vbd_reference SCENE.json --dt H --t-end T [--substeps S] "
-                         "[--iterations N] [--rho RHO] [--positions FILE]\n");
-    return 2;
-  }
-  double dt = 1.0 / 60.0, t_end = 1.0, rho = 0.0;
+  reference::CommandLine args;
+  double rho = 0.0;
   int iterations = 10, substeps = 1;
   std::string positions_file;
-  for (int a = 2; a + 1 < argc; a += 2) {
-    const std::string key = argv[a];
-    const double value = std::atof(argv[a + 1]);
-    if (key == "--dt") dt = value;
-    else if (key == "--t-end") t_end = value;
-    else if (key == "--iterations") iterations = static_cast<int>(value);
-    else if (key == "--substeps") substeps = static_cast<int>(value);
-    else if (key == "--rho") rho = value;
-    else if (key == "--positions") positions_file = argv[a + 1];
-    else { std::fprintf(stderr, "unknown option %s\n", key.c_str()); return 2; }
-  }
-  if (argc % 2 != 0) { std::fprintf(stderr, "vbd_reference: an option lacks its value\n"); return 2; }
-  const auto start = std::chrono::steady_clock::now();
-
-  std::ifstream file(argv[1]);
-  const nlohmann::json scene = nlohmann::json::parse(file);
-  if (scene.at("dimension").get<int>() != 3) {
-    std::fprintf(stderr, "vbd_reference: 3-D scenes only\n");
+  if (!reference::read_command_line("vbd_reference", argc, argv,
+                                    {{"--substeps", "S", &substeps},
+                                     {"--iterations", "N", &iterations},
+                                     {"--rho", "RHO", &rho},
+                                     {"--positions", "FILE", &positions_file}},
+                                    args)) {
     return 2;
   }
-  const int n = static_cast<int>(scene.at("particles").size());
-  std::vector<double> x(n * 3), v(n * 3, 0.0), m(n);
-  std::vector<bool> fixed(n);
-  for (int i = 0; i < n; ++i) {
-    const nlohmann::json& q = scene["particles"][i];
-    m[i] = q.value("mass", 1.0);
-    fixed[i] = q.value("fixed", false);
-    for (int r = 0; r < 3; ++r) {
-      x[i * 3 + r] = vec(q["x"], r);
-      if (q.contains("v") && !fixed[i]) v[i * 3 + r] = vec(q["v"], r);
-    }
-  }
-  std::vector<Spring> springs;
-  for (const nlohmann::json& s : scene.at("springs")) {
-    const int i = s.at("i").get<int>(), j = s.at("j").get<int>();
-    double rest = 0.0;
-    if (s.contains("rest")) {
-      rest = s["rest"].get<double>();
-    } else {
-      for (int r = 0; r < 3; ++r) rest += (x[i * 3 + r] - x[j * 3 + r]) * (x[i * 3 + r] - x[j * 3 + r]);
-      rest = std::sqrt(rest);
-    }
-    if (s.value("damping", 0.0) != 0.0) {
-      std::fprintf(stderr, "vbd_reference: spring damping is not modelled\n");
-      return 2;
-    }
-    springs.push_back({i, j, s.at("k").get<double>(), rest});
-  }
-  if (scene.contains("wind")) {
-    std::fprintf(stderr, "vbd_reference: wind is not modelled\n");
+  reference::Scene scene;
+  const reference::Refusal refusal =
+      reference::read_scene(args.scene, {.ignore_other_keys = true, .dimension = 3}, scene);
+  if (refusal.refused()) {
+    const char* what = refusal.what == reference::Unmodelled::kDimension ? "3-D scenes only"
+                       : refusal.what == reference::Unmodelled::kWind   ? "wind is not modelled"
+                                                                        : "spring damping is not modelled";
+    std::fprintf(stderr, "vbd_reference: %s\n", what);
     return 2;
   }
-  double g[3] = {0, 0, 0};
-  const double drag = scene.value("drag", 0.0);
-  if (scene.contains("gravity")) for (int r = 0; r < 3; ++r) g[r] = vec(scene["gravity"], r);
+  const int n = scene.n;
+  const std::vector<double>& m = scene.m;
+  const std::vector<reference::Spring>& springs = scene.springs;
+  const double* g = scene.g;
+  const double drag = scene.drag;
+  const double dt = args.dt, t_end = args.t_end;
+  std::vector<double> x = scene.x, v = scene.v;
+  auto fixed = [&](int i) { return scene.fixed(i); };
 
   // Each free particle's springs, in the file's order.
   std::vector<std::vector<int>> around(n);
   for (int c = 0; c < static_cast<int>(springs.size()); ++c) {
     if (springs[c].k == 0.0) continue;
-    if (!fixed[springs[c].i]) around[springs[c].i].push_back(c);
-    if (!fixed[springs[c].j]) around[springs[c].j].push_back(c);
+    if (!fixed(springs[c].i)) around[springs[c].i].push_back(c);
+    if (!fixed(springs[c].j)) around[springs[c].j].push_back(c);
   }
   // Greedy colouring in scene order.
   std::vector<int> colour(n, -1);
   std::vector<std::vector<int>> colours;
   for (int i = 0; i < n; ++i) {
-    if (fixed[i]) continue;
+    if (fixed(i)) continue;
     std::vector<bool> taken(colours.size() + 1, false);
     for (int c : around[i]) {
       const int j = springs[c].i == i ? springs[c].j : springs[c].i;
@@ -150,46 +106,10 @@ int main(int argc, char** argv) {
   }
 
   // Energies, and the scale the divergence test compares with.
-  auto kinetic_plus_spring = [&]() {
-    double e = 0.0;
-    for (int i = 0; i < n; ++i) {
-      if (fixed[i]) continue;
-      for (int r = 0; r < 3; ++r) e += 0.5 * m[i] * v[i * 3 + r] * v[i * 3 + r];
-    }
-    for (const Spring& s : springs) {
-      double l = 0.0;
-      for (int r = 0; r < 3; ++r) l += (x[s.i * 3 + r] - x[s.j * 3 + r]) * (x[s.i * 3 + r] - x[s.j * 3 + r]);
-      const double stretch = std::sqrt(l) - s.rest;
-      e += 0.5 * s.k * stretch * stretch;
-    }
-    return e;
+  auto kinetic_plus_spring = [&] {
+    return reference::spring_energy(scene, x, reference::kinetic_energy(scene, v));
   };
-  auto gravity_energy = [&]() {
-    double e = 0.0;
-    for (int i = 0; i < n; ++i) {
-      if (fixed[i]) continue;
-      for (int r = 0; r < 3; ++r) e -= m[i] * g[r] * x[i * 3 + r];
-    }
-    return e;
-  };
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (int i = 0; i < n; ++i) {
-    for (int r = 0; r < 3; ++r) {
-      lo[r] = std::min(lo[r], x[i * 3 + r]);
-      hi[r] = std::max(hi[r], x[i * 3 + r]);
-    }
-  }
-  double diameter = 0.0, g_norm = 0.0;
-  for (int r = 0; r < 3; ++r) {
-    diameter += (hi[r] - lo[r]) * (hi[r] - lo[r]);
-    g_norm += g[r] * g[r];
-  }
-  diameter = std::sqrt(diameter);
-  g_norm = std::sqrt(g_norm);
-  double scale = kinetic_plus_spring();
-  for (int i = 0; i < n; ++i) {
-    if (!fixed[i]) scale += m[i] * g_norm * diameter;
-  }
+  reference::TimeLoop loop(dt, t_end, reference::energy_scale(scene, kinetic_plus_spring()));
 
   // particle i's gradient and Hessian of G at x (definite: t clamped at 0)
   auto local = [&](int i, double h, const std::vector<double>& xn, const std::vector<double>& y,
@@ -197,7 +117,7 @@ int main(int argc, char** argv) {
     const double w = m[i] / (h * h);
     double f[3] = {}, A[3][3] = {}, T = 0.0;  // f: the springs' force on i
     for (int c : around[i]) {
-      const Spring& s = springs[c];
+      const reference::Spring& s = springs[c];
       const int j = s.i == i ? s.j : s.i;
       double d[3], l2 = 0.0;
       for (int r = 0; r < 3; ++r) {
@@ -225,22 +145,16 @@ int main(int argc, char** argv) {
     }
   };
 
-  const double exact = t_end / dt;
-  const long steps = std::abs(exact - std::round(exact)) <= 1e-9 ? std::lround(exact)
-                                                                 : static_cast<long>(std::ceil(exact));
   std::vector<double> xn(n * 3), vn(n * 3), v_before(n * 3), y(n * 3), x_before(n * 3), x_last(n * 3);
   bool has_before = false;
-  double t = 0.0;
-  long taken = 0;
-  bool diverged = false;
-  for (long step = 0; step < steps && !diverged; ++step) {
-    const double H = step + 1 == steps ? t_end - t : dt;
+  while (loop.running()) {
+    const double H = loop.h();
     const double h = H / substeps;
     for (int sub = 0; sub < substeps; ++sub) {
       xn = x;
       vn = v;
       for (int i = 0; i < n; ++i) {
-        if (fixed[i]) continue;
+        if (fixed(i)) continue;
         // The initial guess: y plus the part of gravity the last step's
         // acceleration had.
         // (gravity's acceleration as the force over the mass: m g (1/m))
@@ -289,33 +203,17 @@ int main(int argc, char** argv) {
         }
       }
       for (int i = 0; i < n; ++i) {
-        if (fixed[i]) continue;
+        if (fixed(i)) continue;
         for (int r = 0; r < 3; ++r) v[i * 3 + r] = (x[i * 3 + r] - xn[i * 3 + r]) / h;
       }
       v_before = vn;
       has_before = true;
     }
-    t += H;
-    ++taken;
-    const double e = kinetic_plus_spring();
-    diverged = !std::isfinite(e) || (scale > 0.0 && e > 1000.0 * scale);
+    loop.step_done(H, kinetic_plus_spring());
   }
-  double x_sum = 0.0;
-  for (double c : x) x_sum += c;
-  if (!positions_file.empty()) {
-    std::FILE* out = std::fopen(positions_file.c_str(), "w");
-    if (out == nullptr) { std::fprintf(stderr, "vbd_reference: cannot write %s\n", positions_file.c_str()); return 1; }
-    for (int i = 0; i < n; ++i) {
-      std::fprintf(out, "%d", i);
-      for (int r = 0; r < 3; ++r) std::fprintf(out, ",%.17g", x[i * 3 + r]);
-      std::fprintf(out, "\n");
-    }
-    std::fclose(out);
-  }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("{\"steps\": %ld, \"diverged\": %s, \"diverged_at\": %s, \"energy_final\": %.17g, "
-              "\"seconds\": %.9g, \"x_sum\": %.17g, \"colours\": %zu}\n",
-              taken, diverged ? "true" : "false", diverged ? std::to_string(t).c_str() : "null",
-              kinetic_plus_spring() + gravity_energy(), seconds, x_sum, colours.size());
+  if (!reference::write_positions(args.program, positions_file, scene, x)) return 1;
+  reference::print_summary(loop, kinetic_plus_spring() + reference::gravity_energy(scene, x), args.start,
+                           {{"x_sum", reference::number(reference::coordinate_sum(x))},
+                            {"colours", std::to_string(colours.size())}});
   return 0;
 }
