@@ -16,6 +16,11 @@ std::string warning_text(const RunWarning& warning, const std::string& integrato
                   "also in 2, 4 and 8 substeps): energy still exact, but those steps do not "
                   "keep a body's angular momentum; a smaller --dt avoids them";
           break;
+        case Fallback::kSubsteps:
+          text << "2, 4 or 8 substeps (Newton failed on the whole step: the method evaluates "
+                  "its forces short of the step's end, where a barrier may not stop a body "
+                  "within one step); a smaller --dt avoids them";
+          break;
       }
       break;
     case WarningCode::kOvershoot:

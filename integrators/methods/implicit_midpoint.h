@@ -31,6 +31,7 @@ class ImplicitMidpoint final : public VelocityImplicitMethod {
   StepResult do_step(double h) override;
 
  private:
+  StepResult midpoint_step(double h);
   Vector v_new_;
 };
 

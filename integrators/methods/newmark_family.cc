@@ -90,12 +90,22 @@ StepResult NewmarkFamily::explicit_step(double h) {
 }
 
 StepResult NewmarkFamily::do_step(double h) {
-  const double beta = p_.beta, gamma = p_.gamma, am = p_.alpha_m, af = p_.alpha_f;
+  const double beta = p_.beta, am = p_.alpha_m, af = p_.alpha_f;
   const bool alpha_free = am == 0.0 && af == 0.0;
   if (beta == 0.0 && alpha_free &&
       system().velocity_dependence() == VelocityDependence::kNone) {
     return explicit_step(h);
   }
+  const StepResult result = implicit_step(h);
+  if (result.ok || !(af > 0.0)) return result;
+  // The forces at t_{n+1-alpha_f}, short of the step's end: a step a
+  // barrier cannot close in one, solved again in substeps
+  // (velocity_implicit_method.h).
+  return retry_in_substeps(h, result, [this](double dt) { return implicit_step(dt); }, &a_);
+}
+
+StepResult NewmarkFamily::implicit_step(double h) {
+  const double beta = p_.beta, gamma = p_.gamma, am = p_.alpha_m, af = p_.alpha_f;
   // The header's v_c and x*; x* - x_n is (1 - alpha_f) times x_{n+1} - x_n.
   const double kappa = 0.5 - beta - beta * (1.0 - gamma) / gamma;
   v_c_ = v_ + (h * ((1.0 - gamma) - gamma * am / (1.0 - am))) * a_;

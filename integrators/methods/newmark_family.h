@@ -85,6 +85,8 @@ class NewmarkFamily : public VelocityImplicitMethod {
 
  private:
   StepResult explicit_step(double h);
+  // The implicit step (the header's); on failure the state is unchanged.
+  StepResult implicit_step(double h);
 
   NewmarkParameters p_;
   int overshoot_ = 0;

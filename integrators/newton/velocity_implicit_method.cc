@@ -21,7 +21,39 @@ StepResult VelocityImplicitMethod::do_initialize() {
   matrix_.reset();
   linear_.reset(mutable_stats());
   step_.bind(model_, matrix_);
+  substep_steps_ = 0;
   return StepResult::success();
+}
+
+StepResult VelocityImplicitMethod::retry_in_substeps(
+    double h, const StepResult& failed, const std::function<StepResult(double)>& one_step,
+    Vector* extra) {
+  const double t0 = t_;
+  x_part_ = x_;
+  v_part_ = v_;
+  if (extra != nullptr) extra_part_ = *extra;
+  for (int n = 2; n <= 8; n *= 2) {
+    const double dt = h / n;
+    StepResult result;
+    for (int i = 0; i < n && result.ok; ++i) {
+      t_ = t0 + i * dt;
+      result = one_step(dt);
+    }
+    t_ = t0;  // (advance_to moves it)
+    if (result.ok) {
+      ++substep_steps_;
+      return result;
+    }
+    x_ = x_part_;
+    v_ = v_part_;
+    if (extra != nullptr) *extra = extra_part_;
+  }
+  return failed;
+}
+
+std::vector<FallbackCount> VelocityImplicitMethod::fallbacks() const {
+  if (substep_steps_ == 0) return {};
+  return {{.fallback = Fallback::kSubsteps, .steps = substep_steps_}};
 }
 
 StepResult VelocityImplicitMethod::newton(NewtonPolicy::Matrices matrices, const Vector* start,
