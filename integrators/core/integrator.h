@@ -43,9 +43,9 @@ enum class Fallback {
   // instead of a force's own (the rigid bodies' rigidity): energy still
   // exact, but the step's angular momentum is not kept.
   kGenericDiscreteGradient,
-  // implicit-midpoint, the Newmark-alpha methods: a step whose Newton
-  // failed, solved again as 2, 4 or 8 substeps (VelocityImplicitMethod::
-  // retry_in_substeps).
+  // implicit-midpoint, discrete-gradient, the Newmark-alpha methods: a
+  // step whose Newton failed, solved again as 2, 4 or 8 substeps
+  // (VelocityImplicitMethod::retry_in_substeps).
   kSubsteps,
 };
 struct FallbackCount {

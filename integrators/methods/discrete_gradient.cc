@@ -31,23 +31,16 @@ DiscreteGradient::DiscreteGradient()
            .stability_function =
                [](std::complex<double> z) { return (1.0 + z / 2.0) / (1.0 - z / 2.0); }}) {}
 
-StepResult DiscreteGradient::step_in_parts(double h, int n, const VelocityImplicitScheme& scheme) {
-  const double t0 = t_, dt = h / n;
-  x_start_ = x_;
-  v_start_ = v_;
-  StepResult result;
-  for (int i = 0; i < n && result.ok; ++i) {
-    t_ = t0 + i * dt;
-    result = solve_velocity(dt, scheme, v_new_);
-    if (!result.ok) break;
-    x_ += 0.5 * dt * (v_ + v_new_);
-    v_.swap(v_new_);
-  }
-  t_ = t0;
-  if (!result.ok) {
-    x_ = x_start_;
-    v_ = v_start_;
-  }
+StepResult DiscreteGradient::do_initialize() {
+  generic_steps_ = 0;
+  return VelocityImplicitMethod::do_initialize();
+}
+
+StepResult DiscreteGradient::gradient_step(double h, const VelocityImplicitScheme& scheme) {
+  const StepResult result = solve_velocity(h, scheme, v_new_);
+  if (!result.ok) return result;
+  x_ += 0.5 * h * (v_ + v_new_);
+  v_.swap(v_new_);
   return result;
 }
 
@@ -59,34 +52,30 @@ StepResult DiscreteGradient::do_step(double h) {
   const bool own = system().has_own_discrete_gradients();
   own_gradients_ = true;
   scheme.definite_fallback = !own;
-  StepResult result = solve_velocity(h, scheme, v_new_);
-  if (result.ok) {
-    x_ += 0.5 * h * (v_ + v_new_);
-    v_.swap(v_new_);
-    return result;
-  }
+  const auto one_step = [&](double dt) { return gradient_step(dt, scheme); };
+  const StepResult result = one_step(h);
+  if (result.ok) return result;
+  // The header: substeps (with the forces' own discrete gradients where
+  // they have them), then Gonzalez's generic one. (Once in box-chain's 300
+  // steps of 1/60 s, none at 10 ms, none on the tumbling box at 10 ms; once
+  // in box-pile's runs that then fail on a contact: docs/integrators.md.)
+  if (const StepResult parts = retry_in_substeps(h, result, one_step); parts.ok) return parts;
   if (!own) return result;
-  // The header: substeps with the forces' own discrete gradients, then
-  // Gonzalez's generic one. (Once in box-chain's 300 steps of 1/60 s, none
-  // at 10 ms, none on the tumbling box at 10 ms; once in box-pile's runs
-  // that then fail on a contact: docs/integrators.md.)
-  for (int n = 2; n <= 8; n *= 2) {
-    if (step_in_parts(h, n, scheme).ok) return StepResult::success();
-  }
   own_gradients_ = false;
   scheme.definite_fallback = true;
-  if (StepResult generic = solve_velocity(h, scheme, v_new_); generic.ok) {
+  if (const StepResult generic = gradient_step(h, scheme); generic.ok) {
     ++generic_steps_;
-    x_ += 0.5 * h * (v_ + v_new_);
-    v_.swap(v_new_);
     return generic;
   }
   return result;
 }
 
 std::vector<FallbackCount> DiscreteGradient::fallbacks() const {
-  if (generic_steps_ == 0) return {};
-  return {{.fallback = Fallback::kGenericDiscreteGradient, .steps = generic_steps_}};
+  std::vector<FallbackCount> counts = VelocityImplicitMethod::fallbacks();  // the substeps
+  if (generic_steps_ > 0) {
+    counts.push_back({.fallback = Fallback::kGenericDiscreteGradient, .steps = generic_steps_});
+  }
+  return counts;
 }
 
 SPRINGLAB_INTEGRATOR(DiscreteGradient, discrete_gradient_integrator)

@@ -71,13 +71,15 @@
 
 namespace springlab {
 
-// A step whose Newton fails with the forces' own discrete gradients is
-// solved again as 2, then 4, then 8 substeps of h / n with them (each
-// substep keeps the energy and the angular momentum, so their composition
-// does); only when those fail too does it fall back to Gonzalez's generic
-// discrete gradient for every force in the whole step: energy still exact,
-// the angular momentum not (its torque above), and the run reports the
-// steps that did (Fallback::kGenericDiscreteGradient, a run warning).
+// A step whose Newton fails is solved again as 2, then 4, then 8 substeps
+// of h / n (VelocityImplicitMethod::retry_in_substeps; with the forces' own
+// discrete gradients each substep keeps the energy and the angular
+// momentum, so their composition does); where forces have their own
+// discrete gradients and those fail too, it falls back to Gonzalez's
+// generic discrete gradient for every force in the whole step: energy
+// still exact, the angular momentum not (its torque above). The run
+// reports the steps that did either (Fallback::kSubsteps,
+// kGenericDiscreteGradient: run warnings).
 // tumbling-box at dt 0.05: |L| 0.3142 -> 0.0044 over 5 s when two steps
 // fell back to the generic gradient at once; with substeps first, kept.
 class DiscreteGradient final : public VelocityImplicitMethod {
@@ -86,6 +88,7 @@ class DiscreteGradient final : public VelocityImplicitMethod {
   std::vector<FallbackCount> fallbacks() const override;
 
  protected:
+  StepResult do_initialize() override;
   StepResult do_step(double h) override;
   // The midpoint step with Gonzalez's correction (discrete_gradient_step.h),
   // solved in two phases (the frozen potential, then Newton on r).
@@ -94,14 +97,13 @@ class DiscreteGradient final : public VelocityImplicitMethod {
                                               bool symmetric) override;
 
  private:
-  // One step of h as n substeps with the scheme, from (t_, x_, v_); on
-  // success x_ and v_ hold its end (t_ is left to advance_to), on failure
-  // they are as before.
-  StepResult step_in_parts(double h, int n, const VelocityImplicitScheme& scheme);
+  // One step of h with the scheme from (t_, x_, v_); on failure x_ and v_
+  // are as before.
+  StepResult gradient_step(double h, const VelocityImplicitScheme& scheme);
 
   DiscreteGradientStep gonzalez_;
   bool own_gradients_ = true;  // the forces' own discrete gradients in this step
-  Vector v_new_, x_start_, v_start_;
+  Vector v_new_;
   long generic_steps_ = 0;
 };
 
