@@ -17,8 +17,7 @@ std::string warning_text(const RunWarning& warning, const std::string& integrato
                   "keep a body's angular momentum; a smaller --dt avoids them";
           break;
         case Fallback::kSubsteps:
-          text << "2, 4 or 8 substeps (Newton failed on the whole step, as where a barrier "
-                  "acting short of the step's end cannot stop a body within it); a smaller --dt "
+          text << "2, 4 or 8 substeps (Newton failed on the whole step); a smaller --dt "
                   "avoids them";
           break;
       }
