@@ -72,8 +72,8 @@ struct CommandLine {
 // Reads `args`, then the reference's `options`; false after one line on
 // stderr (without a scene file the usage, "usage: PROGRAM SCENE.json --dt H
 // --t-end T [--name META]...", else "unknown option --x" for a name it does
-// not know): the reference then exits with status 2. A name without a value
-// at the end is ignored.
+// not know, "PROGRAM: an option lacks its value" for a name without one at
+// the end): the reference then exits with status 2.
 inline bool read_command_line(const char* program, int argc, char** argv, std::initializer_list<Option> options,
                               CommandLine& args) {
   if (argc < 2) {
@@ -84,6 +84,10 @@ inline bool read_command_line(const char* program, int argc, char** argv, std::i
   }
   args.program = program;
   args.scene = argv[1];
+  if (argc % 2 != 0) {
+    std::fprintf(stderr, "%s: an option lacks its value\n", program);
+    return false;
+  }
   for (int a = 2; a + 1 < argc; a += 2) {
     const std::string key = argv[a];
     const double value = std::atof(argv[a + 1]);

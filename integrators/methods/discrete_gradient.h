@@ -60,10 +60,9 @@
 // exact matrix -- the midpoint rule's M - h/2 dF/dv - h^2/4 dF/dx plus the
 // correction's derivative, a diagonal shift and a rank-one term solved by
 // Sherman and Morrison -- and a line search on ||r|| (quadratic near the
-// solution). Order 2 (as the
-// midpoint rule: the correction is O(h^3) per step); A-stable, and on the
-// linear oscillator (V quadratic: the correction vanishes) it is the
-// midpoint rule, R(z) = (1 + z/2) / (1 - z/2).
+// solution). Order 2 (as the midpoint rule: the correction is O(h^3) per
+// step); A-stable, and on the linear oscillator (V quadratic: the
+// correction vanishes) it is the midpoint rule, R(z) = (1 + z/2) / (1 - z/2).
 #pragma once
 
 #include "integrators/methods/discrete_gradient_step.h"

@@ -24,7 +24,6 @@
 #pragma once
 
 #include "integrators/newton/newton_problem.h"
-#include "integrators/newton/newton_problem.h"
 
 namespace springlab {
 

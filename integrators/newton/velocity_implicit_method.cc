@@ -28,6 +28,8 @@ StepResult VelocityImplicitMethod::do_initialize() {
 StepResult VelocityImplicitMethod::retry_in_substeps(
     double h, const StepResult& failed, const std::function<StepResult(double)>& one_step,
     Vector* extra) {
+  // (Out of memory: a split needs the same factor.)
+  if (linear_.out_of_memory()) return failed;
   const double t0 = t_;
   x_part_ = x_;
   v_part_ = v_;

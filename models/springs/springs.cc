@@ -1,6 +1,6 @@
 // The "spring" element kind: the "springs" key of a scene file (docs/physics.md "Scene files") --
 // reading, checks, writing -- and its registration. The force itself, Hooke's
-// law with its SIMD kernel, is spring_force.cc; spring damping, read here
+// law, is spring_force.cc (its SIMD kernels in kernels/); spring damping, read here
 // from each spring's "damping", is its own kind (spring_damping_force.cc).
 #include "models/springs/spring_reading.h"
 #include "models/springs/springs.h"

@@ -17,6 +17,8 @@ void spring_scales_portable(const double* k, const double* rest, const double* l
 }
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+namespace {
+
 // A default x86-64 build targets SSE2, two lanes per sqrt/div instruction.
 // Where the CPU has AVX (4 lanes) or AVX-512 (8), the divider finishes a block
 // in about half or a quarter of the time (measured on the bench machine, a
@@ -47,6 +49,8 @@ __attribute__((target("avx512f"))) void spring_scales_avx512(const double* k, co
   }
   for (; j < m; ++j) scale[j] = k[j] * (1.0 - rest[j] / std::sqrt(l2[j]));
 }
+
+}  // namespace
 #endif
 
 ScaleKernel pick_scale_kernel() {
