@@ -16,8 +16,8 @@ void DiscreteGradientStep::residual(const Vector& v, Vector& r) {
   const VelocityStep& step = *step_;
   const MechanicalSystem& system = step.system();
   const double h = step.h(), t = step.t_star();
-  step_->residual(v, r);  // r = M (v - v_c) - h w F(x*, v*)
-  const Vector& f_mid = step.stage_force();
+  step_->stage_and_force(v);
+  const Vector& f_mid = step.stage_force();  // F(x*, v*)
   // The forces with their own discrete gradient g_k (ForceTerm::
   // has_discrete_gradient: the rigid bodies' rigidity) use it in place of
   // their midpoint force, except on the frozen potential (whose gradient r
@@ -29,8 +29,8 @@ void DiscreteGradientStep::residual(const Vector& v, Vector& r) {
   if (own_) {
     f_own_ = f_mid;
     system.add_own_discrete_gradient_difference(t, step.x(), step.stage_x(), y_, f_own_);
-    r = system.mass().cwiseProduct(v - step.inertia()) - (h * step.scheme().weight) * f_own_;
   }
+  step.residual_with(v, own_ ? f_own_ : f_mid, r);  // M (v - v_c) - h w f
   // Gonzalez (1996): grad V(x*) becomes
   //   grad V(x*) + (V(y) - V(x_n) - grad V(x*).Delta) / |Delta|^2 Delta,
   // Delta = y - x_n = h v*, x* the midpoint. grad V(x*).Delta is -F.Delta

@@ -78,9 +78,17 @@ void VelocityStep::stage(const Vector& v) {
 }
 
 void VelocityStep::residual(const Vector& v, Vector& r) {
+  stage_and_force(v);
+  residual_with(v, f_, r);
+}
+
+void VelocityStep::stage_and_force(const Vector& v) {
   stage(v);
   model_->force(t_star(), xs_, vs_, f_);
-  r = system().mass().cwiseProduct(v - inertia()) - (h_ * s_.weight) * f_;
+}
+
+void VelocityStep::residual_with(const Vector& v, const Vector& f, Vector& r) const {
+  r = system().mass().cwiseProduct(v - inertia()) - (h_ * s_.weight) * f;
 }
 
 double VelocityStep::potential(const Vector& v, double& magnitude) {

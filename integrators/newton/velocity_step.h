@@ -129,6 +129,11 @@ class VelocityStep final : public NewtonProblem {
 
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
+  // The stage and F there (stage_force()): residual() without r.
+  void stage_and_force(const Vector& v);
+  // r = M (v - v_c) - h w f at v, for a force f at the stage: F, or a
+  // method's own in place of some forces' (discrete_gradient_step.h).
+  void residual_with(const Vector& v, const Vector& f, Vector& r) const;
   // The scale of the round-off of Phi's stored term at the stage (after
   // stage() or residual()): (w / |b|) sum_parts |F_part(x*)| . |x*|, the
   // stiff and the non-stiff forces apart (MechanicalSystem's ForcePart).
