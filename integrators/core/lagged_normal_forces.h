@@ -15,15 +15,22 @@ class LaggedNormalForces {
  public:
   LaggedNormalForces(const MechanicalSystem& system, const Vector& x, const Vector* v = nullptr,
                      double h = 0.0)
-      : system_(system) {
+      : system_(system), x_(x), v_(v), h_(h) {
     system_.lag_normal_forces(&x, v, h);
   }
+  // The step's start again, for another attempt at the step: the contacts
+  // a previous attempt found at its iterates (follow_lagged_contacts) are
+  // dropped, so that the attempt starts where the step's contacts hold.
+  void again() const { system_.lag_normal_forces(&x_, v_, h_); }
   ~LaggedNormalForces() { system_.lag_normal_forces(nullptr, nullptr, 0.0); }
   LaggedNormalForces(const LaggedNormalForces&) = delete;
   LaggedNormalForces& operator=(const LaggedNormalForces&) = delete;
 
  private:
   const MechanicalSystem& system_;
+  const Vector& x_;
+  const Vector* v_;
+  double h_;
 };
 
 }  // namespace springlab

@@ -91,6 +91,7 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
     // that step). Not after other failures: those runs keep their results.
     ++mutable_stats().nonlinear_failures;
     start = &check_.kept();
+    lag.again();
     std::string again;
     result = checked_newton(NewtonPolicy::Matrices::kAlternating, start, v, again);
     if (result.ok) return result;
@@ -100,6 +101,7 @@ StepResult VelocityImplicitMethod::solve_velocity(double h, const VelocityImplic
     // The definite fallback (see the header): projected Newton from the
     // step's start (or the kept state).
     ++mutable_stats().nonlinear_failures;
+    lag.again();
     std::string again;
     StepResult second = checked_newton(NewtonPolicy::Matrices::kDefinite, start, v, again);
     if (second.ok) return second;
