@@ -12,6 +12,7 @@
 
 #include "experiments/driver/simulation.h"
 #include "integrators/registry/registry.h"
+#include "models/contact/contact_potential.h"
 #include "models/scenes/builtin_scenes.h"
 #include "random_scenes.h"
 #include "registry_suite.h"
@@ -138,16 +139,51 @@ TEST(Contact, AdmissibleFractionIsWhereTheFirstGapCloses) {
   EXPECT_EQ(penalty.admissible_fraction(x, dx), std::numeric_limits<double>::infinity());
 }
 
+// The normal damping law (contact_potential.h): -alpha f_n v_n while slow
+// (g -> alpha as v_n -> 0), never more than the normal force itself (|g v_n|
+// <= 1: the total normal force f_n (1 - g v_n) of a separating contact is
+// never a pull), exactly f_n from |v_n| = 2 / alpha on; its slope is
+// d(g v_n)/dv_n and its potential's derivative g v_n (central differences);
+// alpha = 0 is no damping at all.
+TEST(Contact, NormalDampingIsHuntCrossleyWhenSlowAndNeverMoreThanTheNormalForce) {
+  const double eps = 1e-7;
+  for (double alpha : {0.5, 2.0, 5.0}) {
+    SCOPED_TRACE(alpha);
+    EXPECT_NEAR(normal_damping(alpha, 1e-9).g, alpha, 1e-6 * alpha);
+    for (double vn = -3.0; vn <= 3.0; vn += 0.0625) {
+      const NormalDamping d = normal_damping(alpha, vn);
+      EXPECT_LE(std::abs(d.g * vn), 1.0 + 1e-15) << vn;
+      if (std::abs(vn) >= 2.0 / alpha) EXPECT_NEAR(std::abs(d.g * vn), 1.0, 1e-15) << vn;
+      const double force = [&](double u) { return normal_damping(alpha, u).g * u; }(vn);
+      const double fp = normal_damping(alpha, vn + eps).g * (vn + eps);
+      const double fm = normal_damping(alpha, vn - eps).g * (vn - eps);
+      EXPECT_NEAR(d.slope, (fp - fm) / (2 * eps), 1e-6 * (1.0 + alpha)) << vn;
+      const double Wp = normal_damping(alpha, vn + eps).potential;
+      const double Wm = normal_damping(alpha, vn - eps).potential;
+      EXPECT_NEAR(force, (Wp - Wm) / (2 * eps), 1e-6) << vn;
+    }
+  }
+  const NormalDamping none = normal_damping(0.0, 0.7);
+  EXPECT_EQ(none.g, 0.0);
+  EXPECT_EQ(none.slope, 0.0);
+  EXPECT_EQ(none.potential, 0.0);
+}
+
 // Lagged friction (the hand-written implicit methods, during a step): with
 // f_n taken from x_lag, friction is -dW/dv of its dissipation potential W(v),
-// dF/dv is symmetric, and the model says so; cleared, it is live again
-// (no potential, dF/dx not symmetric). At random states of the friction
-// kind's own random instance (planes, penalty or barrier), 2-D and 3-D.
+// dF/dv is symmetric and matches central differences of F, and the model
+// says so; cleared, it is live again (no potential, dF/dx not symmetric).
+// At random states of each friction kind's own random instance (planes,
+// penalty or barrier): particles in 2-D and 3-D, and the rigid bodies'
+// friction and normal damping (contact_potential.h's normal_damping) with
+// the planes and between bodies.
 TEST(Contact, LaggedFrictionIsTheGradientOfItsDissipationPotential) {
-  for (int dim : {2, 3}) {
+  const std::vector<std::pair<std::string, int>> cases = {
+      {"friction", 2}, {"friction", 3}, {"body-friction", 3}, {"body-body-friction", 3}};
+  for (const auto& [kind, dim] : cases) {
     for (unsigned seed = 1; seed <= 3; ++seed) {
-      const Model model(
-          testing::random_scene({&testing::kind_named("friction")}, dim, seed));
+      SCOPED_TRACE(kind + ", seed " + std::to_string(seed));
+      const Model model(testing::random_scene({&testing::kind_named(kind)}, dim, seed));
       ASSERT_FALSE(model.derives_from_potentials());
       ASSERT_FALSE(model.jacobian_symmetric());
       const Vector x = model.initial_positions(), v = model.initial_velocities();
@@ -169,13 +205,18 @@ TEST(Contact, LaggedFrictionIsTheGradientOfItsDissipationPotential) {
         Vector vp = v, vm = v;
         vp[k] += eps;
         vm[k] -= eps;
+        Vector fp, fm;
+        model.force(0.0, x, vp, fp);
+        model.force(0.0, x, vm, fm);
+        EXPECT_LT((K.col(k) - (fp - fm) / (2 * eps)).norm(), 1e-6 * (1.0 + K.col(k).norm()))
+            << "dF/dv, column " << k;
         const double dW =
             (model.velocity_potential(0.0, vp) - model.velocity_potential(0.0, vm)) / (2 * eps);
         const double dV =
             (model.position_potential(0.0, x + eps * Vector::Unit(x.size(), k)) -
              model.position_potential(0.0, x - eps * Vector::Unit(x.size(), k))) / (2 * eps);
         EXPECT_NEAR(f[k], -dV - dW, 1e-6 * (1.0 + std::abs(f[k])))
-            << dim << "-D, seed " << seed << ", coordinate " << k;
+            << dim << "-D, coordinate " << k;
       }
       model.lag_normal_forces(nullptr, nullptr, 0.0);
       EXPECT_FALSE(model.derives_from_potentials());

@@ -420,6 +420,7 @@ void check_body(const Reporter& r, const std::string& where, const Body& b) {
   check_positive(r, field(where, "density"), b.density);
   check_positive(r, field(where, "rigidity"), b.rigidity);
   check_nonnegative(r, field(where, "friction"), b.friction);
+  check_nonnegative(r, field(where, "contact_damping"), b.contact_damping);
   if (b.position) check_vector(r, field(where, "position"), *b.position, 3);
   check_vector(r, field(where, "v"), b.v, 3);
   check_vector(r, field(where, "omega"), b.omega, 3);
@@ -471,7 +472,8 @@ Body read_body(const Reporter& r, const std::string& where, const Json& j) {
   require_object(r, where, j);
   check_keys(r, where, j,
              {"vertices", "triangles", "shape", "size", "radius", "height", "segments", "density",
-              "position", "orientation", "affine", "v", "omega", "fixed", "rigidity", "friction"},
+              "position", "orientation", "affine", "v", "omega", "fixed", "rigidity", "friction",
+              "contact_damping"},
              {});
   Body b;
   const bool mesh = j.contains("vertices") || j.contains("triangles");
@@ -577,6 +579,9 @@ Body read_body(const Reporter& r, const std::string& where, const Json& j) {
   if (j.contains("friction")) {
     b.friction = read_number(r, field(where, "friction"), j.at("friction"));
   }
+  if (j.contains("contact_damping")) {
+    b.contact_damping = read_number(r, field(where, "contact_damping"), j.at("contact_damping"));
+  }
   check_body(r, where, b);
   return b;
 }
@@ -678,6 +683,9 @@ void write_bodies(const Scene& scene, std::vector<std::pair<std::string, std::st
     if (b.fixed) text += ", \"fixed\": true";
     text += ", \"rigidity\": " + json_number(b.rigidity);
     if (b.friction != 0.0) text += ", \"friction\": " + json_number(b.friction);
+    if (b.contact_damping != 0.0) {
+      text += ", \"contact_damping\": " + json_number(b.contact_damping);
+    }
     text += "}";
     lines.add(text);
   }

@@ -1,5 +1,5 @@
-// Coulomb friction between rigid bodies (docs/physics.md "Contact between
-// bodies"): at every contact of body_body_contact.cc (a's material point
+// Coulomb friction and normal damping between rigid bodies (docs/physics.md
+// "Contact between bodies"): at every contact of body_body_contact.cc (a's material point
 // X_a, b's X_b, the normal n from b's to a's, the gap d: body_contacts.h)
 // smoothed Coulomb friction as with the planes (friction_force.cc; IPC, Li
 // et al. 2020, sec. 5.2) at a's point x_a, on its velocity relative to b's
@@ -29,6 +29,14 @@
 //   dv_t/dq = T dv_rel/dq - (n . v_rel) dn/dq - n v_rel^T dn/dq,
 //   df/dq = -mu (g v_t (df_n/dq)^T + f_n G dv_t/dq),  df_n/dq = -phi'' dD/dq,
 //   dF_u/dq = c_u df/dq + f dc_u/dq.
+//
+// Normal damping (after Hunt and Crossley 1975; contact_potential.h) acts at
+// the same place with alpha = (alpha_a + alpha_b) / 2 (each body's
+// "contact_damping"): f += -f_n g_n v_n n, v_n = n . v_rel, g_n = alpha at
+// low speed (normal_damping). Lagged, it adds f_n f0(|v_n|) to W and
+// -f_n g_n' n n^T to df/dv_rel (g_n' = d(g_n v_n)/dv_n); live,
+//   df/dq += -(g_n v_n n (df_n/dq)^T + f_n g_n' n dv_n/dq + f_n g_n v_n dn/dq),
+//   dv_n/dq = n^T dv_rel/dq + v_rel^T dn/dq.
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -76,7 +84,8 @@ class BodyBodyFrictionForce final : public ForceTerm {
     double sum = 0.0;
     for (const Sliding& s : frozen_) {
       const double y = (s.T * relative_velocity(s, c.v)).norm();
-      sum += s.mu * s.f_n * friction_potential(y, eps_);
+      const double vn = s.n.dot(relative_velocity(s, c.v));
+      sum += s.mu * s.f_n * friction_potential(y, eps_) + s.f_n * normal_damping(s.alpha, vn).potential;
     }
     return sum;
   }
@@ -97,9 +106,10 @@ class BodyBodyFrictionForce final : public ForceTerm {
 
   void add_force(const Configuration& c, double* f) const override {
     visit(c, [&](const Sliding& s, const BodyContact*) {
-      const Eigen::Vector3d vt = s.T * relative_velocity(s, c.v);
+      const Eigen::Vector3d v_rel = relative_velocity(s, c.v);
+      const Eigen::Vector3d vt = s.T * v_rel;
       const FrictionWeight fw = friction_weight(vt.squaredNorm(), eps_);
-      const Eigen::Vector3d force = -s.mu * s.f_n * fw.g * vt;
+      const Eigen::Vector3d force = pair_force(s, fw, vt, s.n.dot(v_rel));
       const std::array<int, 8> index = BodyPairBlocks::unknowns(finder_, s.a, s.b);
       for (std::size_t u = 0; u < 8; ++u) {
         if (index[u] < 0) continue;
@@ -139,7 +149,9 @@ class BodyBodyFrictionForce final : public ForceTerm {
       const Eigen::Matrix3d G =
           fw.g * Eigen::Matrix3d::Identity() + fw.g_over_y * vt * vt.transpose();
       if (dfdv != nullptr) {
-        const Eigen::Matrix3d D = -s.mu * s.f_n * G * s.T;  // df/dv_rel
+        // df/dv_rel
+        const double slope = normal_damping(s.alpha, s.n.dot(v_rel)).slope;
+        const Eigen::Matrix3d D = -s.mu * s.f_n * G * s.T - s.f_n * slope * s.n * s.n.transpose();
         for (int u = 0; u < 8; ++u) {
           for (int w = 0; w < 8; ++w) blocks_.add(dfdv, s.a, s.b, u, w, D, s.w[u] * s.w[w]);
         }
@@ -158,9 +170,13 @@ class BodyBodyFrictionForce final : public ForceTerm {
       const Eigen::Vector3d& n = live->n;
       const Eigen::Matrix<double, 3, 24> dvt =
           s.T * dv_rel - n.dot(v_rel) * d.dn - n * (v_rel.transpose() * d.dn);
+      const double vn = n.dot(v_rel);
+      const NormalDamping damp = normal_damping(s.alpha, vn);
+      const Eigen::Matrix<double, 1, 24> dvn = n.transpose() * dv_rel + v_rel.transpose() * d.dn;
       const Eigen::Matrix<double, 3, 24> df =
-          -s.mu * (fw.g * vt * dfn + s.f_n * G * dvt);
-      const Eigen::Vector3d force = -s.mu * s.f_n * fw.g * vt;
+          -s.mu * (fw.g * vt * dfn + s.f_n * G * dvt) -
+          (damp.g * vn * n * dfn + s.f_n * damp.slope * n * dvn + s.f_n * damp.g * vn * d.dn);
+      const Eigen::Vector3d force = pair_force(s, fw, vt, vn);
       for (int u = 0; u < 8; ++u) {
         // dw_u/dq: 0 for p's; the material point's row for the a_i's.
         Eigen::Matrix<double, 1, 24> dw = Eigen::Matrix<double, 1, 24>::Zero();
@@ -182,13 +198,23 @@ class BodyBodyFrictionForce final : public ForceTerm {
     Eigen::Vector3d Yb;
     Eigen::Matrix3d B;          // A_b^-1
     Eigen::Matrix3d T;
-    double mu = 0.0, f_n = 0.0;
+    Eigen::Vector3d n;
+    double mu = 0.0, alpha = 0.0, f_n = 0.0;
   };
 
-  // The contact's friction at x, if it has any (mu > 0, a normal force).
+  // f = -f_n (mu g(|v_t|) v_t + g_n(|v_n|) v_n n), on a at x_a.
+  static Eigen::Vector3d pair_force(const Sliding& s, const FrictionWeight& fw,
+                                    const Eigen::Vector3d& vt, double vn) {
+    return -s.mu * s.f_n * fw.g * vt - s.f_n * normal_damping(s.alpha, vn).g * vn * s.n;
+  }
+
+  // The contact's friction and damping at x, if it has any (mu > 0 or
+  // alpha > 0, and a normal force).
   bool sliding(const BodyContact& k, const double* x, Sliding& s) const {
-    const double mu = std::sqrt(finder_.surface(k.a).friction * finder_.surface(k.b).friction);
-    if (!(mu > 0.0)) return false;
+    const BodyContactFinder::Surface &a = finder_.surface(k.a), &b = finder_.surface(k.b);
+    const double mu = std::sqrt(a.friction * b.friction);
+    const double alpha = 0.5 * (a.contact_damping + b.contact_damping);
+    if (!(mu > 0.0) && !(alpha > 0.0)) return false;
     const ContactPhi phi = law_.between_bodies(k.d);
     if (!(phi.slope < 0.0)) return false;  // (also skips a closed gap's NaN)
     s.a = k.a;
@@ -197,7 +223,9 @@ class BodyBodyFrictionForce final : public ForceTerm {
     s.Yb = k.Xb + k.d * s.B * k.n;
     s.w = {1.0, k.Xa.x(), k.Xa.y(), k.Xa.z(), -1.0, -s.Yb.x(), -s.Yb.y(), -s.Yb.z()};
     s.T = Eigen::Matrix3d::Identity() - k.n * k.n.transpose();
+    s.n = k.n;
     s.mu = mu;
+    s.alpha = alpha;
     s.f_n = -phi.slope;
     return true;
   }
@@ -262,8 +290,12 @@ class BodyBodyFrictionForce final : public ForceTerm {
 bool has_body_friction(const Scene& scene) {
   if (!has_body_contacts(scene)) return false;
   int rough = 0;
-  for (const Body& b : scene.get<Bodies>()) rough += b.friction > 0.0 ? 1 : 0;
-  return rough >= 2;
+  bool damped = false;
+  for (const Body& b : scene.get<Bodies>()) {
+    rough += b.friction > 0.0 ? 1 : 0;
+    damped = damped || b.contact_damping > 0.0;
+  }
+  return rough >= 2 || damped;
 }
 
 std::unique_ptr<ForceTerm> make_body_body_friction(const Scene& scene,
@@ -278,8 +310,11 @@ std::unique_ptr<ForceTerm> make_body_body_friction(const Scene& scene,
 void add_random_body_friction_pair(Scene& scene, std::mt19937& rng, RandomStates states) {
   add_random_body_pair(scene, rng, states);
   if (scene.dimension != 3) return;
-  std::uniform_real_distribution<double> u(0.3, 0.8);
-  for (Body& b : scene.block<Bodies>()) b.friction = u(rng);
+  std::uniform_real_distribution<double> u(0.3, 0.8), alpha(0.5, 2.0);
+  for (Body& b : scene.block<Bodies>()) {
+    b.friction = u(rng);
+    b.contact_damping = alpha(rng);  // normal damping too (alpha v_n of order 1)
+  }
 }
 
 }  // namespace

@@ -69,6 +69,7 @@ BodyContactFinder::BodyContactFinder(const Scene& scene, const BodyLayout& layou
     s.X = rb.X;
     s.triangles = rb.triangles;
     s.friction = bodies[k].friction;
+    s.contact_damping = bodies[k].contact_damping;
     for (const Eigen::Vector3d& X : s.X) s.radius = std::max(s.radius, X.norm());
     // Each edge with the triangles on its two sides (a closed surface).
     std::vector<std::tuple<int, int, int>> sides;  // (lower vertex, upper vertex, triangle)

@@ -1,7 +1,8 @@
 // The external forces on rigid bodies (bodies.h, docs/physics.md "Rigid
 // bodies (affine bodies)"), each an element kind with no scene key of its
-// own: gravity on the centre of mass, and the planes' contact and Coulomb
-// friction at the bodies' surface vertices.
+// own: gravity on the centre of mass, and the planes' contact, Coulomb
+// friction and normal damping (each body's contact_damping) at the bodies'
+// surface vertices.
 //
 // A surface vertex with rest coordinates X is at x = p + A X: its Jacobian
 // with respect to the body's unknowns q = (p, a_1, a_2, a_3) is
@@ -239,14 +240,20 @@ std::unique_ptr<ForceTerm> make_body_contact(const Scene& scene, const ParticleO
                                             scene.get<Planes>(), scene.get<Contact>());
 }
 
-// ---- Coulomb friction with the planes (friction_force.cc's law at each vertex). ----
+// ---- Coulomb friction with the planes (friction_force.cc's law at each vertex), and
+// the normal damping of the body's contacts (contact_potential.h): per vertex in
+// contact, f = -f_n (mu g(|v_t|) v_t + g_n(|v_n|) v_n n) (g_n: normal_damping's g).
+// Live its dF/dx adds the normal force's change, phi''(d) (mu g v_t + g_n v_n n) n^T. ----
 
 class BodyFrictionForce final : public ForceTerm {
  public:
-  BodyFrictionForce(const BodyLayout& layout, const Planes& planes, const Contact& contact)
-      : vertices_(free_vertices(layout)), law_(contact), eps_(contact.smoothing) {
+  BodyFrictionForce(const BodyLayout& layout, const Planes& planes, const Contact& contact,
+                    std::vector<double> alpha)
+      : vertices_(free_vertices(layout)), law_(contact), eps_(contact.smoothing),
+        alpha_(std::move(alpha)) {
+    const bool damped = std::any_of(alpha_.begin(), alpha_.end(), [](double a) { return a > 0.0; });
     for (Plane p : planes) {
-      if (!(p.friction > 0.0)) continue;
+      if (!(p.friction > 0.0) && !damped) continue;
       p.normal.normalize();
       planes_.push_back(p);
     }
@@ -263,8 +270,7 @@ class BodyFrictionForce final : public ForceTerm {
     if (!lagged_) return 0.0;
     double sum = 0.0;
     for_each_contact(c, [&](std::size_t, const Vertex&, const Sliding& s) {
-      const double y = s.y;
-      sum += s.mu * s.f_n * friction_potential(y, eps_);
+      sum += s.mu * s.f_n * friction_potential(s.y, eps_) + s.f_n * s.damp.potential;
     });
     return sum;
   }
@@ -285,7 +291,10 @@ class BodyFrictionForce final : public ForceTerm {
   void add_force(const Configuration& c, double* f) const override {
     for_each_contact(c, [&](std::size_t, const Vertex& v, const Sliding& s) {
       for (int a = 0; a < 4; ++a) {
-        for (int r = 0; r < 3; ++r) f[(v.first + a) * 3 + r] -= v.w[a] * s.mu * s.f_n * s.g * s.vt[r];
+        for (int r = 0; r < 3; ++r) {
+          f[(v.first + a) * 3 + r] -= v.w[a] * s.mu * s.f_n * s.g * s.vt[r] +
+                                      v.w[a] * s.f_n * s.damp.g * s.un * s.n[r];
+        }
       }
     });
   }
@@ -303,7 +312,8 @@ class BodyFrictionForce final : public ForceTerm {
         for (int r = 0; r < 3; ++r) {
           for (int q = 0; q < 3; ++q) {
             const double T = (r == q ? 1.0 : 0.0) - s.n[r] * s.n[q];
-            B[r][q] = -s.mu * s.f_n * (s.g * T + s.g_over_y * s.vt[r] * s.vt[q]);
+            B[r][q] = -s.mu * s.f_n * (s.g * T + s.g_over_y * s.vt[r] * s.vt[q]) -
+                      s.f_n * s.damp.slope * s.n[r] * s.n[q];
           }
         }
         add_vertex_block(dfdv, slots_, k, v, B);
@@ -311,7 +321,10 @@ class BodyFrictionForce final : public ForceTerm {
       if (dfdx != nullptr && s.curvature != 0.0) {
         double B[3][3];
         for (int r = 0; r < 3; ++r) {
-          for (int q = 0; q < 3; ++q) B[r][q] = s.mu * s.g * s.curvature * s.vt[r] * s.n[q];
+          for (int q = 0; q < 3; ++q) {
+            B[r][q] = s.mu * s.g * s.curvature * s.vt[r] * s.n[q] +
+                      s.curvature * s.damp.g * s.un * s.n[r] * s.n[q];
+          }
         }
         add_vertex_block(dfdx, slots_, k, v, B);
       }
@@ -321,7 +334,9 @@ class BodyFrictionForce final : public ForceTerm {
  private:
   struct Sliding {
     Eigen::Vector3d n, vt;
-    double mu, y, g, g_over_y, f_n, curvature;
+    double un;  // n . v at the vertex
+    double mu, alpha, y, g, g_over_y, f_n, curvature;
+    NormalDamping damp;  // contact_potential.h, at un
   };
 
   template <typename Visit>
@@ -333,6 +348,8 @@ class BodyFrictionForce final : public ForceTerm {
         Sliding s;
         s.n = p.normal;
         s.mu = p.friction;
+        s.alpha = alpha_[static_cast<std::size_t>(v.body)];
+        if (s.mu == 0.0 && s.alpha == 0.0) continue;
         if (lagged_) {
           s.f_n = lagged_fn_[k * vertices_.size() + i];
           s.curvature = 0.0;
@@ -344,7 +361,9 @@ class BodyFrictionForce final : public ForceTerm {
           s.curvature = phi.curvature;
         }
         const Eigen::Vector3d u = vertex_point(v, c.v);
-        s.vt = u - s.n.dot(u) * s.n;
+        s.un = s.n.dot(u);
+        s.damp = normal_damping(s.alpha, s.un);
+        s.vt = u - s.un * s.n;
         const FrictionWeight w = friction_weight(s.vt.squaredNorm(), eps_);
         s.y = w.y;
         s.g = w.g;
@@ -358,6 +377,7 @@ class BodyFrictionForce final : public ForceTerm {
   Planes planes_;
   ContactLaw law_;
   double eps_;
+  std::vector<double> alpha_;  // each body's contact damping (scene order)
   bool lagged_ = false;
   std::vector<double> lagged_fn_;
   std::vector<BlockSlot> slots_;
@@ -365,11 +385,14 @@ class BodyFrictionForce final : public ForceTerm {
 
 std::unique_ptr<ForceTerm> make_body_friction(const Scene& scene, const ParticleOrder& order) {
   const Planes& planes = scene.get<Planes>();
-  const bool any = std::any_of(planes.begin(), planes.end(),
-                               [](const Plane& p) { return p.friction > 0.0; });
-  if (!any || body_pseudo_particles(scene) == 0) return nullptr;
+  std::vector<double> alpha;
+  for (const Body& b : scene.get<Bodies>()) alpha.push_back(b.contact_damping);
+  const bool rough = std::any_of(planes.begin(), planes.end(),
+                                 [](const Plane& p) { return p.friction > 0.0; });
+  const bool damped = std::any_of(alpha.begin(), alpha.end(), [](double a) { return a > 0.0; });
+  if (planes.empty() || !(rough || damped) || body_pseudo_particles(scene) == 0) return nullptr;
   return std::make_unique<BodyFrictionForce>(body_layout(scene, order), planes,
-                                             scene.get<Contact>());
+                                             scene.get<Contact>(), std::move(alpha));
 }
 
 // Random instances: a body (and gravity, planes, friction) when the scene
@@ -426,6 +449,9 @@ void add_random_body_contact(Scene& scene, std::mt19937& rng, RandomStates state
 void add_random_body_friction(Scene& scene, std::mt19937& rng, RandomStates states) {
   friction_kind().add_random(scene, rng, states);  // planes with mu, a smoothing speed
   ensure_body(scene, rng, states);
+  // Normal damping on the bodies' contacts (alpha v_n of order 1).
+  std::uniform_real_distribution<double> u(0.5, 2.0);
+  for (Body& b : scene.block<Bodies>()) b.contact_damping = u(rng);
 }
 
 }  // namespace

@@ -119,6 +119,7 @@ Body scene_box(const Values& p, const Eigen::Vector3d& size) {
   box.density = p.at("density");
   box.rigidity = p.at("rigidity");
   box.friction = p.at("friction");
+  box.contact_damping = p.at("contact_damping");
   return box;
 }
 
@@ -325,6 +326,10 @@ std::vector<ParameterSpec> box_params(std::vector<ParameterSpec> own) {
               {param("density", 1000, "density [kg/m^3]", Range::kPositive),
                param("rigidity", 1e6, "rigidity kappa [Pa]", Range::kPositive),
                param("friction", 0.5, "Coulomb coefficient mu of the ground and of every box",
+                     Range::kNonNegative),
+               param("contact_damping", 2.0,
+                     "every box's contact damping alpha [s/m] along the normal (after Hunt and "
+                     "Crossley: -alpha f_n v_n when slow, at most f_n); 0: elastic contact",
                      Range::kNonNegative),
                param("g", 9.81, "gravitational acceleration, pointing down [m/s^2]", Range::kAny),
                choice("contact", "barrier",
