@@ -28,7 +28,7 @@ from springlab_report.integrators import Integrators  # noqa: E402
 from springlab_report.kinds import KINDS  # noqa: E402
 from springlab_report.kinds.convergence import _coinciding  # noqa: E402
 from springlab_report.kinds.energy import classify  # noqa: E402
-from springlab_report.kinds import motion, spectral, stability  # noqa: E402
+from springlab_report.kinds import motion, rigid, spectral, stability  # noqa: E402
 from springlab_report.page import marker_text  # noqa: E402
 
 INTEGRATORS = {"integrators": [
@@ -706,6 +706,20 @@ class RigidPile(unittest.TestCase):
         self.assertIn("Stopped: newmark at 0.001 s diverged at t = 0.2 s (rigidity); "
                       "generalized-alpha at 0.001 s failed at t = 0.1 s (Newton).", text)
         self.assertTrue((self.s.dir / "out" / "rigid-pile.png").is_file())
+
+    def test_caption_says_how_the_collisions_dissipate(self):
+        """From the pile's scene as the experiment wrote it: each box's
+        contact_damping (absent: 0, elastic)."""
+        self.assertEqual(rigid.pile_damping({"scene": "box-pile"}), "")
+        box = {"shape": "box", "size": [0.2, 0.1, 0.15]}
+        damped = {"scene": {"bodies": [dict(box, contact_damping=2.0)] * 3}}
+        self.assertEqual(rigid.pile_damping(damped),
+                         "every box with contact damping alpha = 2 s/m")
+        self.assertEqual(rigid.pile_damping({"scene": {"bodies": [box, box]}}),
+                         "elastic contact: no contact damping")
+        mixed = {"scene": {"bodies": [box, dict(box, contact_damping=5.0)]}}
+        self.assertEqual(rigid.pile_damping(mixed),
+                         "the boxes' contact damping alpha from 0 to 5 s/m")
 
 
 class FluidPlayer(unittest.TestCase):

@@ -219,16 +219,33 @@ def render_pile(exp, ctx):
     legend_outside(ax_e, fontsize=9)
     saved = ctx.figs.save(fig, exp.name + "-pile.png")
     pile = exp.setting("pile") or {}
-    caption = ("The box pile (%s bodies meeting each other and the ground under the barrier) "
+    damping = pile_damping(pile)
+    caption = ("The box pile (%s bodies meeting each other and the ground under the barrier%s) "
                "under each implicit method: the top box's height and the total energy against "
                "time. A pile that stands keeps its top box up; a run that stops ends its lines "
                "with a cross (the legend says when, the sentences below why)." %
-               fmt(pile.get("bodies"), 3))
+               (fmt(pile.get("bodies"), 3), ", " + damping if damping else ""))
     if left_axis:
         caption += (" The energy axis ends at 1.25 times the highest energy of the runs that "
                     "completed; above it: %s." % "; ".join(left_axis))
     return (figure_html(saved, "rigid: the box pile", esc(caption)) +
             facts_html(pile_sentences(runs), heading="What the pile shows"))
+
+
+def pile_damping(pile):
+    """How the pile's collisions dissipate, from its scene's bodies (the
+    setting's scene as the experiment wrote it); "" when it does not say."""
+    scene = pile.get("scene")
+    bodies = scene.get("bodies") if isinstance(scene, dict) else None
+    if not bodies:
+        return ""
+    alphas = sorted({float(b.get("contact_damping", 0.0)) for b in bodies})
+    if alphas == [0.0]:
+        return "elastic contact: no contact damping"
+    if len(alphas) == 1:
+        return "every box with contact damping alpha = %s s/m" % fmt(alphas[0], 3)
+    return "the boxes' contact damping alpha from %s to %s s/m" % (fmt(alphas[0], 3),
+                                                                   fmt(alphas[-1], 3))
 
 
 def pile_stops(runs):
