@@ -119,7 +119,7 @@ TEST(BoxPiles, ThePileOfEightStandsUnderImplicitEulerAtAFrameStep) {
 // generalized-alpha and the implicit midpoint. The last two damp little:
 // with elastic contact (contact_damping 0) their boxes bounce and the pile
 // topples (the top box ends on the ground under generalized-alpha; the
-// midpoint diverges at t = 3.5 s); the boxes' default contact damping
+// midpoint diverges at t = 1.5 s); the boxes' default contact damping
 // (2 s/m) takes the bounce out and it stands.
 TEST(BoxPiles, ThePileOfEightStandsAtAMillisecond) {
   const Model model(make_builtin_scene("box-pile", {{"n", "8"}}));
