@@ -21,6 +21,8 @@ class LaggedNormalForces {
   // The step's start again, for another attempt at the step: the contacts
   // a previous attempt found at its iterates (follow_lagged_contacts) are
   // dropped, so that the attempt starts where the step's contacts hold.
+  // (x and v are kept by reference: they must outlive this object, as the
+  // step's state does.)
   void again() const { system_.lag_normal_forces(&x_, v_, h_); }
   ~LaggedNormalForces() { system_.lag_normal_forces(nullptr, nullptr, 0.0); }
   LaggedNormalForces(const LaggedNormalForces&) = delete;

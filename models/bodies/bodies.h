@@ -62,10 +62,11 @@ struct Body {
   // Coulomb mu against other bodies (a pair uses sqrt(mu_a mu_b);
   // body_body_friction.cc); the planes' friction is the plane's own.
   double friction = 0.0;
-  // alpha [s/m] of Hunt and Crossley's damping along the normal of its
-  // contacts, -alpha f_n v_n (docs/physics.md "Contact between bodies"; a
-  // pair uses (alpha_a + alpha_b) / 2, a plane the body's own alpha):
-  // collisions that dissipate (body_body_friction.cc, body_forces.cc).
+  // alpha [s/m] of the damping along the normal of its contacts, after
+  // Hunt and Crossley: -alpha f_n v_n while slow, at most f_n
+  // (contact_potential.h's normal_damping; docs/physics.md "Contact between
+  // bodies"; a pair uses (alpha_a + alpha_b) / 2, a plane the body's own
+  // alpha): collisions that dissipate (body_body_friction.cc, body_forces.cc).
   double contact_damping = 0.0;
 };
 using Bodies = std::vector<Body>;

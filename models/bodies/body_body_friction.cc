@@ -34,8 +34,8 @@
 // the same place with alpha = (alpha_a + alpha_b) / 2 (each body's
 // "contact_damping"): f += -f_n g_n v_n n, v_n = n . v_rel, g_n = alpha at
 // low speed (normal_damping). Lagged, it adds f_n f0(|v_n|) to W and
-// -f_n g_n' n n^T to df/dv_rel (g_n' = d(g_n v_n)/dv_n); live,
-//   df/dq += -(g_n v_n n (df_n/dq)^T + f_n g_n' n dv_n/dq + f_n g_n v_n dn/dq),
+// -f_n f1'(|v_n|) n n^T to df/dv_rel (f1' = d(g_n v_n)/dv_n); live,
+//   df/dq += -(g_n v_n n (df_n/dq)^T + f_n f1' n dv_n/dq + f_n g_n v_n dn/dq),
 //   dv_n/dq = n^T dv_rel/dq + v_rel^T dn/dq.
 #include <Eigen/LU>
 #include <algorithm>
@@ -83,9 +83,10 @@ class BodyBodyFrictionForce final : public ForceTerm {
     if (!lagged_) return 0.0;
     double sum = 0.0;
     for (const Sliding& s : frozen_) {
-      const double y = (s.T * relative_velocity(s, c.v)).norm();
-      const double vn = s.n.dot(relative_velocity(s, c.v));
-      sum += s.mu * s.f_n * friction_potential(y, eps_) + s.f_n * normal_damping(s.alpha, vn).potential;
+      const Eigen::Vector3d v_rel = relative_velocity(s, c.v);
+      const double y = (s.T * v_rel).norm();
+      sum += s.mu * s.f_n * friction_potential(y, eps_) +
+             s.f_n * normal_damping(s.alpha, s.n.dot(v_rel)).potential;
     }
     return sum;
   }
@@ -109,7 +110,8 @@ class BodyBodyFrictionForce final : public ForceTerm {
       const Eigen::Vector3d v_rel = relative_velocity(s, c.v);
       const Eigen::Vector3d vt = s.T * v_rel;
       const FrictionWeight fw = friction_weight(vt.squaredNorm(), eps_);
-      const Eigen::Vector3d force = pair_force(s, fw, vt, s.n.dot(v_rel));
+      const double vn = s.n.dot(v_rel);
+      const Eigen::Vector3d force = pair_force(s, fw, vt, vn, normal_damping(s.alpha, vn));
       const std::array<int, 8> index = BodyPairBlocks::unknowns(finder_, s.a, s.b);
       for (std::size_t u = 0; u < 8; ++u) {
         if (index[u] < 0) continue;
@@ -148,10 +150,13 @@ class BodyBodyFrictionForce final : public ForceTerm {
       const FrictionWeight fw = friction_weight(vt.squaredNorm(), eps_);
       const Eigen::Matrix3d G =
           fw.g * Eigen::Matrix3d::Identity() + fw.g_over_y * vt * vt.transpose();
+      // (Lagged, s.n is the step's normal; live, the contact's own: the same.)
+      const double vn = s.n.dot(v_rel);
+      const NormalDamping damp = normal_damping(s.alpha, vn);
       if (dfdv != nullptr) {
         // df/dv_rel
-        const double slope = normal_damping(s.alpha, s.n.dot(v_rel)).slope;
-        const Eigen::Matrix3d D = -s.mu * s.f_n * G * s.T - s.f_n * slope * s.n * s.n.transpose();
+        const Eigen::Matrix3d D =
+            -s.mu * s.f_n * G * s.T - s.f_n * damp.slope * s.n * s.n.transpose();
         for (int u = 0; u < 8; ++u) {
           for (int w = 0; w < 8; ++w) blocks_.add(dfdv, s.a, s.b, u, w, D, s.w[u] * s.w[w]);
         }
@@ -170,13 +175,11 @@ class BodyBodyFrictionForce final : public ForceTerm {
       const Eigen::Vector3d& n = live->n;
       const Eigen::Matrix<double, 3, 24> dvt =
           s.T * dv_rel - n.dot(v_rel) * d.dn - n * (v_rel.transpose() * d.dn);
-      const double vn = n.dot(v_rel);
-      const NormalDamping damp = normal_damping(s.alpha, vn);
       const Eigen::Matrix<double, 1, 24> dvn = n.transpose() * dv_rel + v_rel.transpose() * d.dn;
       const Eigen::Matrix<double, 3, 24> df =
           -s.mu * (fw.g * vt * dfn + s.f_n * G * dvt) -
           (damp.g * vn * n * dfn + s.f_n * damp.slope * n * dvn + s.f_n * damp.g * vn * d.dn);
-      const Eigen::Vector3d force = pair_force(s, fw, vt, vn);
+      const Eigen::Vector3d force = pair_force(s, fw, vt, vn, damp);
       for (int u = 0; u < 8; ++u) {
         // dw_u/dq: 0 for p's; the material point's row for the a_i's.
         Eigen::Matrix<double, 1, 24> dw = Eigen::Matrix<double, 1, 24>::Zero();
@@ -204,8 +207,9 @@ class BodyBodyFrictionForce final : public ForceTerm {
 
   // f = -f_n (mu g(|v_t|) v_t + g_n(|v_n|) v_n n), on a at x_a.
   static Eigen::Vector3d pair_force(const Sliding& s, const FrictionWeight& fw,
-                                    const Eigen::Vector3d& vt, double vn) {
-    return -s.mu * s.f_n * fw.g * vt - s.f_n * normal_damping(s.alpha, vn).g * vn * s.n;
+                                    const Eigen::Vector3d& vt, double vn,
+                                    const NormalDamping& damp) {
+    return -s.mu * s.f_n * fw.g * vt - s.f_n * damp.g * vn * s.n;
   }
 
   // The contact's friction and damping at x, if it has any (mu > 0 or
@@ -287,6 +291,9 @@ class BodyBodyFrictionForce final : public ForceTerm {
   bool fixed_pattern_ = false;  // every pair declared (BodyPairBlocks::every_pair)
 };
 
+}  // namespace
+
+// Whether the term exists (body_pair_memory.cc counts its pairs likewise).
 bool has_body_friction(const Scene& scene) {
   if (!has_body_contacts(scene)) return false;
   int rough = 0;
@@ -297,6 +304,8 @@ bool has_body_friction(const Scene& scene) {
   }
   return rough >= 2 || damped;
 }
+
+namespace {
 
 std::unique_ptr<ForceTerm> make_body_body_friction(const Scene& scene,
                                                    const ParticleOrder& order) {

@@ -85,7 +85,7 @@ class BodyContactFinder {
     std::vector<std::array<int, 2>> feature_edges;  // between triangles not coplanar
     double radius = 0.0;                            // max |X|
     double friction = 0.0;                          // mu against other bodies
-    double contact_damping = 0.0;                   // Hunt and Crossley's alpha [s/m]
+    double contact_damping = 0.0;                   // alpha [s/m] (bodies.h)
 
     // At the model's state x (all particles; null: the initial state).
     Eigen::Vector3d p(const double* x) const;

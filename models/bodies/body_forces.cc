@@ -386,7 +386,9 @@ class BodyFrictionForce final : public ForceTerm {
 std::unique_ptr<ForceTerm> make_body_friction(const Scene& scene, const ParticleOrder& order) {
   const Planes& planes = scene.get<Planes>();
   std::vector<double> alpha;
-  for (const Body& b : scene.get<Bodies>()) alpha.push_back(b.contact_damping);
+  // (A fixed body has no vertices here: its alpha acts only through the
+  // free body it meets, in body_body_friction.cc.)
+  for (const Body& b : scene.get<Bodies>()) alpha.push_back(b.fixed ? 0.0 : b.contact_damping);
   const bool rough = std::any_of(planes.begin(), planes.end(),
                                  [](const Plane& p) { return p.friction > 0.0; });
   const bool damped = std::any_of(alpha.begin(), alpha.end(), [](double a) { return a > 0.0; });

@@ -58,14 +58,9 @@ void body_body_contact_memory(const Scene& scene, MemoryEstimate& out) {
 
 // The friction term exists where two bodies or more are rough, or one has
 // contact damping (body_body_friction.cc's has_body_friction).
+bool has_body_friction(const Scene& scene);  // body_body_friction.cc
 void body_body_friction_memory(const Scene& scene, MemoryEstimate& out) {
-  if (!has_body_contacts(scene)) return;
-  const Bodies& bodies = scene.get<Bodies>();
-  const auto rough =
-      std::count_if(bodies.begin(), bodies.end(), [](const Body& b) { return b.friction > 0.0; });
-  const bool damped = std::any_of(bodies.begin(), bodies.end(),
-                                  [](const Body& b) { return b.contact_damping > 0.0; });
-  if (rough >= 2 || damped) add_pairs(scene, "friction", out);
+  if (has_body_friction(scene)) add_pairs(scene, "friction", out);
 }
 
 }  // namespace springlab

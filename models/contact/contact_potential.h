@@ -80,24 +80,31 @@ inline double friction_potential(double y, double eps) {
 
 // Damping along the normal at a contact, after Hunt and Crossley (1975,
 // "Coefficient of restitution interpreted as damping in vibroimpact",
-// J. Appl. Mech. 42:440): a force proportional to the normal force and,
-// at low speed, to the approach speed v_n = n . v,
-//   f = -f_n s(|v_n|) v_n / |v_n| n,   s(y) = f1(y) with eps = 2 / alpha,
-// i.e. -alpha f_n v_n n for slow contacts, and never more than f_n itself
-// (friction's smoothing f1 of the normal speed: the force saturates at
-// |v_n| >= 2 / alpha). It is zero where the contact starts (f_n = 0: no
-// jump as it engages) and dissipates. Bounded, a lagged f_n that is large
-// at a step's start (the barrier's force as a gap nearly closes) cannot
-// throw the step: unbounded, alpha f_n v_n at such a contact glued boxes
-// together and Newton failed (box-drop). With f_n lagged it is -dW/dv of
-//   W(v) = f_n f0(|v_n|),   dF/dv = -f_n (g + g'/y y^2) n n^T,
-// g and g'/y friction_weight's at eps = 2 / alpha.
+// J. Appl. Mech. 42:440): a force proportional to the normal force and, at
+// low speed, to the approach speed v_n = n . v,
+//   f = -f_n g_n v_n n,   g_n = f1(|v_n|) / |v_n|  (friction's f1 at eps = 2 / alpha),
+// i.e. -alpha f_n v_n n while |v_n| << 2 / alpha, and never more than f_n
+// (reached at |v_n| = 2 / alpha). It is zero where the contact starts
+// (f_n = 0: no jump as it engages) and dissipates. Evaluated live, a
+// separating contact's total normal force f_n (1 - f1) is never a pull;
+// within an implicit step f_n is lagged from the step's start while the
+// contact force is the stage's, so there it can pull by up to the lagged
+// f_n. Bounded, a lagged f_n that is large at a step's start (the barrier's
+// force as a gap nearly closes) cannot throw the step: unbounded,
+// alpha f_n v_n at such a contact glued boxes together and Newton failed
+// (box-drop). With f_n lagged it is -dW/dv of
+//   W(v) = f_n f0(|v_n|),   dF/dv = -f_n f1'(|v_n|) n n^T  (f1' >= 0).
 struct NormalDamping {
-  double g = 0.0;          // f = -f_n g v_n n
-  double slope = 0.0;      // df/dv_n = -f_n slope n
-  double potential = 0.0;  // W / f_n
+  double g = 0.0;          // g_n: f = -f_n g_n v_n n
+  double slope = 0.0;      // f1'(|v_n|) = d(g_n v_n)/dv_n: df/dv_n = -f_n slope n
+  double potential = 0.0;  // f0(|v_n|) = W / f_n
 };
-inline NormalDamping normal_damping(double alpha, double v_n);
+inline NormalDamping normal_damping(double alpha, double v_n) {
+  if (!(alpha > 0.0)) return {};
+  const double eps = 2.0 / alpha;
+  const FrictionWeight w = friction_weight(v_n * v_n, eps);
+  return {w.g, w.g + w.g_over_y * v_n * v_n, friction_potential(w.y, eps)};
+}
 
 // phi of the scene's contact model (its stiffness and distance resolved).
 struct ContactLaw {
@@ -120,12 +127,5 @@ struct ContactLaw {
     return model == ContactModel::kPenalty ? !(d >= 0.0) : !(d > 0.0);
   }
 };
-
-inline NormalDamping normal_damping(double alpha, double v_n) {
-  if (!(alpha > 0.0)) return {};
-  const double eps = 2.0 / alpha;
-  const FrictionWeight w = friction_weight(v_n * v_n, eps);
-  return {w.g, w.g + w.g_over_y * v_n * v_n, friction_potential(w.y, eps)};
-}
 
 }  // namespace springlab
