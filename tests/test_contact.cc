@@ -154,7 +154,7 @@ TEST(Contact, NormalDampingIsHuntCrossleyWhenSlowAndNeverMoreThanTheNormalForce)
       const NormalDamping d = normal_damping(alpha, vn);
       EXPECT_LE(std::abs(d.g * vn), 1.0 + 1e-15) << vn;
       if (std::abs(vn) >= 2.0 / alpha) EXPECT_NEAR(std::abs(d.g * vn), 1.0, 1e-15) << vn;
-      const double force = [&](double u) { return normal_damping(alpha, u).g * u; }(vn);
+      const double force = d.g * vn;
       const double fp = normal_damping(alpha, vn + eps).g * (vn + eps);
       const double fm = normal_damping(alpha, vn - eps).g * (vn - eps);
       EXPECT_NEAR(d.slope, (fp - fm) / (2 * eps), 1e-6 * (1.0 + alpha)) << vn;

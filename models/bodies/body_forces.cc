@@ -247,16 +247,12 @@ std::unique_ptr<ForceTerm> make_body_contact(const Scene& scene, const ParticleO
 
 class BodyFrictionForce final : public ForceTerm {
  public:
+  // `planes`: those it acts on (make_body_friction chooses them).
   BodyFrictionForce(const BodyLayout& layout, const Planes& planes, const Contact& contact,
                     std::vector<double> alpha)
-      : vertices_(free_vertices(layout)), law_(contact), eps_(contact.smoothing),
-        alpha_(std::move(alpha)) {
-    const bool damped = std::any_of(alpha_.begin(), alpha_.end(), [](double a) { return a > 0.0; });
-    for (Plane p : planes) {
-      if (!(p.friction > 0.0) && !damped) continue;
-      p.normal.normalize();
-      planes_.push_back(p);
-    }
+      : vertices_(free_vertices(layout)), planes_(planes), law_(contact),
+        eps_(contact.smoothing), alpha_(std::move(alpha)) {
+    for (Plane& p : planes_) p.normal.normalize();
   }
 
   std::string_view name() const override { return "body friction"; }
@@ -389,11 +385,14 @@ std::unique_ptr<ForceTerm> make_body_friction(const Scene& scene, const Particle
   // (A fixed body has no vertices here: its alpha acts only through the
   // free body it meets, in body_body_friction.cc.)
   for (const Body& b : scene.get<Bodies>()) alpha.push_back(b.fixed ? 0.0 : b.contact_damping);
-  const bool rough = std::any_of(planes.begin(), planes.end(),
-                                 [](const Plane& p) { return p.friction > 0.0; });
+  // Every plane when a free body is damped; else those with friction.
   const bool damped = std::any_of(alpha.begin(), alpha.end(), [](double a) { return a > 0.0; });
-  if (planes.empty() || !(rough || damped) || body_pseudo_particles(scene) == 0) return nullptr;
-  return std::make_unique<BodyFrictionForce>(body_layout(scene, order), planes,
+  Planes acting;
+  for (const Plane& p : planes) {
+    if (damped || p.friction > 0.0) acting.push_back(p);
+  }
+  if (acting.empty() || body_pseudo_particles(scene) == 0) return nullptr;
+  return std::make_unique<BodyFrictionForce>(body_layout(scene, order), acting,
                                              scene.get<Contact>(), std::move(alpha));
 }
 
