@@ -7,12 +7,15 @@
 //     report shows (central differences);
 //   - dF/dx and dF/dv against central differences;
 //   - the definite part of dF/dx (Newton's matrix) is negative
-//     semidefinite, and equals dF/dx where that already is.
+//     semidefinite, and equals dF/dx where that already is;
+//   - a kind that gives products with its Jacobians gives the assembled
+//     Jacobians times p.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <ostream>
+#include <random>
 #include <string>
 
 #include "models/model/model.h"
@@ -209,6 +212,58 @@ TEST_P(EveryKind, DefinitePartIsSemidefiniteAndExactWhereItCanBe) {
   }
 }
 
+// A kind that gives products with its Jacobians (ForceTerm::
+// add_jacobian_products: a fluid's, whose pressure Hessian Newton then never
+// assembles) gives exactly the assembled Jacobians times p, exact and
+// definite, before and after the implicit methods lag what they lag.
+class EveryKindWithProducts : public EveryKind {};
+// A kind whose random instance has terms with Jacobians, every one of which
+// gives products (once lagged, as the implicit methods lag).
+bool gives_products(const KindCase& c) {
+  if (c.kind == nullptr) return false;
+  const Model model(random_scene({c.kind}, c.dim, 1));
+  const Vector x = model.initial_positions(), v = model.initial_velocities();
+  model.lag_normal_forces(&x, &v, 0.01);
+  bool any = false;
+  for (const auto& term : model.terms()) any |= !term->constant();
+  return any && model.has_jacobian_products();
+}
+
+TEST_P(EveryKindWithProducts, JacobianProductsAreTheAssembledJacobiansTimesP) {
+  int checked = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const Model model(scene(seed));
+    const Vector x = model.initial_positions();
+    const Vector v = model.initial_velocities();
+    for (bool lagged : {false, true}) {
+      model.lag_normal_forces(lagged ? &x : nullptr, lagged ? &v : nullptr, 0.01);
+      if (!model.has_jacobian_products()) continue;
+      std::mt19937 rng(seed);
+      std::uniform_real_distribution<double> unit(-1.0, 1.0);
+      Vector p(model.dofs());
+      for (Eigen::Index i = 0; i < p.size(); ++i) p[i] = unit(rng);
+      for (bool definite : {false, true}) {
+        SparseMatrix dfdx, dfdv;
+        if (definite) {
+          model.definite_jacobians(0.2, x, v, &dfdx, &dfdv);
+        } else {
+          model.jacobians(0.2, x, v, &dfdx, &dfdv);
+        }
+        Vector dfdx_p, dfdv_p;
+        model.jacobian_products(definite, 0.2, x, v, p, &dfdx_p, &dfdv_p);
+        const Vector want_x = dfdx * p, want_v = dfdv * p;
+        const double scale_x = 1e-12 * (1.0 + Eigen::MatrixXd(dfdx).norm() * p.norm());
+        const double scale_v = 1e-12 * (1.0 + Eigen::MatrixXd(dfdv).norm() * p.norm());
+        EXPECT_LE((dfdx_p - want_x).norm(), scale_x) << "seed " << seed << " definite " << definite;
+        EXPECT_LE((dfdv_p - want_v).norm(), scale_v) << "seed " << seed << " definite " << definite;
+        ++checked;
+      }
+    }
+    model.lag_normal_forces(nullptr, nullptr, 0.0);
+  }
+  EXPECT_GT(checked, 0);
+}
+
 // A kind that stores energy shows it in its column: present in the model's
 // report, and -- on its own -- holding the whole potential.
 TEST_P(EveryKindOnItsOwn, StoredEnergyIsInTheKindsColumn) {
@@ -245,6 +300,10 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryKind, ::testing::ValuesIn(all_cases()), 
 INSTANTIATE_TEST_SUITE_P(Registry, EveryKindOnItsOwn,
                          ::testing::ValuesIn(cases_where("Registry/EveryKindOnItsOwn",
                                                          on_its_own_with_elements)),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(Registry, EveryKindWithProducts,
+                         ::testing::ValuesIn(cases_where("Registry/EveryKindWithProducts",
+                                                         gives_products)),
                          case_name);
 
 // What the registry promises every kind file: a name, a random instance, and

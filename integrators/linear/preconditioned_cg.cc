@@ -8,6 +8,13 @@ namespace springlab {
 CgResult preconditioned_cg(const SparseMatrix& a, SparseDirectSolver& p, const Vector& b,
                            double rtol, double atol, int max_iterations, Vector& d,
                            CgScratch& s) {
+  return preconditioned_cg([&a](const Vector& x, Vector& q) { q.noalias() = a * x; }, p, b, rtol,
+                           atol, max_iterations, d, s);
+}
+
+CgResult preconditioned_cg(const LinearProduct& a, SparseDirectSolver& p, const Vector& b,
+                           double rtol, double atol, int max_iterations, Vector& d,
+                           CgScratch& s) {
   CgResult result;
   d.setZero(b.size());
   s.r = b;  // r = b - A d
@@ -18,7 +25,7 @@ CgResult preconditioned_cg(const SparseMatrix& a, SparseDirectSolver& p, const V
   s.p = s.z;
   double rz = s.r.dot(s.z);
   while (result.iterations < max_iterations) {
-    s.q.noalias() = a * s.p;
+    a(s.p, s.q);
     ++result.iterations;
     const double curvature = s.p.dot(s.q);
     if (!std::isfinite(curvature)) {

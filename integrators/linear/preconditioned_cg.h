@@ -21,6 +21,8 @@
 // Newton stop measures, in the update's own units (m/s).
 #pragma once
 
+#include <functional>
+
 #include "integrators/linear/sparse_direct_solver.h"
 #include "models/core/mechanical_system.h"
 
@@ -33,6 +35,10 @@ struct CgResult {
   bool finite = true;       // false when a solve with P or A p was not finite
 };
 
+// The product q = A p where A is not assembled (MechanicalSystem::
+// jacobian_products): Krylov methods need nothing else of A.
+using LinearProduct = std::function<void(const Vector& p, Vector& q)>;
+
 // Scratch vectors are the caller's, so repeated solves do not allocate.
 struct CgScratch {
   Vector r, z, p, q;
@@ -40,5 +46,8 @@ struct CgScratch {
 CgResult preconditioned_cg(const SparseMatrix& a, SparseDirectSolver& p,
                            const Vector& b, double rtol, double atol, int max_iterations,
                            Vector& d, CgScratch& scratch);
+CgResult preconditioned_cg(const LinearProduct& a, SparseDirectSolver& p, const Vector& b,
+                           double rtol, double atol, int max_iterations, Vector& d,
+                           CgScratch& scratch);
 
 }  // namespace springlab

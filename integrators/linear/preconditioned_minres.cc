@@ -8,6 +8,12 @@ namespace springlab {
 
 CgResult preconditioned_minres(const SparseMatrix& a, SparseDirectSolver& p, const Vector& b,
                                double rtol, int max_iterations, Vector& d, MinresScratch& s) {
+  return preconditioned_minres([&a](const Vector& x, Vector& q) { q.noalias() = a * x; }, p, b,
+                               rtol, max_iterations, d, s);
+}
+
+CgResult preconditioned_minres(const LinearProduct& a, SparseDirectSolver& p, const Vector& b,
+                               double rtol, int max_iterations, Vector& d, MinresScratch& s) {
   CgResult result;
   const Eigen::Index n = b.size();
   d.setZero(n);
@@ -34,7 +40,7 @@ CgResult preconditioned_minres(const SparseMatrix& a, SparseDirectSolver& p, con
     ++result.iterations;
     // Lanczos: v_k = y / beta_k, the next P^-1-orthogonal direction.
     s.v = s.y / beta;
-    s.y.noalias() = a * s.v;
+    a(s.v, s.y);
     if (result.iterations >= 2) s.y -= (beta / old_beta) * s.r1;
     const double alpha = s.v.dot(s.y);
     s.y -= (alpha / beta) * s.r2;

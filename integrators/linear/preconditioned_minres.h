@@ -23,5 +23,8 @@ struct MinresScratch {
 CgResult preconditioned_minres(const SparseMatrix& a, SparseDirectSolver& p, const Vector& b,
                                double rtol, int max_iterations, Vector& d,
                                MinresScratch& scratch);
+CgResult preconditioned_minres(const LinearProduct& a, SparseDirectSolver& p, const Vector& b,
+                               double rtol, int max_iterations, Vector& d,
+                               MinresScratch& scratch);
 
 }  // namespace springlab

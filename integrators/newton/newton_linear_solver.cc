@@ -32,6 +32,25 @@ SparseMatrix& NewtonLinearSolver::matrix(bool definite, bool symmetric,
   symmetric_ = symmetric;
   source_ = &source;
   direct_current_ = false;
+  deferred_ = false;
+  assembled_ = true;
+  return jacobian_;
+}
+
+void NewtonLinearSolver::defer(bool definite, bool symmetric, DefiniteMatrixSource& source) {
+  definite_ = definite;
+  symmetric_ = symmetric;
+  source_ = &source;
+  direct_current_ = false;
+  deferred_ = true;
+  assembled_ = false;
+}
+
+const SparseMatrix& NewtonLinearSolver::assembled_matrix() {
+  if (!assembled_) {
+    source_->assemble_matrix(definite_, jacobian_);
+    assembled_ = true;
+  }
   return jacobian_;
 }
 
@@ -81,7 +100,7 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve(const Vector& rhs,
 bool NewtonLinearSolver::refresh_preconditioner(std::string& error) {
   const SparseMatrix* a = &jacobian_;
   preconditioner_valid_ = false;
-  if (!definite_) {
+  if (!definite_ || !assembled_) {
     source_->assemble_definite(preconditioner_matrix_);
     a = &preconditioner_matrix_;
   }
@@ -108,7 +127,7 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_factored(MatrixKind kind, c
   if (!(direct_current_ && direct_.has_factor())) {
     ++stats_->factorizations;
     direct_current_ = true;
-    if (!factorize_on(direct_, direct_version_, jacobian_, kind)) {
+    if (!factorize_on(direct_, direct_version_, assembled_matrix(), kind)) {
       direct_current_ = false;
       error = direct_.out_of_memory()
                   ? out_of_memory_text(direct_)
@@ -144,10 +163,18 @@ NewtonLinearSolver::Result NewtonLinearSolver::solve_with_limit(const Vector& rh
   // CG where the matrix is positive definite or truncation is wanted (Newton
   // on a potential); MINRES where a true solve of an indefinite one is.
   const bool minres = !definite_ && !tolerance.truncate;
+  // J by its products where it is deferred (not assembled), else the matrix.
+  const LinearProduct product = [this](const Vector& p, Vector& q) {
+    if (deferred_ && !assembled_) {
+      source_->product(definite_, p, q);
+    } else {
+      q.noalias() = jacobian_ * p;
+    }
+  };
   auto krylov = [&](int limit) {
-    CgResult k = minres ? preconditioned_minres(jacobian_, preconditioner_, rhs, tolerance.rtol,
+    CgResult k = minres ? preconditioned_minres(product, preconditioner_, rhs, tolerance.rtol,
                                                 limit, d, minres_)
-                        : preconditioned_cg(jacobian_, preconditioner_, rhs, tolerance.rtol,
+                        : preconditioned_cg(product, preconditioner_, rhs, tolerance.rtol,
                                             tolerance.atol, limit, d, cg_);
     stats_->linear_iterations += k.iterations;
     return k;
@@ -193,7 +220,7 @@ bool NewtonLinearSolver::solve_directly(const Vector& rhs, Vector& d, std::strin
   direct_current_ = false;
   const MatrixKind kind =
       symmetric_ ? MatrixKind::kSymmetric : MatrixKind::kGeneral;
-  if (!factorize_on(direct_, direct_version_, jacobian_, kind)) {
+  if (!factorize_on(direct_, direct_version_, assembled_matrix(), kind)) {
     error = direct_.out_of_memory() ? out_of_memory_text(direct_)
                                     : "the step's matrix is singular (" + direct_.error() + ")";
     return false;

@@ -79,6 +79,13 @@ class NewtonLinearSolver {
   // is; `source`: where the definite matrix of the same point is, for a
   // fresh preconditioner). The pattern is the same from call to call.
   SparseMatrix& matrix(bool definite, bool symmetric, DefiniteMatrixSource& source);
+  // Or J given by its products (source.product), not assembled: the
+  // Krylov solves multiply by products, and J is assembled only where a
+  // solve needs its matrix (a direct factorization of J; the preconditioner
+  // is made from source.assemble_definite as ever). Where J reaches
+  // further than the products do (a fluid's pressure Hessian), this saves
+  // an assembly at every Newton iteration.
+  void defer(bool definite, bool symmetric, DefiniteMatrixSource& source);
   // The next solve is a nonlinear solve's first (see above).
   void start_nonlinear_solve() { first_solve_ = true; }
   // d ~ J^-1 rhs. False `ok`, with `error`, when J (or the definite matrix)
@@ -114,6 +121,10 @@ class NewtonLinearSolver {
   IntegratorStats* stats_ = nullptr;
   DefiniteMatrixSource* source_ = nullptr;
   bool definite_ = false;   // jacobian_ is the definite matrix
+  bool deferred_ = false;   // J is given by the source's products (defer)
+  bool assembled_ = true;   // jacobian_ holds J (false while deferred and not yet needed)
+  // jacobian_, assembled first where it is deferred.
+  const SparseMatrix& assembled_matrix();
   bool symmetric_ = false;  // jacobian_ is symmetric
   bool first_solve_ = false;
   SparseMatrix jacobian_, preconditioner_matrix_;

@@ -37,4 +37,18 @@ void NewtonMatrix::assemble(bool definite, SparseMatrix& out) {
   out.diagonal() += model.system().mass();
 }
 
+bool NewtonMatrix::has_products() const {
+  return point_.term == nullptr && model_->system().has_jacobian_products();
+}
+
+void NewtonMatrix::product(bool definite, const Vector& p, Vector& y) {
+  const MechanicalSystem& system = model_->system();
+  const Point& q = point_;
+  const bool velocity = system.velocity_dependence() != VelocityDependence::kNone;
+  system.jacobian_products(definite, q.t, *q.x, *q.v, p, &dfdx_p_, velocity ? &dfdv_p_ : nullptr);
+  // J p = M p - h^2 b dF/dx p - h c dF/dv p.
+  y = system.mass().cwiseProduct(p) - (q.h * q.h * q.b) * dfdx_p_;
+  if (velocity) y -= (q.h * q.c) * dfdv_p_;
+}
+
 }  // namespace springlab

@@ -47,6 +47,11 @@ class DefiniteMatrixSource {
  public:
   virtual ~DefiniteMatrixSource() = default;
   virtual void assemble_definite(SparseMatrix& out) = 0;
+  // The matrix of the point itself (exact, or definite with `definite`),
+  // and its product y = J p without it, for a solver handed the point
+  // without the matrix (NewtonLinearSolver::defer).
+  virtual void assemble_matrix(bool /*definite*/, SparseMatrix& out) { assemble_definite(out); }
+  virtual void product(bool /*definite*/, const Vector& /*p*/, Vector& /*y*/) {}
   // The pattern version (MechanicalSystem::pattern_version) of the matrices
   // last assembled: a solver that analysed another pattern starts again.
   virtual long pattern_version() const { return 0; }
@@ -83,6 +88,14 @@ class NewtonMatrix final : public DefiniteMatrixSource {
   // stays in dfdx().
   void assemble(bool definite, SparseMatrix& out);
   void assemble_definite(SparseMatrix& out) override { assemble(true, out); }
+  void assemble_matrix(bool definite, SparseMatrix& out) override { assemble(definite, out); }
+  // Whether product() serves at the point: the model gives products of its
+  // Jacobians (MechanicalSystem::has_jacobian_products) and the method adds
+  // no term of its own.
+  bool has_products() const;
+  // y = J p at the point, J = M - h c dF/dv - h^2 b dF/dx, by the model's
+  // products: J is never assembled.
+  void product(bool definite, const Vector& p, Vector& y) override;
   long pattern_version() const override { return model_->system().pattern_version(); }
   // The model of the run (Integrator::initialize).
   void bind(const CountedModel& model) { model_ = &model; }
@@ -94,6 +107,7 @@ class NewtonMatrix final : public DefiniteMatrixSource {
   const CountedModel* model_ = nullptr;
   Point point_;
   SparseMatrix dfdx_, dfdv_;
+  Vector dfdx_p_, dfdv_p_;  // product()'s
 };
 
 }  // namespace springlab

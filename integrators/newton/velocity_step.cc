@@ -106,18 +106,29 @@ double VelocityStep::potential(const Vector& v, double& magnitude) {
 }
 
 void VelocityStep::matrix(const Vector& v, bool definite, NewtonLinearSolver& linear) {
+  // Where the model multiplies by its Jacobians without them (a fluid's),
+  // J is handed to the solver by its products: assembled only where a
+  // solve needs the matrix.
+  set_matrix_point(v);
+  if (matrix_->has_products()) {
+    linear.defer(definite, model_->system().jacobian_symmetric(), *matrix_);
+    return;
+  }
   assemble(v, definite, linear);
 }
 
-SparseMatrix& VelocityStep::assemble(const Vector& v, bool definite,
-                                     NewtonLinearSolver& linear) {
-  const double h = h_;
+void VelocityStep::set_matrix_point(const Vector& v) {
   const VelocityImplicitScheme& s = s_;
   stage(v);
   // The Newton matrix's coefficients of dF/dx (h^2 w b) and dF/dv (h w c),
   // and the method's own term of dF/dx (term_).
-  matrix_->set_point({.t = t_star(), .x = &xs_, .v = &vs_, .h = h, .b = s.weight * s.b,
+  matrix_->set_point({.t = t_star(), .x = &xs_, .v = &vs_, .h = h_, .b = s.weight * s.b,
                       .c = s.weight * s.c, .term = term_});
+}
+
+SparseMatrix& VelocityStep::assemble(const Vector& v, bool definite,
+                                     NewtonLinearSolver& linear) {
+  set_matrix_point(v);
   const bool symmetric =
       model_->system().jacobian_symmetric() && (term_ == nullptr || term_->symmetric(definite));
   SparseMatrix& jacobian = linear.matrix(definite, symmetric, *matrix_);

@@ -98,9 +98,11 @@ class VelocityStep final : public NewtonProblem {
   void residual(const Vector& v, Vector& r) override;
   bool has_potential() const override;
   double potential(const Vector& v, double& magnitude) override;
+  // J at v for the solver: by its products where the model gives them
+  // (NewtonLinearSolver::defer), else assembled.
   void matrix(const Vector& v, bool definite, NewtonLinearSolver& linear) override;
-  // matrix(), and the matrix it assembled (a method's problem around this
-  // one adds its own terms to it: discrete_gradient_step.h).
+  // J assembled at v, whatever the model gives (a method's problem around
+  // this one adds its own terms to it: discrete_gradient_step.h).
   SparseMatrix& assemble(const Vector& v, bool definite, NewtonLinearSolver& linear);
   // A term of the method's in J's dF/dx part (newton_matrix.h) for the
   // next matrix() of this step; nullptr: none.
@@ -129,6 +131,8 @@ class VelocityStep final : public NewtonProblem {
 
   // Sets the stage x*(v), v*(v) (potential() then refers to it).
   void stage(const Vector& v);
+  // The stage at v and the Newton matrix's point there (its coefficients).
+  void set_matrix_point(const Vector& v);
   // The stage and F there (stage_force()): residual() without r.
   void stage_and_force(const Vector& v);
   // r = M (v - v_c) - h w f at v, for a force f at the stage: F, or a

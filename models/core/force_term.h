@@ -181,6 +181,16 @@ class ForceTerm {
   virtual std::string pattern_change() const { return "its couplings change with the state"; }
   virtual bool pattern_holds(const Configuration&) const { return true; }
   virtual void follow_pattern(const Configuration&) {}
+  // Products with the Jacobians without assembling them (MechanicalSystem::
+  // jacobian_products): a term that can says so, and adds dF/dx p (its
+  // definite part with `definite`) and dF/dv p at c to the outputs (either
+  // may be null). p and the outputs hold every particle (internal order,
+  // as add_force's f); p is 0 on the fixed ones. Exactly the assembled
+  // Jacobians times p, summed in another order.
+  virtual bool has_jacobian_products() const { return false; }
+  virtual void add_jacobian_products(const Configuration& /*c*/, bool /*definite*/,
+                                     const double* /*p*/, double* /*dfdx_p*/,
+                                     double* /*dfdv_p*/) const {}
   // dF/dx made negative semidefinite where it is not (MechanicalSystem::
   // definite_jacobians); a term whose dF/dx always is one keeps the default.
   virtual void add_definite_stiffness(const Configuration& c, double* dfdx) const {

@@ -99,6 +99,19 @@ class MechanicalSystem {
   virtual void definite_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
                                   SparseMatrix* dfdv) const = 0;
 
+  // dfdx_p = dF/dx p (of the definite Jacobians with `definite`) and
+  // dfdv_p = dF/dv p at (t, x, v), either may be null, without assembling
+  // the Jacobians: where has_jacobian_products(), every force that has
+  // Jacobians gives them (ForceTerm::add_jacobian_products). A Krylov
+  // solve then needs no matrix but its preconditioner's (a fluid's
+  // pressure Hessian reaches two kernel supports: assembling it cost more
+  // than the conjugate gradients' products by it, docs/physics.md
+  // "Implicit steps on a fluid").
+  virtual bool has_jacobian_products() const { return false; }
+  virtual void jacobian_products(bool /*definite*/, double /*t*/, const Vector& /*x*/,
+                                 const Vector& /*v*/, const Vector& /*p*/, Vector* /*dfdx_p*/,
+                                 Vector* /*dfdv_p*/) const {}
+
   // When every force derives from potentials,
   //   F(t, x, v) = -dV/dx (t, x) - dW/dv (t, v),
   // V the stored energy (springs, gravity) and W a dissipation potential of v

@@ -69,7 +69,8 @@ class FluidPressureForce final : public ForceTerm {
         dim_(dim),
         free_(free_particles),
         pattern_(2.0, dim, x_all),
-        x_all0_(std::move(x_all)) {}
+        x_all0_(std::move(x_all)),
+        hessian_(fluids_.size()) {}
 
   // xpbd: the density constraints of position-based fluids
   // (fluid_density_projection.cc) instead of the pressure force.
@@ -142,6 +143,21 @@ class FluidPressureForce final : public ForceTerm {
   void add_definite_stiffness(const Configuration& c, double* dfdx) const override {
     if (dim_ == 2) add_stiffness_d<2>(c, dfdx, true); else add_stiffness_d<3>(c, dfdx, true);
   }
+  // dF/dx p without the reach-two matrix (fluid_pressure_hessian.h).
+  bool has_jacobian_products() const override { return true; }
+  void add_jacobian_products(const Configuration& c, bool definite, const double* p,
+                             double* dfdx_p, double*) const override {
+    if (dfdx_p == nullptr) return;
+    for (std::size_t k = 0; k < fluids_.size(); ++k) {
+      SphParticles& fluid = *fluids_[k];
+      fluid.update(c.x);
+      if (dim_ == 2) {
+        add_pressure_stiffness_product<2>(fluid, free_, definite, p, dfdx_p, hessian_[k]);
+      } else {
+        add_pressure_stiffness_product<3>(fluid, free_, definite, p, dfdx_p, hessian_[k]);
+      }
+    }
+  }
 
  private:
   template <int D>
@@ -172,10 +188,10 @@ class FluidPressureForce final : public ForceTerm {
 
   template <int D>
   void add_stiffness_d(const Configuration& c, double* values, bool definite) const {
-    for (const auto& shared : fluids_) {
-      SphParticles& fluid = *shared;
+    for (std::size_t k = 0; k < fluids_.size(); ++k) {
+      SphParticles& fluid = *fluids_[k];
       fluid.update(c.x);
-      add_pressure_stiffness<D>(fluid, free_, *pattern_matrix_, definite, values, hessian_);
+      add_pressure_stiffness<D>(fluid, free_, *pattern_matrix_, definite, values, hessian_[k]);
     }
   }
 
@@ -186,7 +202,7 @@ class FluidPressureForce final : public ForceTerm {
   const SparseMatrix* pattern_matrix_ = nullptr;
   std::vector<double> x_all0_;  // every particle at the start, internal order
   mutable std::vector<double> a_;
-  mutable PressureHessianScratch hessian_;
+  mutable std::vector<PressureHessianScratch> hessian_;  // per fluid
 };
 
 }  // namespace

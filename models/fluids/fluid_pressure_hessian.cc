@@ -54,6 +54,16 @@ void prepare(const SphParticles& fluid, PressureHessianScratch& s) {
   }
 }
 
+// prepare() once per update of `fluid`: kept while its generation holds.
+template <int D>
+void prepare_once(const SphParticles& fluid, PressureHessianScratch& s) {
+  if (s.fluid == &fluid && s.generation == fluid.generation()) return;
+  prepare<D>(fluid, s);
+  s.fluid = &fluid;
+  s.generation = fluid.generation();
+  s.pair_k_definite = -1;
+}
+
 // R_j,other = m_other G_other,j = -m_other G_j,other, from pair k (g[k] is
 // G_first,second).
 template <int D>
@@ -97,7 +107,7 @@ template <int D>
 void add_pressure_stiffness(const SphParticles& fluid, int free_particles,
                             const SparseMatrix& pattern, bool definite, double* values,
                             PressureHessianScratch& s) {
-  prepare<D>(fluid, s);
+  prepare_once<D>(fluid, s);
   const int n = fluid.size();
   const std::size_t un = static_cast<std::size_t>(n);
   // R_j of each particle's members: j itself, then its neighbours.
@@ -189,6 +199,92 @@ void add_pressure_stiffness(const SphParticles& fluid, int free_particles,
 }
 
 template <int D>
+void add_pressure_stiffness_product(const SphParticles& fluid, int free_particles, bool definite,
+                                    const double* p, double* out, PressureHessianScratch& s) {
+  prepare_once<D>(fluid, s);
+  const int n = fluid.size();
+  const std::size_t un = static_cast<std::size_t>(n);
+  const auto& pairs = fluid.pairs();
+  // The pair blocks K_ab, once per update and kind of matrix.
+  if (s.pair_k_definite != static_cast<int>(definite)) {
+    s.pair_k.resize(pairs.size() * D * D);
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      double K[D][D];
+      pair_block<D>(fluid, k, pair_coefficient<D>(fluid, s, pairs[k].first, pairs[k].second),
+                    definite, K);
+      for (int r = 0; r < D; ++r) {
+        for (int c = 0; c < D; ++c) s.pair_k[(k * D + r) * D + c] = K[r][c];
+      }
+    }
+    s.pair_k_definite = static_cast<int>(definite);
+  }
+  // p_a, or nullptr where a is fixed (its p is 0).
+  auto p_of = [&](int a) -> const double* {
+    const int i = fluid.index(a);
+    return i < free_particles ? p + static_cast<std::size_t>(i) * D : nullptr;
+  };
+  auto dot = [](const double* u, const double* v) {
+    double sum = 0.0;
+    for (int r = 0; r < D; ++r) sum += u[r] * v[r];
+    return sum;
+  };
+  // c_j = m_j A'_j s_j, s_j = R_jj . p_j + sum over j's neighbours k of R_jk . p_k.
+  s.c.assign(un, 0.0);
+  for (int j = 0; j < n; ++j) {
+    const std::size_t uj = static_cast<std::size_t>(j);
+    const double weight = fluid.mass(j) * s.a_slope[uj];
+    if (weight == 0.0) continue;
+    double sj = 0.0;
+    if (const double* pj = p_of(j)) sj += dot(&s.self[uj * D], pj);
+    for (int e = s.start[uj]; e < s.start[uj + 1]; ++e) {
+      const int k = s.partner[static_cast<std::size_t>(e)];
+      const double* pk = p_of(k);
+      if (pk == nullptr) continue;
+      double r_jk[D];
+      neighbour_gradient<D>(fluid, s, k, static_cast<std::size_t>(s.via[static_cast<std::size_t>(e)]),
+                            r_jk);
+      sj += dot(r_jk, pk);
+    }
+    s.c[uj] = weight * sj;
+  }
+  // Rank-one terms: out_a -= sum over j in {a} and a's neighbours of c_j R_ja.
+  for (int a = 0; a < n; ++a) {
+    const int i = fluid.index(a);
+    if (i >= free_particles) continue;
+    const std::size_t ua = static_cast<std::size_t>(a);
+    double* oa = out + static_cast<std::size_t>(i) * D;
+    for (int r = 0; r < D; ++r) oa[r] -= s.c[ua] * s.self[ua * D + static_cast<std::size_t>(r)];
+    for (int e = s.start[ua]; e < s.start[ua + 1]; ++e) {
+      const double cj = s.c[static_cast<std::size_t>(s.partner[static_cast<std::size_t>(e)])];
+      if (cj == 0.0) continue;
+      double r_ja[D];
+      neighbour_gradient<D>(fluid, s, a, static_cast<std::size_t>(s.via[static_cast<std::size_t>(e)]),
+                            r_ja);
+      for (int r = 0; r < D; ++r) oa[r] -= cj * r_ja[r];
+    }
+  }
+  // Pair terms: out_a -= K_ab (p_a - p_b), out_b += K_ab (p_a - p_b).
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto [a, b] = pairs[k];
+    const double* pa = p_of(a);
+    const double* pb = p_of(b);
+    if (pa == nullptr && pb == nullptr) continue;
+    double dp[D], kdp[D];
+    for (int r = 0; r < D; ++r) dp[r] = (pa != nullptr ? pa[r] : 0.0) - (pb != nullptr ? pb[r] : 0.0);
+    const double* K = &s.pair_k[k * D * D];
+    for (int r = 0; r < D; ++r) kdp[r] = dot(K + r * D, dp);
+    if (pa != nullptr) {
+      double* oa = out + static_cast<std::size_t>(fluid.index(a)) * D;
+      for (int r = 0; r < D; ++r) oa[r] -= kdp[r];
+    }
+    if (pb != nullptr) {
+      double* ob = out + static_cast<std::size_t>(fluid.index(b)) * D;
+      for (int r = 0; r < D; ++r) ob[r] += kdp[r];
+    }
+  }
+}
+
+template <int D>
 void add_pressure_stiffness_reference(const SphParticles& fluid, int free_particles,
                                       const SparseMatrix& pattern, bool definite,
                                       double* values) {
@@ -244,6 +340,10 @@ template void add_pressure_stiffness<2>(const SphParticles&, int, const SparseMa
                                         double*, PressureHessianScratch&);
 template void add_pressure_stiffness<3>(const SphParticles&, int, const SparseMatrix&, bool,
                                         double*, PressureHessianScratch&);
+template void add_pressure_stiffness_product<2>(const SphParticles&, int, bool, const double*,
+                                                double*, PressureHessianScratch&);
+template void add_pressure_stiffness_product<3>(const SphParticles&, int, bool, const double*,
+                                                double*, PressureHessianScratch&);
 template void add_pressure_stiffness_reference<2>(const SphParticles&, int, const SparseMatrix&,
                                                   bool, double*);
 template void add_pressure_stiffness_reference<3>(const SphParticles&, int, const SparseMatrix&,

@@ -40,6 +40,14 @@ struct PressureHessianScratch {
   std::vector<int> start, partner, via;  // each particle's neighbours (CSR)
   std::vector<int> rank;             // the scatter array: a row particle's place in a column
   std::vector<double> members;       // R_j, of j's members in order (D each)
+  // The products' (add_pressure_stiffness_product): the update the arrays
+  // above were prepared at (a fluid and its generation), each pair's block
+  // K and whether it is the definite one (-1: none yet), c_j per particle.
+  const SphParticles* fluid = nullptr;
+  long generation = -1;
+  std::vector<double> pair_k;
+  int pair_k_definite = -1;
+  std::vector<double> c;
 };
 
 // values += dF/dx (or its definite part) of the pressure of `fluid` at its
@@ -49,6 +57,20 @@ template <int D>
 void add_pressure_stiffness(const SphParticles& fluid, int free_particles,
                             const SparseMatrix& pattern, bool definite, double* values,
                             PressureHessianScratch& scratch);
+// out += dF/dx p (its definite part with `definite`) of the pressure of
+// `fluid` at its last update(), without the matrix. With
+// s_j = sum_k R_jk . p_k (the density's change along p) and
+// c_j = m_j A'_j s_j,
+//   (dF/dx p)_a = -sum_j c_j R_ja - sum_b K_ab (p_a - p_b),
+// two passes over the pairs (reach one) where the matrix reaches two
+// supports. p and out hold every particle, a at fluid.index(a) * D; p is
+// read on the free particles only (the others' are 0), out written on them
+// only. The per-pair quantities are prepared once per update of `fluid`.
+template <int D>
+void add_pressure_stiffness_product(const SphParticles& fluid, int free_particles, bool definite,
+                                    const double* p, double* out,
+                                    PressureHessianScratch& scratch);
+
 template <int D>
 void add_pressure_stiffness_reference(const SphParticles& fluid, int free_particles,
                                       const SparseMatrix& pattern, bool definite,

@@ -133,6 +133,21 @@ class FluidViscosityForce final : public ForceTerm {
   void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
     if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
   }
+  // Lagged: dF/dx = 0 and (dF/dv p)_i = -sum_j kappa_ij (p_i - p_j), pair
+  // by pair (live, dF/dx is not symmetric: the matrix is assembled).
+  bool has_jacobian_products() const override { return lagged_; }
+  void add_jacobian_products(const Configuration&, bool, const double* p, double*,
+                             double* dfdv_p) const override {
+    if (dfdv_p == nullptr) return;
+    for (const LaggedPair& pair : lagged_pairs_) {
+      const bool a_free = pair.a < free_, b_free = pair.b < free_;
+      for (int r = 0; r < dim_; ++r) {
+        const double w = (a_free ? p[pair.a * dim_ + r] : 0.0) - (b_free ? p[pair.b * dim_ + r] : 0.0);
+        if (a_free) dfdv_p[pair.a * dim_ + r] -= pair.kappa * w;
+        if (b_free) dfdv_p[pair.b * dim_ + r] += pair.kappa * w;
+      }
+    }
+  }
 
  private:
   // C = -2 nu m_a m_b / rho0.

@@ -29,6 +29,7 @@ void SphParticles::update(const double* x) {
   }
   if (same) return;
   valid_ = true;
+  ++generation_;
   grid_.build(x_.data(), static_cast<int>(n), dim_, kernel_.support());
   const auto& pairs = grid_.pairs();
   separation_.resize(pairs.size() * d);

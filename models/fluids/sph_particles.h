@@ -46,6 +46,9 @@ class SphParticles final : public SharedByTerms {
   const double* separation(std::size_t k) const { return &separation_[k * dim_]; }
   double distance(std::size_t k) const { return distance_[k]; }
   const std::vector<double>& density() const { return density_; }
+  // Counts the updates that found new pairs and densities (a cache of
+  // something computed from them is current while this is unchanged).
+  long generation() const { return generation_; }
 
  private:
   std::vector<int> index_;
@@ -55,6 +58,7 @@ class SphParticles final : public SharedByTerms {
   TaitEquation eos_;
   std::vector<double> x_;
   bool valid_ = false;
+  long generation_ = 0;
   NeighbourGrid grid_;
   std::vector<double> separation_, distance_, density_;
 };

@@ -372,6 +372,36 @@ void Model::assemble_jacobians(ForcePart part, bool definite, double t, const Ve
   }
 }
 
+bool Model::has_jacobian_products() const {
+  for (const auto& term : terms_) {
+    if (!term->constant() && !term->has_jacobian_products()) return false;
+  }
+  return true;
+}
+
+void Model::jacobian_products(bool definite, double t, const Vector& x, const Vector& v,
+                              const Vector& p, Vector* dfdx_p, Vector* dfdv_p) const {
+  const Configuration c = configure(t, x, v);
+  const Eigen::Index n = dofs(), all = x_all_.size();
+  p_all_.setZero(all);
+  p_all_.head(n) = p;
+  double* px = nullptr;
+  double* pv = nullptr;
+  if (dfdx_p != nullptr) {
+    dfdx_p_all_.setZero(all);
+    px = dfdx_p_all_.data();
+  }
+  if (dfdv_p != nullptr) {
+    dfdv_p_all_.setZero(all);
+    pv = dfdv_p_all_.data();
+  }
+  for (const auto& term : terms_) {
+    if (!term->constant()) term->add_jacobian_products(c, definite, p_all_.data(), px, pv);
+  }
+  if (dfdx_p != nullptr) *dfdx_p = dfdx_p_all_.head(n);
+  if (dfdv_p != nullptr) *dfdv_p = dfdv_p_all_.head(n);
+}
+
 Energies Model::energies(const Vector& x, const Vector& v) const {
   Energies e(energy_layout_);
   energies(x, v, e);

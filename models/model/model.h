@@ -46,6 +46,9 @@ class Model final : public MechanicalSystem,
                  SparseMatrix* dfdv) const override;
   void definite_jacobians(double t, const Vector& x, const Vector& v, SparseMatrix* dfdx,
                           SparseMatrix* dfdv) const override;
+  bool has_jacobian_products() const override;
+  void jacobian_products(bool definite, double t, const Vector& x, const Vector& v,
+                         const Vector& p, Vector* dfdx_p, Vector* dfdv_p) const override;
   bool derives_from_potentials() const override { return derives_from_potentials_; }
   double position_potential(double t, const Vector& x) const override;
   double velocity_potential(double t, const Vector& v) const override;
@@ -199,6 +202,8 @@ class Model final : public MechanicalSystem,
   // Scratch: all particles, internal order. The fixed tail of x_all_ holds
   // the fixed positions and never changes; v_all_'s fixed tail stays 0.
   mutable Vector x_all_, v_all_, f_all_;
+  // jacobian_products' direction and products, all particles.
+  mutable Vector p_all_, dfdx_p_all_, dfdv_p_all_;
   // The second configuration of a discrete gradient (y), all particles.
   mutable Vector y_all_;
   // Scratch values on the pattern (add_own_discrete_gradient_jacobian_difference).
