@@ -148,6 +148,74 @@ TEST(FluidNeighbours, APointNotFiniteHasNoPartners) {
   EXPECT_EQ(grid.pairs().size(), 3u);
 }
 
+// The particles' Verlet list (sph_particles.h): after moves below and
+// above its skin, of one particle or all, the pairs are exactly those within
+// the support, and the densities those of a fresh search.
+TEST(FluidNeighbours, TheVerletListFindsEveryPairAfterEachMove) {
+  std::mt19937 rng(11);
+  for (int dim : {2, 3}) {
+    Fluid fluid;
+    fluid.spacing = 0.1;
+    const int n = dim == 2 ? 200 : 300;
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<double> x(static_cast<std::size_t>(n * dim));
+    for (double& c : x) c = u(rng);
+    auto make = [&] {
+      std::vector<int> index(static_cast<std::size_t>(n));
+      for (int a = 0; a < n; ++a) index[static_cast<std::size_t>(a)] = a;
+      return SphParticles(fluid, index, std::vector<double>(static_cast<std::size_t>(n), 1.0), dim);
+    };
+    SphParticles particles = make();
+    auto same_as_a_fresh_search = [&](const std::string& what) {
+      EXPECT_EQ(sorted(particles.pairs()), all_pairs_within(x.data(), n, dim, particles.kernel().support()))
+          << what;
+      SphParticles fresh = make();
+      fresh.update(x.data());
+      for (std::size_t a = 0; a < static_cast<std::size_t>(n); ++a) {
+        EXPECT_NEAR(particles.density()[a], fresh.density()[a], 1e-12 * fresh.density()[a]) << what;
+      }
+    };
+    const double support = particles.kernel().support();
+    const double skin_move = SphParticles::kSkin * 0.5 * support;  // the list's limit
+    particles.update(x.data());
+    // Moves of every particle by 0.3, 0.9 and 1.5 times the limit, then one
+    // particle by 3 times it towards another's place.
+    for (double factor : {0.3, 0.9, 1.5}) {
+      std::normal_distribution<double> step(0.0, 1.0);
+      for (int a = 0; a < n; ++a) {
+        double dir[3], norm = 0.0;
+        for (int r = 0; r < dim; ++r) norm += (dir[r] = step(rng)) * dir[r];
+        norm = std::sqrt(norm);
+        for (int r = 0; r < dim; ++r) x[static_cast<std::size_t>(a * dim + r)] += factor * skin_move * dir[r] / norm;
+      }
+      particles.update(x.data());
+      same_as_a_fresh_search(std::to_string(dim) + "-D, every particle moved by " +
+                             std::to_string(factor) + " x the limit");
+    }
+    for (int r = 0; r < dim; ++r) {
+      x[static_cast<std::size_t>(r)] = x[static_cast<std::size_t>(dim + r)] + 0.1 * support;
+    }
+    particles.update(x.data());
+    same_as_a_fresh_search(std::to_string(dim) + "-D, one particle moved next to another");
+  }
+  // Two particles just beyond the list's reach, (1 + kSkin) 2h, closing head
+  // on by 1.5 times the limit each: within 2h now, which only a new search
+  // finds (a limit twice as lax would keep the old list and miss them).
+  Fluid fluid;
+  fluid.spacing = 0.1;
+  SphParticles two(fluid, {0, 1}, {1.0, 1.0}, 2);
+  const double support = two.kernel().support();
+  const double limit = SphParticles::kSkin * 0.5 * support;
+  std::vector<double> x = {0.0, 0.0, 1.001 * (1.0 + SphParticles::kSkin) * support, 0.0};
+  two.update(x.data());
+  EXPECT_TRUE(two.pairs().empty());
+  x[0] += 1.5 * limit;
+  x[2] -= 1.5 * limit;
+  two.update(x.data());
+  ASSERT_EQ(two.pairs().size(), 1u);
+  EXPECT_NEAR(two.distance(0), x[2] - x[0], 1e-15);
+}
+
 // ---- Forces ----
 
 TEST(FluidForces, ConserveMomentumWithoutBoundaries) {

@@ -30,27 +30,58 @@ void SphParticles::update(const double* x) {
   if (same) return;
   valid_ = true;
   ++generation_;
-  grid_.build(x_.data(), static_cast<int>(n), dim_, kernel_.support());
-  const auto& pairs = grid_.pairs();
-  separation_.resize(pairs.size() * d);
-  distance_.resize(pairs.size());
+  const double support = kernel_.support();
+  if (!list_holds()) {
+    grid_.build(x_.data(), static_cast<int>(n), dim_, (1.0 + kSkin) * support);
+    searched_x_ = x_;
+    searched_ = true;
+  }
+  // The list's pairs within the support, in its order.
+  const auto& list = grid_.pairs();
+  pairs_.clear();
+  separation_.clear();
+  distance_.clear();
+  const double support2 = support * support;
+  for (const auto& [a, b] : list) {
+    const std::size_t ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    double sep[3], r2 = 0.0;
+    for (std::size_t r = 0; r < d; ++r) {
+      sep[r] = x_[ua * d + r] - x_[ub * d + r];
+      r2 += sep[r] * sep[r];
+    }
+    if (!(r2 < support2)) continue;
+    pairs_.emplace_back(a, b);
+    separation_.insert(separation_.end(), sep, sep + d);
+    distance_.push_back(std::sqrt(r2));
+  }
   density_.resize(n);
   const double w0 = kernel_.value(0.0);
   for (std::size_t a = 0; a < n; ++a) density_[a] = mass_[a] * w0;
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const std::size_t a = static_cast<std::size_t>(pairs[k].first);
-    const std::size_t b = static_cast<std::size_t>(pairs[k].second);
-    double r2 = 0.0;
-    for (std::size_t r = 0; r < d; ++r) {
-      const double s = x_[a * d + r] - x_[b * d + r];
-      separation_[k * d + r] = s;
-      r2 += s * s;
-    }
-    distance_[k] = std::sqrt(r2);
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    const std::size_t a = static_cast<std::size_t>(pairs_[k].first);
+    const std::size_t b = static_cast<std::size_t>(pairs_[k].second);
     const double w = kernel_.value(distance_[k]);
     density_[a] += mass_[b] * w;
     density_[b] += mass_[a] * w;
   }
+}
+
+bool SphParticles::list_holds() const {
+  if (!searched_ || searched_x_.size() != x_.size()) return false;
+  // Two particles each moved by at most kSkin h came at most 2 kSkin h =
+  // kSkin 2h closer: a pair now within 2h was within (1 + kSkin) 2h.
+  const double limit = kSkin * 0.5 * kernel_.support();
+  const double limit2 = limit * limit;
+  const std::size_t d = static_cast<std::size_t>(dim_);
+  for (std::size_t a = 0; a < x_.size(); a += d) {
+    double move2 = 0.0;
+    for (std::size_t r = 0; r < d; ++r) {
+      const double m = x_[a + r] - searched_x_[a + r];
+      move2 += m * m;
+    }
+    if (!(move2 <= limit2)) return false;  // a NaN included: search again
+  }
+  return true;
 }
 
 SphParticles make_sph_particles(const Scene& scene, const Fluid& fluid,

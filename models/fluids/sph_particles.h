@@ -7,7 +7,14 @@
 // The pressure and viscosity forces and the output read it. It keeps what it
 // found for the last positions: evaluating the same positions again (the
 // model's terms one after the other, energies after forces) costs a
-// comparison, not a search.
+// comparison, not a search. And new positions near the last search's cost
+// a pass over a list, not a search: the search finds the pairs within the
+// support plus a skin, (1 + kSkin) 2h, and while no particle has moved
+// more than kSkin h (half the skin) since, every pair within 2h is among
+// them (a Verlet list: Verlet 1967), so the pairs are that list filtered by
+// distance, in its order. An implicit step's Newton iterates and line
+// search trials move the particles by less than that at 1 ms: one search a
+// step instead of one per evaluation.
 #pragma once
 
 #include <memory>
@@ -40,9 +47,12 @@ class SphParticles final : public SharedByTerms {
   // Local positions (a at local_x()[a * dim]) of the last update.
   const double* local_x() const { return x_.data(); }
 
+  // The skin of the search, as a fraction of the support 2h.
+  static constexpr double kSkin = 0.25;
+
   // Pairs (a, b), a < b, with |x_a - x_b| < 2h; separation x_a - x_b at
   // separation(k) (dim values), its length at distance(k).
-  const std::vector<std::pair<int, int>>& pairs() const { return grid_.pairs(); }
+  const std::vector<std::pair<int, int>>& pairs() const { return pairs_; }
   const double* separation(std::size_t k) const { return &separation_[k * dim_]; }
   double distance(std::size_t k) const { return distance_[k]; }
   const std::vector<double>& density() const { return density_; }
@@ -59,8 +69,13 @@ class SphParticles final : public SharedByTerms {
   std::vector<double> x_;
   bool valid_ = false;
   long generation_ = 0;
-  NeighbourGrid grid_;
+  NeighbourGrid grid_;             // the pairs within (1 + kSkin) 2h of searched_x_
+  std::vector<double> searched_x_;  // the positions of the last search (local order)
+  bool searched_ = false;
+  std::vector<std::pair<int, int>> pairs_;
   std::vector<double> separation_, distance_, density_;
+  // Whether the last search's list still holds every pair within 2h at x_.
+  bool list_holds() const;
 };
 
 // The local particles of `fluid` in a model's internal order (`internal` of
