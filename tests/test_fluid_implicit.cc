@@ -159,15 +159,16 @@ RunResult watched_run(const Model& model, const std::string& integrator, double 
 
 // The implicit methods complete the dam break at a game's frame step, 1/60 s
 // (70 times the acoustic step of this coarse column: 50 water particles),
-// for 2 s: implicit Euler and BDF2 keep the water in the box (no particle
-// below the floor or beyond the walls by more than a spacing) and, as they
-// damp, never raise the energy above its start. (They failed at the first
-// step before the viscosity was lagged: docs/physics.md "Implicit steps on
-// a fluid".) Implicit midpoint's step's end, x_n+1 = 2 x_mid - x_n, is
-// where no force was evaluated: at 1/60 s particles overshoot through the
-// floor until the fluid's verdict (models/fluids/fluid_verdict.cc: a water
-// particle outside the walls' box by more than the fluid's size) ends the
-// run as diverged; at 1/120 s it completes and keeps the water in the box.
+// for 2 s: implicit Euler, BDF2 and the implicit midpoint rule keep the
+// water in the closed box (no particle below the floor or beyond the walls
+// by more than a spacing) and, with the lagged viscosity dissipating, none
+// raises the energy above its start by more than 0.5 %. (They failed at
+// the first step before the viscosity was lagged: docs/physics.md "Implicit
+// steps on a fluid".) In the open box (`lid=0`) the midpoint rule's step's
+// end, x_n+1 = 2 x_mid - x_n, where no force was evaluated, carries water
+// thrown above the walls through the floor as it falls back, until the
+// fluid's verdict (models/fluids/fluid_verdict.cc: a water particle outside
+// the walls' box by more than the fluid's size) ends the run as diverged.
 TEST(FluidFrameSteps, ImplicitMethodsCompleteTheDamBreakAtOneSixtieth) {
   const Scene scene = make_builtin_scene("dam-break", {{"spacing", "0.02"}});
   const Model model(scene);
@@ -175,7 +176,7 @@ TEST(FluidFrameSteps, ImplicitMethodsCompleteTheDamBreakAtOneSixtieth) {
   auto in_box = [&](const Watched& w) {
     return w.lowest > -l && w.nearest > -l && w.farthest < 5.0 * a + l;
   };
-  for (const char* name : {"implicit-euler", "bdf2"}) {
+  for (const char* name : {"implicit-euler", "bdf2", "implicit-midpoint"}) {
     Watched w;
     const RunResult r = watched_run(model, name, kFrame, 2.0, w);
     ASSERT_EQ(r.status, RunStatus::kCompleted) << name << ": " << r.failure;
@@ -184,18 +185,16 @@ TEST(FluidFrameSteps, ImplicitMethodsCompleteTheDamBreakAtOneSixtieth) {
     const double highest = *std::max_element(w.energy.begin(), w.energy.end());
     std::cout << name << " at 1/60 s: " << r.stats.newton_iterations / r.stats.steps
               << " Newton iterations per step, energy " << w.energy.front() << " -> "
-              << w.energy.back() << " J\n";
-    EXPECT_LE(highest, w.energy.front() * (1.0 + 1e-9)) << name;
+              << w.energy.back() << " J, highest " << highest << " J\n";
+    EXPECT_LE(highest, w.energy.front() * 1.005) << name;
   }
-  Watched frame, half;
-  const RunResult midpoint = watched_run(model, "implicit-midpoint", kFrame, 2.0, frame);
-  ASSERT_EQ(midpoint.status, RunStatus::kDiverged) << "implicit-midpoint at 1/60 s";
+  const Model open(make_builtin_scene("dam-break", {{"spacing", "0.02"}, {"lid", "0"}}));
+  Watched frame;
+  const RunResult midpoint = watched_run(open, "implicit-midpoint", kFrame, 2.0, frame);
+  ASSERT_EQ(midpoint.status, RunStatus::kDiverged) << "implicit-midpoint at 1/60 s, open box";
   ASSERT_TRUE(midpoint.verdict.has_value());
   EXPECT_EQ(midpoint.verdict->rule, VerdictRule::kFluidOutside) << midpoint.failure;
-  EXPECT_FALSE(in_box(frame)) << "implicit-midpoint at 1/60 s kept the water in the box";
-  ASSERT_EQ(watched_run(model, "implicit-midpoint", kFrame / 2.0, 2.0, half).status,
-            RunStatus::kCompleted);
-  EXPECT_TRUE(in_box(half)) << "implicit-midpoint at 1/120 s: lowest y " << half.lowest;
+  EXPECT_FALSE(in_box(frame)) << "implicit-midpoint at 1/60 s kept the water in the open box";
 }
 
 // The trust region (docs/physics.md "Implicit steps on a fluid"): an update

@@ -191,12 +191,12 @@ std::string verdict_text(const Verdict& verdict, const Model& model,
       }
       text << ", further than the fluid's size " << verdict.bound << " m: ";
       // The state cannot tell over from through: a stable run's jets can
-      // outgrow the walls too (bdf2 on the dam break at 1/60 s: water
-      // particle 199 lands 0.57 m beyond the -x side).
+      // outgrow open walls too (bdf2 on the dam break at 1/60 s with
+      // -p lid=0: water particle 199 lands 0.54 m beyond the -x side).
       text << (verdict.plane >= 0 ? "the fluid blew up or leaked through the plane"
                                   : "the water left the tank: flung out by a blow-up, through "
-                                    "a wall, or thrown over one (a splash higher than the "
-                                    "walls: the dam-break's -p walls raises them)");
+                                    "a wall, or thrown over one (a splash higher than open "
+                                    "walls: the dam-break's -p lid=1 closes its box)");
       fluid_advice(text, model, context, verdict.where);
       return text.str();
     case VerdictRule::kFluidDensity:
