@@ -11,9 +11,10 @@ completed by two checks that do not use springlab's own rule:
     one is a blow-up;
   - place: a free particle at the end further than 0.1 m beyond the walls
     (the box of the fluid's fixed particles) at the sides or below the
-    floor, or above the walls' open top by more than the box's width (a
-    splash goes up: the dam break throws water 0.2-0.4 m over walls 0.27 m
-    high with every stable step), is one that left the tank.
+    floor, or above the walls' top by more than the box's width (a splash
+    goes up: the dam break with -p lid=0 throws water 0.2-0.4 m over walls
+    0.27 m high with every stable step; by default a lid closes its box),
+    is one that left the tank.
 
     tests/fluid_verdict_grid.py build/release/springlab [--jobs 2]
 

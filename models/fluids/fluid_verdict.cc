@@ -5,9 +5,9 @@
 //     bounding box of the fluid's fixed particles (its walls) at t = 0 and L
 //     the largest side of the box of all its particles (water and walls) at
 //     t = 0: water that left the tank (flung out by a blow-up, or through a
-//     wall); above an open top, L allows for a splash (dam-break at spacing
-//     0.01: 0.31 m over walls 0.27 m high with symplectic Euler at 0.5 ms,
-//     L = 0.55 m);
+//     wall); above an open top, L allows for a splash (dam-break -p lid=0
+//     at spacing 0.01: 0.31 m over walls 0.27 m high with symplectic Euler
+//     at 0.5 ms, L = 0.55 m);
 //   - or a water particle lies further behind a contact plane than L (any
 //     plane of the scene);
 //   - or a water particle's density is more than kDensityBound (100 %)

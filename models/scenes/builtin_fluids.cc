@@ -155,7 +155,7 @@ Box tank_box(const Values& p, double width, double depth) {
 // x = 0 of a box 5a long, released at t = 0. The box is closed by a lid at
 // the walls' top (as SPHERIC's dam-break tanks are): the accurate methods
 // throw water up the far wall higher than the walls (symplectic Euler at its
-// acoustic step 0.77 m, BDF2 at 1/60 s 0.49 m, over walls 0.25 m high),
+// acoustic step 0.73 m, BDF2 at 1/60 s 0.47 m, over walls 0.25 m high),
 // which an open box lets fall outside, ending the run (docs/physics.md
 // "Implicit steps on a fluid"); `lid=0` opens it.
 Scene build_dam_break(const Values& p) {
