@@ -150,7 +150,9 @@ TEST(FluidNeighbours, APointNotFiniteHasNoPartners) {
 
 // The particles' Verlet list (sph_particles.h): after moves below and
 // above its skin, of one particle or all, the pairs are exactly those within
-// the support, and the densities those of a fresh search.
+// the support that have a free particle (a third of the particles are fixed
+// and never move), and every density the sum over all particles within the
+// support, fixed pairs included.
 TEST(FluidNeighbours, TheVerletListFindsEveryPairAfterEachMove) {
   std::mt19937 rng(11);
   for (int dim : {2, 3}) {
@@ -160,43 +162,62 @@ TEST(FluidNeighbours, TheVerletListFindsEveryPairAfterEachMove) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<double> x(static_cast<std::size_t>(n * dim));
     for (double& c : x) c = u(rng);
-    auto make = [&] {
-      std::vector<int> index(static_cast<std::size_t>(n));
-      for (int a = 0; a < n; ++a) index[static_cast<std::size_t>(a)] = a;
-      return SphParticles(fluid, index, std::vector<double>(static_cast<std::size_t>(n), 1.0), dim);
-    };
-    SphParticles particles = make();
-    auto same_as_a_fresh_search = [&](const std::string& what) {
-      EXPECT_EQ(sorted(particles.pairs()), all_pairs_within(x.data(), n, dim, particles.kernel().support()))
-          << what;
-      SphParticles fresh = make();
-      fresh.update(x.data());
-      for (std::size_t a = 0; a < static_cast<std::size_t>(n); ++a) {
-        EXPECT_NEAR(particles.density()[a], fresh.density()[a], 1e-12 * fresh.density()[a]) << what;
+    std::vector<int> index(static_cast<std::size_t>(n));
+    std::vector<char> fixed(static_cast<std::size_t>(n));
+    for (int a = 0; a < n; ++a) {
+      index[static_cast<std::size_t>(a)] = a;
+      fixed[static_cast<std::size_t>(a)] = a % 3 == 0;
+    }
+    SphParticles particles(fluid, index, std::vector<double>(static_cast<std::size_t>(n), 1.0),
+                           dim, fixed);
+    const CubicSpline& w = particles.kernel();
+    const double support = w.support();
+    auto as_searched = [&](const std::string& what) {
+      std::vector<std::pair<int, int>> want;
+      for (const auto& [a, b] : all_pairs_within(x.data(), n, dim, support)) {
+        if (!fixed[static_cast<std::size_t>(a)] || !fixed[static_cast<std::size_t>(b)]) {
+          want.emplace_back(a, b);
+        }
+      }
+      EXPECT_EQ(sorted(particles.pairs()), want) << what;
+      for (int a = 0; a < n; ++a) {
+        double rho = 0.0;  // every particle within the support, a itself included
+        for (int b = 0; b < n; ++b) {
+          double r2 = 0.0;
+          for (int r = 0; r < dim; ++r) {
+            const double d = x[static_cast<std::size_t>(a * dim + r)] - x[static_cast<std::size_t>(b * dim + r)];
+            r2 += d * d;
+          }
+          if (r2 < support * support) rho += w.value(std::sqrt(r2));
+        }
+        EXPECT_NEAR(particles.density()[static_cast<std::size_t>(a)], rho, 1e-12 * rho) << what;
       }
     };
-    const double support = particles.kernel().support();
     const double skin_move = SphParticles::kSkin * 0.5 * support;  // the list's limit
     particles.update(x.data());
-    // Moves of every particle by 0.3, 0.9 and 1.5 times the limit, then one
-    // particle by 3 times it towards another's place.
+    as_searched(std::to_string(dim) + "-D, first search");
+    // Moves of every free particle by 0.3, 0.9 and 1.5 times the limit, then
+    // one particle next to another.
     for (double factor : {0.3, 0.9, 1.5}) {
       std::normal_distribution<double> step(0.0, 1.0);
       for (int a = 0; a < n; ++a) {
+        if (fixed[static_cast<std::size_t>(a)]) continue;
         double dir[3], norm = 0.0;
         for (int r = 0; r < dim; ++r) norm += (dir[r] = step(rng)) * dir[r];
         norm = std::sqrt(norm);
-        for (int r = 0; r < dim; ++r) x[static_cast<std::size_t>(a * dim + r)] += factor * skin_move * dir[r] / norm;
+        for (int r = 0; r < dim; ++r) {
+          x[static_cast<std::size_t>(a * dim + r)] += factor * skin_move * dir[r] / norm;
+        }
       }
       particles.update(x.data());
-      same_as_a_fresh_search(std::to_string(dim) + "-D, every particle moved by " +
-                             std::to_string(factor) + " x the limit");
+      as_searched(std::to_string(dim) + "-D, every free particle moved by " +
+                  std::to_string(factor) + " x the limit");
     }
     for (int r = 0; r < dim; ++r) {
-      x[static_cast<std::size_t>(r)] = x[static_cast<std::size_t>(dim + r)] + 0.1 * support;
+      x[static_cast<std::size_t>(dim + r)] = x[static_cast<std::size_t>(2 * dim + r)] + 0.1 * support;
     }
     particles.update(x.data());
-    same_as_a_fresh_search(std::to_string(dim) + "-D, one particle moved next to another");
+    as_searched(std::to_string(dim) + "-D, one particle moved next to another");
   }
   // Two particles just beyond the list's reach, (1 + kSkin) 2h, closing head
   // on by 1.5 times the limit each: within 2h now, which only a new search

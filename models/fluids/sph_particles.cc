@@ -8,12 +8,15 @@
 namespace springlab {
 
 SphParticles::SphParticles(const Fluid& fluid, std::vector<int> index, std::vector<double> mass,
-                           int dim)
+                           int dim, std::vector<char> fixed)
     : index_(std::move(index)),
       mass_(std::move(mass)),
       dim_(dim),
       kernel_(kSmoothingPerSpacing * fluid.spacing, dim),
-      eos_{fluid.density, fluid.speed_of_sound} {}
+      eos_{fluid.density, fluid.speed_of_sound},
+      fixed_(std::move(fixed)) {
+  if (fixed_.empty()) fixed_.assign(index_.size(), 0);
+}
 
 void SphParticles::update(const double* x) {
   const std::size_t n = index_.size(), d = static_cast<std::size_t>(dim_);
@@ -31,24 +34,44 @@ void SphParticles::update(const double* x) {
   valid_ = true;
   ++generation_;
   const double support = kernel_.support();
+  const double support2 = support * support;
+  auto distance2 = [&](std::size_t a, std::size_t b, double* sep) {
+    double r2 = 0.0;
+    for (std::size_t r = 0; r < d; ++r) {
+      sep[r] = x_[a * d + r] - x_[b * d + r];
+      r2 += sep[r] * sep[r];
+    }
+    return r2;
+  };
   if (!list_holds()) {
     grid_.build(x_.data(), static_cast<int>(n), dim_, (1.0 + kSkin) * support);
     searched_x_ = x_;
     searched_ = true;
+    list_.clear();
+    fixed_density_.assign(n, 0.0);
+    for (const auto& [a, b] : grid_.pairs()) {
+      const std::size_t ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+      if (!fixed_[ua] || !fixed_[ub]) {
+        list_.emplace_back(a, b);
+        continue;
+      }
+      double sep[3];
+      const double r2 = distance2(ua, ub, sep);
+      if (!(r2 < support2)) continue;
+      const double w = kernel_.value(std::sqrt(r2));
+      fixed_density_[ua] += mass_[ub] * w;
+      fixed_density_[ub] += mass_[ua] * w;
+    }
   }
   // The list's pairs within the support, in its order.
-  const auto& list = grid_.pairs();
+  const auto& list = list_;
   pairs_.clear();
   separation_.clear();
   distance_.clear();
-  const double support2 = support * support;
   for (const auto& [a, b] : list) {
     const std::size_t ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
-    double sep[3], r2 = 0.0;
-    for (std::size_t r = 0; r < d; ++r) {
-      sep[r] = x_[ua * d + r] - x_[ub * d + r];
-      r2 += sep[r] * sep[r];
-    }
+    double sep[3];
+    const double r2 = distance2(ua, ub, sep);
     if (!(r2 < support2)) continue;
     pairs_.emplace_back(a, b);
     separation_.insert(separation_.end(), sep, sep + d);
@@ -56,7 +79,7 @@ void SphParticles::update(const double* x) {
   }
   density_.resize(n);
   const double w0 = kernel_.value(0.0);
-  for (std::size_t a = 0; a < n; ++a) density_[a] = mass_[a] * w0;
+  for (std::size_t a = 0; a < n; ++a) density_[a] = mass_[a] * w0 + fixed_density_[a];
   for (std::size_t k = 0; k < pairs_.size(); ++k) {
     const std::size_t a = static_cast<std::size_t>(pairs_[k].first);
     const std::size_t b = static_cast<std::size_t>(pairs_[k].second);
@@ -88,11 +111,14 @@ SphParticles make_sph_particles(const Scene& scene, const Fluid& fluid,
                                 const std::vector<int>& internal_of_scene) {
   std::vector<int> index;
   std::vector<double> mass;
+  std::vector<char> fixed;
   for (int s = fluid.first; s < fluid.first + fluid.count; ++s) {
     index.push_back(internal_of_scene[static_cast<std::size_t>(s)]);
     mass.push_back(scene.particles[static_cast<std::size_t>(s)].mass);
+    fixed.push_back(scene.particles[static_cast<std::size_t>(s)].fixed ? 1 : 0);
   }
-  return SphParticles(fluid, std::move(index), std::move(mass), scene.dimension);
+  return SphParticles(fluid, std::move(index), std::move(mass), scene.dimension,
+                      std::move(fixed));
 }
 
 double lattice_mass(double rho0, double spacing, int dimension) {

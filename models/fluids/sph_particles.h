@@ -33,7 +33,9 @@ class SphParticles final : public SharedByTerms {
   // `index[a]`: where local particle a's coordinates start in the arrays
   // update() reads, divided by dim (the model's internal index, or the scene
   // index); `mass[a]` its mass.
-  SphParticles(const Fluid& fluid, std::vector<int> index, std::vector<double> mass, int dim);
+  // `fixed[a]`: local particle a never moves (a wall's; empty: none is).
+  SphParticles(const Fluid& fluid, std::vector<int> index, std::vector<double> mass, int dim,
+               std::vector<char> fixed = {});
 
   // Finds the pairs and densities at positions x (particle p at x[p * dim]).
   void update(const double* x);
@@ -50,7 +52,9 @@ class SphParticles final : public SharedByTerms {
   // The skin of the search, as a fraction of the support 2h.
   static constexpr double kSkin = 0.25;
 
-  // Pairs (a, b), a < b, with |x_a - x_b| < 2h; separation x_a - x_b at
+  // Pairs (a, b), a < b, with |x_a - x_b| < 2h and a or b free (two fixed
+  // particles exert nothing that moves anything; their share of each
+  // other's density is summed once per search); separation x_a - x_b at
   // separation(k) (dim values), its length at distance(k).
   const std::vector<std::pair<int, int>>& pairs() const { return pairs_; }
   const double* separation(std::size_t k) const { return &separation_[k * dim_]; }
@@ -69,7 +73,13 @@ class SphParticles final : public SharedByTerms {
   std::vector<double> x_;
   bool valid_ = false;
   long generation_ = 0;
-  NeighbourGrid grid_;             // the pairs within (1 + kSkin) 2h of searched_x_
+  std::vector<char> fixed_;        // per local particle (empty: none)
+  NeighbourGrid grid_;             // the search
+  // The pairs within (1 + kSkin) 2h of searched_x_ with a free particle,
+  // and each particle's density from fixed partners within 2h when it is
+  // fixed itself (the walls' own share, constant).
+  std::vector<std::pair<int, int>> list_;
+  std::vector<double> fixed_density_;
   std::vector<double> searched_x_;  // the positions of the last search (local order)
   bool searched_ = false;
   std::vector<std::pair<int, int>> pairs_;
