@@ -106,15 +106,15 @@ double VelocityStep::potential(const Vector& v, double& magnitude) {
 }
 
 void VelocityStep::matrix(const Vector& v, bool definite, NewtonLinearSolver& linear) {
+  set_matrix_point(v);
   // Where the model multiplies by its Jacobians without them (a fluid's),
   // J is handed to the solver by its products: assembled only where a
   // solve needs the matrix.
-  set_matrix_point(v);
   if (matrix_->has_products()) {
     linear.defer(definite, model_->system().jacobian_symmetric(), *matrix_);
-    return;
+  } else {
+    assemble_at_point(definite, linear);
   }
-  assemble(v, definite, linear);
 }
 
 void VelocityStep::set_matrix_point(const Vector& v) {
@@ -129,6 +129,10 @@ void VelocityStep::set_matrix_point(const Vector& v) {
 SparseMatrix& VelocityStep::assemble(const Vector& v, bool definite,
                                      NewtonLinearSolver& linear) {
   set_matrix_point(v);
+  return assemble_at_point(definite, linear);
+}
+
+SparseMatrix& VelocityStep::assemble_at_point(bool definite, NewtonLinearSolver& linear) {
   const bool symmetric =
       model_->system().jacobian_symmetric() && (term_ == nullptr || term_->symmetric(definite));
   SparseMatrix& jacobian = linear.matrix(definite, symmetric, *matrix_);

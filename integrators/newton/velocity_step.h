@@ -133,6 +133,8 @@ class VelocityStep final : public NewtonProblem {
   void stage(const Vector& v);
   // The stage at v and the Newton matrix's point there (its coefficients).
   void set_matrix_point(const Vector& v);
+  // J assembled at the point set last.
+  SparseMatrix& assemble_at_point(bool definite, NewtonLinearSolver& linear);
   // The stage and F there (stage_force()): residual() without r.
   void stage_and_force(const Vector& v);
   // r = M (v - v_c) - h w f at v, for a force f at the stage: F, or a
