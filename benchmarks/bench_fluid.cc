@@ -1,24 +1,27 @@
 // BM_FluidStep/dam-break/<n>: one explicit step of the 2-D dam break
 // (docs/scenes.md "dam-break"): symplectic Euler at the acoustic CFL step
-// dt = 0.25 h / c, i.e. one force evaluation -- the neighbour search
-// (models/fluids/neighbour_grid.cc, rebuilt at every evaluation), the summation
-// density, the pressure and the viscosity forces -- and the update.
+// dt = 0.25 h / c, i.e. one force evaluation -- the neighbours (the list of
+// models/fluids/sph_particles.h: filtered by distance at each evaluation,
+// searched again within 1.25 x 2h once a particle has moved h / 4 from the
+// last search), the summation density, the pressure and the viscosity
+// forces -- and the update.
 // BM_FluidNeighbours/dam-break/<n>: the neighbour search alone
 // (NeighbourGrid::build over every particle, radius 2h), at the initial
 // positions.
 //
-// n is a / spacing (a = 1 m): 16, 64 and 217 give 1,010, 10,130 and 100,709
-// particles (water 2 n^2, then three layers of wall particles). Counters:
-// `ns_per_particle` (CPU time per iteration / all particles of the fluid,
-// walls included: they are searched and summed like the water), `particles`,
-// `water`, `pairs` (within 2h at the start). Each run starts from rest at
-// t = 0 (the column starts to fall: every step moves every particle, so
-// no evaluation reuses the last search); a run lasts Google Benchmark's
-// usual 0.5 s or one step, whichever is longer, well before the front
-// reaches the far wall.
+// n is a / spacing (a = 1 m): 16, 64 and 217 give 1,268, 11,108 and 103,982
+// particles (water 2 n^2, then three layers of wall particles and the lid).
+// Counters: `ns_per_particle` (CPU time per iteration / all particles of the
+// fluid, walls included: they are searched like the water, though pairs of
+// two wall particles are not kept), `particles`, `water`, `pairs` (within
+// 2h at the start). Each run starts from rest at t = 0 (the column starts
+// to fall: every step moves every particle, by less than the list's limit,
+// so most evaluations filter the last search's list); a run lasts Google
+// Benchmark's usual 0.5 s or one step, whichever is longer, well before the
+// front reaches the far wall.
 //
 // BM_FluidImplicit/dam-break: the default dam break (a = 0.1 m, spacing
-// 5 mm: 800 water particles, 618 wall particles, 1,600 unknowns) under
+// 5 mm: 800 water particles, 936 wall particles with the lid, 1,600 unknowns) under
 // implicit-euler at dt = 1 ms, issue 50's three figures side by side in one
 // iteration (so that they see the same machine load):
 //   - step_ms: a run of 0.05 s (50 steps) through simulate(), the driver of

@@ -235,6 +235,20 @@ TEST(FluidNeighbours, TheVerletListFindsEveryPairAfterEachMove) {
   two.update(x.data());
   ASSERT_EQ(two.pairs().size(), 1u);
   EXPECT_NEAR(two.distance(0), x[2] - x[0], 1e-15);
+  // The same approach in two moves of 0.6 times the limit each: each is
+  // below it, their sum is not, and the moves count from the last search
+  // (a list kept while each update moves less than the limit would miss
+  // the pair).
+  SphParticles again(fluid, {0, 1}, {1.0, 1.0}, 2);
+  x = {0.0, 0.0, 1.001 * (1.0 + SphParticles::kSkin) * support, 0.0};
+  again.update(x.data());
+  for (int move = 0; move < 2; ++move) {
+    x[0] += 0.6 * limit;
+    x[2] -= 0.6 * limit;
+    again.update(x.data());
+  }
+  ASSERT_LT(x[2] - x[0], support);
+  EXPECT_EQ(again.pairs().size(), 1u);
 }
 
 // ---- Forces ----

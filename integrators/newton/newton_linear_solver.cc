@@ -22,6 +22,9 @@ void NewtonLinearSolver::reset(IntegratorStats& stats) {
   rent_ = 0;
   exact_iterations_ = -1;
   direct_version_ = preconditioner_version_ = -1;
+  deferred_ = false;
+  assembled_ = true;
+  source_ = nullptr;
   jacobian_ = SparseMatrix();
   preconditioner_matrix_ = SparseMatrix();
 }
