@@ -29,24 +29,24 @@ void NewtonLinearSolver::reset(IntegratorStats& stats) {
   preconditioner_matrix_ = SparseMatrix();
 }
 
-SparseMatrix& NewtonLinearSolver::matrix(bool definite, bool symmetric,
-                                         DefiniteMatrixSource& source) {
+void NewtonLinearSolver::next_matrix(bool definite, bool symmetric, DefiniteMatrixSource& source,
+                                     bool deferred) {
   definite_ = definite;
   symmetric_ = symmetric;
   source_ = &source;
   direct_current_ = false;
-  deferred_ = false;
-  assembled_ = true;
+  deferred_ = deferred;
+  assembled_ = !deferred;
+}
+
+SparseMatrix& NewtonLinearSolver::matrix(bool definite, bool symmetric,
+                                         DefiniteMatrixSource& source) {
+  next_matrix(definite, symmetric, source, /*deferred=*/false);
   return jacobian_;
 }
 
 void NewtonLinearSolver::defer(bool definite, bool symmetric, DefiniteMatrixSource& source) {
-  definite_ = definite;
-  symmetric_ = symmetric;
-  source_ = &source;
-  direct_current_ = false;
-  deferred_ = true;
-  assembled_ = false;
+  next_matrix(definite, symmetric, source, /*deferred=*/true);
 }
 
 const SparseMatrix& NewtonLinearSolver::assembled_matrix() {

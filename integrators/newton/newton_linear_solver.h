@@ -125,6 +125,8 @@ class NewtonLinearSolver {
   bool assembled_ = true;   // jacobian_ holds J (false while deferred and not yet needed)
   // jacobian_, assembled first where it is deferred.
   const SparseMatrix& assembled_matrix();
+  // matrix() and defer(): the next solves' J, assembled by the caller or not.
+  void next_matrix(bool definite, bool symmetric, DefiniteMatrixSource& source, bool deferred);
   bool symmetric_ = false;  // jacobian_ is symmetric
   bool first_solve_ = false;
   SparseMatrix jacobian_, preconditioner_matrix_;

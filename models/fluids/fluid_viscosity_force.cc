@@ -96,18 +96,11 @@ class FluidViscosityForce final : public ForceTerm {
   }
 
   void add_force(const Configuration& c, double* f) const override {
-    auto add = [&](int a, int b, double kappa) {
-      for (int r = 0; r < dim_; ++r) {
-        const double force = -kappa * (c.v[a * dim_ + r] - c.v[b * dim_ + r]);
-        f[a * dim_ + r] += force;
-        f[b * dim_ + r] -= force;
-      }
-    };
     if (lagged_) {
-      for (const LaggedPair& p : lagged_pairs_) add(p.a, p.b, p.kappa);
+      add_lagged(c.v, f);
       return;
     }
-    for_each_pair(c, [&](const Pair& p) { add(p.a, p.b, p.C * p.phi); });
+    for_each_pair(c, [&](const Pair& p) { add_pair(c.v, p.a, p.b, p.C * p.phi, f); });
   }
 
   void declare_jacobian_blocks(JacobianPatternBuilder& builder) const override {
@@ -133,20 +126,13 @@ class FluidViscosityForce final : public ForceTerm {
   void add_jacobians(const Configuration& c, double* dfdx, double* dfdv) const override {
     if (dim_ == 2) add_jacobians_d<2>(c, dfdx, dfdv); else add_jacobians_d<3>(c, dfdx, dfdv);
   }
-  // Lagged: dF/dx = 0 and (dF/dv p)_i = -sum_j kappa_ij (p_i - p_j), pair
-  // by pair (live, dF/dx is not symmetric: the matrix is assembled).
+  // Lagged: dF/dx = 0, and the force is linear in v, F = dF/dv v, so
+  // dF/dv p is the lagged force at the velocities p (live, dF/dx is not
+  // symmetric: the matrix is assembled).
   bool has_jacobian_products() const override { return lagged_; }
   void add_jacobian_products(const Configuration&, bool, const double* p, double*,
                              double* dfdv_p) const override {
-    if (dfdv_p == nullptr) return;
-    for (const LaggedPair& pair : lagged_pairs_) {
-      const bool a_free = pair.a < free_, b_free = pair.b < free_;
-      for (int r = 0; r < dim_; ++r) {
-        const double w = (a_free ? p[pair.a * dim_ + r] : 0.0) - (b_free ? p[pair.b * dim_ + r] : 0.0);
-        if (a_free) dfdv_p[pair.a * dim_ + r] -= pair.kappa * w;
-        if (b_free) dfdv_p[pair.b * dim_ + r] += pair.kappa * w;
-      }
-    }
+    if (dfdv_p != nullptr) add_lagged(p, dfdv_p);
   }
 
  private:
@@ -192,6 +178,19 @@ class FluidViscosityForce final : public ForceTerm {
         visit(p);
       }
     }
+  }
+
+  // f += pair (a, b)'s force -kappa (v_a - v_b) on a, its opposite on b.
+  void add_pair(const double* v, int a, int b, double kappa, double* f) const {
+    for (int r = 0; r < dim_; ++r) {
+      const double force = -kappa * (v[a * dim_ + r] - v[b * dim_ + r]);
+      f[a * dim_ + r] += force;
+      f[b * dim_ + r] -= force;
+    }
+  }
+  // f += the lagged pairs' forces at velocities v (every particle).
+  void add_lagged(const double* v, double* f) const {
+    for (const LaggedPair& p : lagged_pairs_) add_pair(v, p.a, p.b, p.kappa, f);
   }
 
   template <int D>

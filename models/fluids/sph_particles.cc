@@ -46,7 +46,6 @@ void SphParticles::update(const double* x) {
   if (!list_holds()) {
     grid_.build(x_.data(), static_cast<int>(n), dim_, (1.0 + kSkin) * support);
     searched_x_ = x_;
-    searched_ = true;
     list_.clear();
     fixed_density_.assign(n, 0.0);
     for (const auto& [a, b] : grid_.pairs()) {
@@ -64,11 +63,10 @@ void SphParticles::update(const double* x) {
     }
   }
   // The list's pairs within the support, in its order.
-  const auto& list = list_;
   pairs_.clear();
   separation_.clear();
   distance_.clear();
-  for (const auto& [a, b] : list) {
+  for (const auto& [a, b] : list_) {
     const std::size_t ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
     double sep[3];
     const double r2 = distance2(ua, ub, sep);
@@ -90,7 +88,7 @@ void SphParticles::update(const double* x) {
 }
 
 bool SphParticles::list_holds() const {
-  if (!searched_ || searched_x_.size() != x_.size()) return false;
+  if (searched_x_.empty() || searched_x_.size() != x_.size()) return false;
   // Two particles each moved by at most kSkin h came at most 2 kSkin h =
   // kSkin 2h closer: a pair now within 2h was within (1 + kSkin) 2h.
   const double limit = kSkin * 0.5 * kernel_.support();

@@ -80,8 +80,7 @@ class SphParticles final : public SharedByTerms {
   // fixed itself (the walls' own share, constant).
   std::vector<std::pair<int, int>> list_;
   std::vector<double> fixed_density_;
-  std::vector<double> searched_x_;  // the positions of the last search (local order)
-  bool searched_ = false;
+  std::vector<double> searched_x_;  // the positions of the last search (local order; empty: none)
   std::vector<std::pair<int, int>> pairs_;
   std::vector<double> separation_, distance_, density_;
   // Whether the last search's list still holds every pair within 2h at x_.

@@ -6,7 +6,8 @@
 // the walls' -- kWallLayers layers of fixed particles continuing the
 // lattice outside the box (floor y < 0, sides x < 0 and x > width, and in
 // 3-D z < 0 and z > depth; the dam break's lid above the walls' top), so a
-// particle next to a wall has a full kernel of neighbours. y is up in 2-D and 3-D, gravity (0, -g, 0).
+// particle next to a wall has a full kernel of neighbours. y is up in 2-D
+// and 3-D, gravity (0, -g, 0).
 //
 // Masses: m = rho0 / S, S = sum over the lattice of W(|k| l), so that an
 // interior particle's density by summation is rho0 exactly at t = 0.
