@@ -21,6 +21,36 @@ StepResult Bdf2::do_initialize() {
 }
 
 StepResult Bdf2::do_step(double h) {
+  const StepResult result = formula_step(h);
+  if (result.ok) return result;
+  // Solved again in substeps (the header), the history restored before
+  // each split is tried and after none worked.
+  x_previous_kept_ = x_previous_;
+  v_previous_kept_ = v_previous_;
+  const double h_previous = h_previous_;
+  const bool had_previous = have_previous_;
+  x_start_ = x_;
+  v_start_ = v_;
+  auto restore = [&] {
+    x_previous_ = x_previous_kept_;
+    v_previous_ = v_previous_kept_;
+    h_previous_ = h_previous;
+    have_previous_ = had_previous;
+  };
+  const StepResult parts = retry_in_substeps(
+      h, result, [this](double dt) { return formula_step(dt); }, nullptr, restore);
+  if (!parts.ok) {
+    restore();
+    return parts;
+  }
+  x_previous_.swap(x_start_);
+  v_previous_.swap(v_start_);
+  h_previous_ = h;
+  have_previous_ = true;
+  return parts;
+}
+
+StepResult Bdf2::formula_step(double h) {
   VelocityImplicitScheme scheme{.t_eval_offset = 1.0, .a = 0.0, .b = 1.0, .c = 1.0};
   if (have_previous_) {
     const double w = h / h_previous_;

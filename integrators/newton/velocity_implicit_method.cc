@@ -27,7 +27,7 @@ StepResult VelocityImplicitMethod::do_initialize() {
 
 StepResult VelocityImplicitMethod::retry_in_substeps(
     double h, const StepResult& failed, const std::function<StepResult(double)>& one_step,
-    Vector* extra) {
+    Vector* extra, const std::function<void()>& restart) {
   // (Out of memory: a split needs the same factor.)
   if (linear_.out_of_memory()) return failed;
   const double t0 = t_;
@@ -36,6 +36,7 @@ StepResult VelocityImplicitMethod::retry_in_substeps(
   if (extra != nullptr) extra_part_ = *extra;
   for (int n = 2; n <= 8; n *= 2) {
     const double dt = h / n;
+    if (restart) restart();
     StepResult result;
     for (int i = 0; i < n && result.ok; ++i) {
       t_ = t0 + i * dt;

@@ -89,10 +89,13 @@ class VelocityImplicitMethod : public Integrator {
   // solution keeps the step's end out of contact (box-pile n=8 at 1 ms:
   // the midpoint at t = 0.088 s, generalized-alpha at 0.843 s); a shorter
   // step can. When no split works, the state (and `extra`, the method's
-  // own, e.g. Newmark's a_n) is as before and `failed` stands.
+  // own, e.g. Newmark's a_n) is as before and `failed` stands. `restart`,
+  // when given, is called before each split is tried: a method with a
+  // history (bdf2) puts its own back there.
   StepResult retry_in_substeps(double h, const StepResult& failed,
                                const std::function<StepResult(double)>& one_step,
-                               Vector* extra = nullptr);
+                               Vector* extra = nullptr,
+                               const std::function<void()>& restart = nullptr);
   // Builds L-BFGS's initial Hessian; false when the system's stiff forces
   // are not distance constraints (finite elements).
   bool prepare_quasi_newton() { return lbfgs_.prepare(system()); }
