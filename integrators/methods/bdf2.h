@@ -20,9 +20,10 @@
 // of 1. The history is then set back on the grid of h, (x_n, v_n) before
 // (x_n+1, v_n+1), so that the next step is again of the ratio 1 (a jump of
 // the ratio to n = 8 would extrapolate with c0 = 64/17). At 1/60 s on the
-// default dam break Newton can fail at the impact on the far wall (t = 0.3
-// s), converging only linearly at a rate near 1, where two substeps of
-// 1/120 s are solved.
+// default dam break Newton can fail at the impact on the far wall,
+// converging only linearly at a rate near 1 (in one build with --dt
+// 0.0166667, at t = 0.30 s; not with --dt 1/60 in full): two substeps of
+// 1/120 s are then solved.
 //
 // Order 2. L-stable (A-stable, and the roots of its characteristic
 // polynomial go to 0 as w h -> infinity), with less damping of the low
