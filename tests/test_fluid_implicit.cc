@@ -322,16 +322,17 @@ TEST(FluidFrameSteps, SloshingPeriodAtOneSixtieth) {
 // water particles), its speed of sound 20 sqrt(g H) = 22 m/s, so that at
 // 1/60 s the acoustic Courant number c dt / h is 23 (the default dam
 // break's is 36). Left alone it only settles: implicit Euler's kinetic
-// energy stays below 0.01 % of its gravitational energy E0 = 19.2 J (2.5 mJ
-// at most, measured). The midpoint rule's solve is implicit Euler's over
-// h/2, and its step's end the extrapolation x_n+1 = 2 x_mid - x_n,
-// v_n+1 = 2 v_mid - v_n: at 4 ms that too only settles (25 mJ at most),
-// but at 1/60 s it stirs the water from rest, its kinetic energy reaching
-// about E0 (18 to 20 J in different builds) within 2 s, while its viscosity
-// dissipates some 450 J more: energy made from nothing, the nonlinear
-// instability of the rule on stiff forces at large steps (Ascher and Reich
-// 1999). Bounds: below 1 % of E0 (8 times the largest measured) and above
-// 10 % (a tenth of what the midpoint reached).
+// energy stays below 0.02 % of its energy at rest E0 = 19.2 J
+// (gravitational; 2.5 mJ at most, measured). The midpoint rule's step is
+// implicit Euler's equations over h/2, then the extrapolation
+// x_n+1 = 2 x_mid - x_n, v_n+1 = 2 v_mid - v_n: at 4 ms that too only
+// settles (25 mJ at most), but at 1/60 s it stirs the water from rest, its
+// kinetic energy reaching about E0 (18.4 to 20.4 J in the runs measured)
+// within 2 s, while its viscosity dissipates some 440 J more: energy made
+// from nothing, the nonlinear instability of the rule on stiff forces at
+// large steps (Ascher and Reich, SIAM J. Sci. Comput. 21, 1999). Bounds:
+// below 1 % of E0 (8 times the largest measured) and above 10 % (a tenth
+// of what the midpoint reached).
 TEST(FluidFrameSteps, TheMidpointRuleStirsStillWaterAtOneSixtieth) {
   const Model model(make_builtin_scene(
       "tank", {{"width", "0.25"}, {"depth", "0.125"}, {"spacing", "0.0125"}, {"sound", "20"}}));

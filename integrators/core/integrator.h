@@ -43,8 +43,8 @@ enum class Fallback {
   // instead of a force's own (the rigid bodies' rigidity): energy still
   // exact, but the step's angular momentum is not kept.
   kGenericDiscreteGradient,
-  // implicit-midpoint, discrete-gradient, the Newmark-alpha methods: a
-  // step whose Newton failed, solved again as 2, 4 or 8 substeps
+  // implicit-midpoint, discrete-gradient, the Newmark-alpha methods, bdf2:
+  // a step whose Newton failed, solved again as 2, 4 or 8 substeps
   // (VelocityImplicitMethod::retry_in_substeps).
   kSubsteps,
 };

@@ -16,47 +16,32 @@ Bdf2::Bdf2()
                           .spectral_radius_infinity = 0.0}) {}
 
 StepResult Bdf2::do_initialize() {
-  have_previous_ = false;
+  previous_.have = false;
   return VelocityImplicitMethod::do_initialize();
 }
 
 StepResult Bdf2::do_step(double h) {
   const StepResult result = formula_step(h);
   if (result.ok) return result;
-  // Solved again in substeps (the header), the history restored before
-  // each split is tried and after none worked.
-  x_previous_kept_ = x_previous_;
-  v_previous_kept_ = v_previous_;
-  const double h_previous = h_previous_;
-  const bool had_previous = have_previous_;
-  x_start_ = x_;
-  v_start_ = v_;
-  auto restore = [&] {
-    x_previous_ = x_previous_kept_;
-    v_previous_ = v_previous_kept_;
-    h_previous_ = h_previous;
-    have_previous_ = had_previous;
-  };
+  // Solved again in substeps (the header): the history put back before
+  // each split is tried, and after none worked.
+  kept_ = previous_;
+  start_ = {.have = true, .x = x_, .v = v_, .h = h};
   const StepResult parts = retry_in_substeps(
-      h, result, [this](double dt) { return formula_step(dt); }, nullptr, restore);
-  if (!parts.ok) {
-    restore();
-    return parts;
-  }
-  x_previous_.swap(x_start_);
-  v_previous_.swap(v_start_);
-  h_previous_ = h;
-  have_previous_ = true;
+      h, result, [this](double dt) { return formula_step(dt); }, nullptr,
+      [this] { previous_ = kept_; });
+  // Solved: the next step's history is this step's start, one h back.
+  previous_ = parts.ok ? start_ : kept_;
   return parts;
 }
 
 StepResult Bdf2::formula_step(double h) {
   VelocityImplicitScheme scheme{.t_eval_offset = 1.0, .a = 0.0, .b = 1.0, .c = 1.0};
-  if (have_previous_) {
-    const double w = h / h_previous_;
+  if (previous_.have) {
+    const double w = h / previous_.h;
     const double c0 = w * w / (1.0 + 2.0 * w), b = (1.0 + w) / (1.0 + 2.0 * w);
-    v_c_ = v_ + c0 * (v_ - v_previous_);
-    x_o_ = c0 * (x_ - x_previous_);
+    v_c_ = v_ + c0 * (v_ - previous_.v);
+    x_o_ = c0 * (x_ - previous_.x);
     scheme.b = b;
     scheme.weight = b;
     scheme.inertia = &v_c_;
@@ -64,13 +49,13 @@ StepResult Bdf2::formula_step(double h) {
   }
   const StepResult result = solve_velocity(h, scheme, v_new_);
   if (!result.ok) return result;
-  x_previous_ = x_;
-  v_previous_ = v_;
-  if (have_previous_) x_ += x_o_;
+  previous_.x = x_;
+  previous_.v = v_;
+  if (previous_.have) x_ += x_o_;
   x_ += (h * scheme.b) * v_new_;
   v_.swap(v_new_);
-  h_previous_ = h;
-  have_previous_ = true;
+  previous_.h = h;
+  previous_.have = true;
   return result;
 }
 

@@ -16,14 +16,15 @@
 //
 // A step whose Newton fails is solved again in 2, 4 or 8 substeps
 // (VelocityImplicitMethod::retry_in_substeps, a run warning), each a step
-// of the same variable-step formula: the first of the ratio 1/n, the rest
+// of the same variable-step formula: the first of the ratio (h/n) / h_n-1
+// (1/n on a uniform grid; on a run's first step, implicit Euler), the rest
 // of 1. The history is then set back on the grid of h, (x_n, v_n) before
 // (x_n+1, v_n+1), so that the next step is again of the ratio 1 (a jump of
 // the ratio to n = 8 would extrapolate with c0 = 64/17). At 1/60 s on the
 // default dam break Newton can fail at the impact on the far wall,
 // converging only linearly at a rate near 1 (in one build with --dt
-// 0.0166667, at t = 0.30 s; not with --dt 1/60 in full): two substeps of
-// 1/120 s are then solved.
+// 0.0166667, at t = 0.30 s; not with --dt 0.016666666666666666): that
+// step is then solved in substeps.
 //
 // Order 2. L-stable (A-stable, and the roots of its characteristic
 // polynomial go to 0 as w h -> infinity), with less damping of the low
@@ -46,14 +47,20 @@ class Bdf2 final : public VelocityImplicitMethod {
   StepResult do_step(double h) override;
 
  private:
-  // One step of the formula above from the history as it is.
+  // One step of the formula above from the history as it is. When it
+  // fails, the state and the history are as they were.
   StepResult formula_step(double h);
 
-  bool have_previous_ = false;
-  double h_previous_ = 0.0;
-  Vector x_previous_, v_previous_, v_c_, x_o_, v_new_;
-  // The history and state at the start of a step solved in substeps.
-  Vector x_previous_kept_, v_previous_kept_, x_start_, v_start_;
+  // The previous step: its start (x, v) and its size h.
+  struct History {
+    bool have = false;
+    Vector x, v;
+    double h = 0.0;
+  };
+  History previous_;
+  // At a step solved in substeps: previous_ then, and the step's start.
+  History kept_, start_;
+  Vector v_c_, x_o_, v_new_;
 };
 
 }  // namespace springlab
