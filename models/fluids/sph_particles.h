@@ -73,7 +73,7 @@ class SphParticles final : public SharedByTerms {
   std::vector<double> x_;
   bool valid_ = false;
   long generation_ = 0;
-  std::vector<char> fixed_;        // per local particle (empty: none)
+  std::vector<char> fixed_;        // per local particle: 1 for a wall's, which never moves
   NeighbourGrid grid_;             // the search
   // The pairs within (1 + kSkin) 2h of searched_x_ with a free particle,
   // and each particle's density from fixed partners within 2h when it is
